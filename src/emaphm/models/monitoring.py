@@ -1,0 +1,283 @@
+"""Monitoring model (MM): the fast, low-fidelity actuator, batched over a population.
+
+Same controller, transmission and fault semantics as the reference model, but
+an **averaged inverter** (each leg applies its duty cycle times ``V_dc`` over
+the whole control period, no switching), no sensor effects, and a coarse step:
+one control period ``T_s = 1/f_pwm`` (125 us at 8 kHz) divided into ``n_sub``
+sub-steps (default 1). The electrical update is the exact-exponential RL step
+of :mod:`emaphm.models.pmsm`, stable over the whole ``[0, 1]^8`` box.
+
+Two implementations that tests hold equal to round-off:
+
+* :func:`simulate_reference` -- a plain single-candidate Python loop, written
+  to be read;
+* :func:`_kernel` -- the Numba kernel, time loop outside and population
+  inside, which returns traces or only the fitness (Eq. 4) against a target.
+
+A candidate whose state leaves the physical range (``|i| > I_DIVERGED`` A,
+``|omega| > OMEGA_DIVERGED`` rad/s, or a non-finite value) is frozen, flagged
+in ``status`` and given infinite fitness: a diverging candidate is a value,
+not an exception.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..faults import as_k
+from ..params import ActuatorParams, siemens_1fk7060
+from ..profiles import Profile, diagnostic
+from ._jit import jit
+from .controller import control_step
+from .inverter import modulate
+from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
+                     C_L_A, C_L_B, C_L_C, C_R_A, C_R_B, C_R_C, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M,
+                     P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
+                     P_T_MAX, P_T_S, P_V_DC, pack, pack_population)
+from .mechanics import transmission_step
+from .pmsm import back_emf_coeffs, phase_step, rl_coeffs, torque
+
+__all__ = ["MonitoringModel", "PopulationResult", "simulate_reference", "I_DIVERGED",
+           "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED"]
+
+I_DIVERGED = 1e4        # A
+OMEGA_DIVERGED = 1e5    # rad/s
+STATUS_OK = 0
+STATUS_DIVERGED = 1
+
+
+@jit
+def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
+            out_i, out_theta, out_omega, out_torque, fitness, status):
+    """Simulate ``CP.shape[0]`` candidates over ``theta_ref.shape[0]`` control periods.
+
+    Shapes: ``P (N_P,)``, ``CP (n_pop, N_CP)``, ``theta_ref, T_load (n,)``;
+    ``i_target, weights (n, 3)`` or ``(0, 3)`` for no fitness; ``out_i
+    (n_pop, n, 3)``, ``out_theta, out_omega, out_torque (n_pop, n)`` or
+    zero-sized for no traces; ``fitness, status (n_pop,)`` written in place.
+    ``fitness`` accumulates ``sum_k sum_j weights[k, j] (i_j - i_target[k, j])^2``.
+    """
+    n_pop = CP.shape[0]
+    n = theta_ref.shape[0]
+    store = out_i.shape[0] == n_pop and n_pop > 0
+    with_fit = i_target.shape[0] == n
+    p = P[P_POLES]
+    T_s = P[P_T_S]
+    dt = T_s / n_sub
+    J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
+    V_dc = P[P_V_DC]
+    # per-candidate exact RL coefficients for this step
+    a = np.empty((n_pop, 3))
+    h = np.empty((n_pop, 3))
+    for j in range(n_pop):
+        for ph in range(3):
+            a[j, ph], h[j, ph] = rl_coeffs(CP[j, C_R_A + ph], CP[j, C_L_A + ph], dt)
+    # state
+    th_m = np.zeros(n_pop)
+    w_m = np.zeros(n_pop)
+    th_l = np.zeros(n_pop)
+    w_l = np.zeros(n_pop)
+    I = np.zeros((n_pop, 3))
+    integ = np.zeros((n_pop, 4))
+    for j in range(n_pop):
+        fitness[j] = 0.0
+        status[j] = 0
+    for k in range(n):
+        ref = theta_ref[k]
+        T_l = T_load[k]
+        for j in range(n_pop):
+            if status[j] != 0:
+                continue
+            thm, wm, thl, wl = th_m[j], w_m[j], th_l[j], w_l[j]
+            ia, ib, ic = I[j, 0], I[j, 1], I[j, 2]
+            if with_fit:
+                da = ia - i_target[k, 0]
+                db = ib - i_target[k, 1]
+                dc = ic - i_target[k, 2]
+                fitness[j] += weights[k, 0] * da * da + weights[k, 1] * db * db + weights[k, 2] * dc * dc
+            s_e = math.sin(p * thm)
+            c_e = math.cos(p * thm)
+            v_a, v_b, v_c, T_ref, e0, e1, e2, e3 = control_step(
+                ref, thm, wm, ia, ib, ic, s_e, c_e,
+                integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3],
+                CP[j, C_KP], P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W],
+                P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I], V_dc, T_s)
+            integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
+            d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
+            for s in range(n_sub):
+                if s > 0:
+                    s_e = math.sin(p * thm)
+                    c_e = math.cos(p * thm)
+                ca, cb, cc = back_emf_coeffs(thm, s_e, c_e, CP[j, C_C0_A], CP[j, C_C0_B],
+                                             CP[j, C_C0_C], CP[j, C_ECC], CP[j, C_ECC_PHASE])
+                if s == 0 and store:
+                    out_i[j, k, 0] = ia
+                    out_i[j, k, 1] = ib
+                    out_i[j, k, 2] = ic
+                    out_theta[j, k] = thm
+                    out_omega[j, k] = wm
+                    out_torque[j, k] = torque(ia, ib, ic, ca, cb, cc)
+                ia, ib, ic, _ = phase_step(ia, ib, ic, d_a * V_dc, d_b * V_dc, d_c * V_dc,
+                                           ca * wm, cb * wm, cc * wm,
+                                           a[j, 0], a[j, 1], a[j, 2], h[j, 0], h[j, 1], h[j, 2])
+                T_m = torque(ia, ib, ic, ca, cb, cc)
+                thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
+                                                     CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
+                                                     CP[j, C_BACKLASH], dt)
+            if not (abs(ia) < I_DIVERGED and abs(ib) < I_DIVERGED and abs(ic) < I_DIVERGED
+                    and abs(wm) < OMEGA_DIVERGED and abs(thm) < 1e9):
+                status[j] = STATUS_DIVERGED
+                fitness[j] = np.inf
+                continue
+            th_m[j], w_m[j], th_l[j], w_l[j] = thm, wm, thl, wl
+            I[j, 0], I[j, 1], I[j, 2] = ia, ib, ic
+
+
+def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1) -> dict[str, np.ndarray]:
+    """Readable single-candidate monitoring model in plain Python (slow).
+
+    Uses the same physics functions as the kernel (their pure-Python
+    versions). Returns a dict of arrays ``t, theta_ref, theta_m, omega_m,
+    i_abc (n, 3), torque`` sampled at the control instants.
+    """
+    from ..faults import apply_faults  # local: keep module import light
+
+    faulty = apply_faults(params, k)
+    m, inv, ctl, tr, ld = faulty.motor, faulty.inverter, faulty.controller, faulty.transmission, faulty.load
+    T_s = inv.T_s
+    dt = T_s / n_sub
+    t = profile.grid(T_s)
+    ref = profile.theta_ref(t)
+    T_load = profile.load_torque(t)
+    coeffs = [rl_coeffs.py_func(m.R[ph], m.L[ph], dt) for ph in range(3)]
+    (a_a, h_a), (a_b, h_b), (a_c, h_c) = coeffs
+    thm = wm = thl = wl = 0.0
+    ia = ib = ic = 0.0
+    integ = (0.0, 0.0, 0.0, 0.0)
+    out = {name: np.zeros(t.size) for name in ("theta_m", "omega_m", "torque")}
+    out["i_abc"] = np.zeros((t.size, 3))
+    for n in range(t.size):
+        s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
+        out["theta_m"][n], out["omega_m"][n] = thm, wm
+        out["i_abc"][n] = ia, ib, ic
+        ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
+        out["torque"][n] = torque.py_func(ia, ib, ic, ca, cb, cc)
+        v_a, v_b, v_c, _, *integ = control_step.py_func(
+            ref[n], thm, wm, ia, ib, ic, s_e, c_e, *integ,
+            ctl.Kp, ctl.Ki, ctl.Kd, ctl.omega_max, ctl.Kp_w, ctl.Ki_w, m.T_max, ctl.k_T, m.I_max,
+            inv.Kp_i, inv.Ki_i, inv.V_dc, T_s)
+        duty = modulate.py_func(v_a, v_b, v_c, inv.V_dc)
+        for _ in range(n_sub):
+            s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
+            ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
+            ia, ib, ic, _ = phase_step.py_func(ia, ib, ic, *(d * inv.V_dc for d in duty),
+                                               ca * wm, cb * wm, cc * wm, a_a, a_b, a_c, h_a, h_b, h_c)
+            T_m = torque.py_func(ia, ib, ic, ca, cb, cc)
+            thm, wm, thl, wl = transmission_step.py_func(
+                thm, wm, thl, wl, T_m, T_load[n], m.J_m, m.C_m, tr.FSJ, tr.FDJ, ld.J_l, ld.C_l,
+                tr.backlash, dt)
+    out.update(t=t, theta_ref=ref)
+    return out
+
+
+@dataclass(frozen=True)
+class PopulationResult:
+    """Traces of a population, sampled at the control instants ``t``.
+
+    ``i_abc (n_pop, n, 3)`` [A], ``theta_m, omega_m, torque (n_pop, n)``,
+    ``status (n_pop,)`` (0 ok, 1 diverged; a diverged candidate's traces stop
+    where it left the physical range and are zero after).
+    """
+
+    t: np.ndarray
+    theta_ref: np.ndarray
+    theta_m: np.ndarray
+    omega_m: np.ndarray
+    i_abc: np.ndarray
+    torque: np.ndarray
+    status: np.ndarray
+
+
+@dataclass(frozen=True)
+class MonitoringModel:
+    """The monitoring model on one test profile, ready to evaluate populations.
+
+    Parameters
+    ----------
+    params : ActuatorParams
+        The healthy actuator (faults come from the candidates' ``k``).
+    profile : Profile
+        Test profile (default: :func:`emaphm.profiles.diagnostic`).
+    n_sub : int
+        Sub-steps per control period; the step is ``T_s / n_sub``.
+    """
+
+    params: ActuatorParams = field(default_factory=siemens_1fk7060)
+    profile: Profile = field(default_factory=diagnostic)
+    n_sub: int = 1
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n_sub, bool) or not isinstance(self.n_sub, int) or self.n_sub < 1:
+            raise ValueError(f"MonitoringModel.n_sub must be an integer >= 1, got {self.n_sub!r}")
+        t = self.profile.grid(self.params.inverter.T_s)
+        object.__setattr__(self, "_t", t)
+        object.__setattr__(self, "_ref", np.ascontiguousarray(self.profile.theta_ref(t)))
+        object.__setattr__(self, "_load", np.ascontiguousarray(self.profile.load_torque(t)))
+
+    @property
+    def t(self) -> np.ndarray:
+        """Control (sampling) instants [s]."""
+        return self._t
+
+    @property
+    def dt(self) -> float:
+        """Integration step [s]."""
+        return self.params.inverter.T_s / self.n_sub
+
+    def _run(self, CP, P, i_target, weights, store):
+        n_pop, n = CP.shape[0], self._t.size
+        shape = (n_pop, n) if store else (0, 0)
+        out_i = np.zeros(shape + (3,))
+        outs = [np.zeros(shape) for _ in range(3)]
+        fitness = np.zeros(n_pop)
+        status = np.zeros(n_pop, dtype=np.int64)
+        _kernel(P, CP, self._ref, self._load, self.n_sub, i_target, weights,
+                out_i, *outs, fitness, status)
+        return out_i, outs, fitness, status
+
+    def simulate_population(self, K) -> PopulationResult:
+        """Traces of every candidate in ``K`` (n_pop, 8)."""
+        P, CP = pack_population(self.params, K)
+        empty = np.zeros((0, 3))
+        out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
+        return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)
+
+    def simulate(self, k) -> PopulationResult:
+        """Traces of one fault vector (a population of one)."""
+        return self.simulate_population(as_k(k)[None, :])
+
+    def weighted_sse(self, K, i_target: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``sum_k sum_j weights (i_j - i_target)^2`` per candidate, without storing traces.
+
+        ``i_target, weights`` have shape (n, 3) on the model grid :attr:`t`.
+        Returns ``(fitness (n_pop,), status (n_pop,))``; diverged candidates get ``inf``.
+        """
+        n = self._t.size
+        i_target = np.ascontiguousarray(i_target, dtype=float)
+        weights = np.ascontiguousarray(weights, dtype=float)
+        if i_target.shape != (n, 3) or weights.shape != (n, 3):
+            raise ValueError(f"target currents and weights must have shape ({n}, 3) on the model "
+                             f"grid, got {i_target.shape} and {weights.shape}")
+        P, CP = pack_population(self.params, K)
+        _, _, fitness, status = self._run(CP, P, i_target, weights, False)
+        return fitness, status
+
+    def simulate_params(self, params: ActuatorParams) -> PopulationResult:
+        """Traces of an actuator given by its (possibly faulty) parameters."""
+        P, CP = pack(params)
+        empty = np.zeros((0, 3))
+        out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
+        return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)

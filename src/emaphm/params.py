@@ -1,0 +1,382 @@
+"""Physical parameters of the actuator: frozen, typed, validated, in SI units.
+
+Every quantity is referred to the motor shaft (a gearbox is folded in by the
+user: reflect inertias and torques through the ratio). Symbols follow the
+textbook and the paper (Baldo et al. 2023, section 3.2):
+
+=========================  ==================  =====================================
+field                      unit                meaning
+=========================  ==================  =====================================
+``Motor.p``                --                  pole pairs
+``Motor.R``                ohm                 phase resistance, per phase (a, b, c)
+``Motor.L``                H                   synchronous inductance, per phase
+``Motor.c0``               V s/rad             back-EMF coefficient, peak per phase
+                                               per mechanical rad/s (also N m/A)
+``Motor.ecc``              --                  static eccentricity modulus (Eq. 2)
+``Motor.ecc_phase``        rad                 static eccentricity phase (Eq. 2)
+``Motor.J_m``              kg m^2              rotor inertia
+``Motor.C_m``              N m s/rad           viscous friction coefficient
+``Motor.T_max``            N m                 maximum torque
+``Motor.I_max``            A                   maximum phase current, peak
+``Inverter.V_dc``          V                   DC link voltage
+``Inverter.f_pwm``         Hz                  PWM carrier frequency (= control rate)
+``Inverter.Kp_i``          V/A                 dq current controller, proportional
+``Inverter.Ki_i``          V/(A s)             dq current controller, integral
+``Controller.Kp``          1/s                 position loop proportional gain
+``Controller.Ki``          1/s^2               position loop integral gain
+``Controller.Kd``          --                  position loop derivative gain
+``Controller.omega_max``   rad/s               speed reference saturation
+``Controller.Kp_w``        N m s/rad           speed loop proportional gain
+``Controller.Ki_w``        N m/rad             speed loop integral gain
+``Controller.k_T``         N m/A               drive's torque constant setting (peak)
+``Transmission.FSJ``       N m                 static (breakaway) dry friction torque
+``Transmission.FDJ``       N m                 dynamic (Coulomb) dry friction torque
+``Transmission.backlash``  rad                 total backlash width
+``Load.J_l``               kg m^2              load inertia behind the backlash
+``Load.C_l``               N m s/rad           load viscous damping
+=========================  ==================  =====================================
+
+The default preset :func:`siemens_1fk7060` describes the paper's test bench
+motor, a Siemens 1FK7060-2AC71. The paper's data table is missing from our
+copy, so the motor values are a **reconstruction** consistent with the 1FK7
+family (not checked against the data sheet); the mechanics and controller are
+our design defaults. Describe another actuator with a TOML file
+(:func:`load_params` / :func:`save_params`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tomllib
+from dataclasses import asdict, dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+import tomli_w
+
+__all__ = [
+    "ParameterError",
+    "Motor",
+    "Inverter",
+    "Controller",
+    "Transmission",
+    "Load",
+    "ActuatorParams",
+    "siemens_1fk7060",
+    "load_params",
+    "save_params",
+]
+
+
+class ParameterError(ValueError):
+    """An actuator parameter is missing, of the wrong type or out of range."""
+
+
+Phase3 = tuple[float, float, float]
+
+# unit of every field, used in error messages and in the TOML comments
+_UNITS: dict[str, str] = {
+    "p": "pole pairs, integer",
+    "R": "ohm",
+    "L": "H",
+    "c0": "V s/rad",
+    "ecc": "-, 0..1",
+    "ecc_phase": "rad",
+    "J_m": "kg m^2",
+    "C_m": "N m s/rad",
+    "T_max": "N m",
+    "I_max": "A peak",
+    "V_dc": "V",
+    "f_pwm": "Hz",
+    "Kp_i": "V/A",
+    "Ki_i": "V/(A s)",
+    "Kp": "1/s",
+    "Ki": "1/s^2",
+    "Kd": "-",
+    "omega_max": "rad/s",
+    "Kp_w": "N m s/rad",
+    "Ki_w": "N m/rad",
+    "k_T": "N m/A peak",
+    "FSJ": "N m",
+    "FDJ": "N m",
+    "backlash": "rad",
+    "J_l": "kg m^2",
+    "C_l": "N m s/rad",
+}
+
+
+def _check(owner: str, name: str, value: float, *, lo: float | None = None,
+           hi: float | None = None, strict_lo: bool = True) -> float:
+    unit = _UNITS.get(name, "")
+    where = f"{owner}.{name} [{unit}]"
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{where} must be a number, got {value!r}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise ParameterError(f"{where} must be finite, got {value!r}")
+    if lo is not None and (v <= lo if strict_lo else v < lo):
+        rel = ">" if strict_lo else ">="
+        raise ParameterError(f"{where} must be {rel} {lo:g}, got {v:g}")
+    if hi is not None and v > hi:
+        raise ParameterError(f"{where} must be <= {hi:g}, got {v:g}")
+    return v
+
+
+def _phase3(owner: str, name: str, value: Any) -> Phase3:
+    """Accept a scalar (same on all phases) or three per-phase values."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        value = (value, value, value)
+    try:
+        vals = tuple(value)
+    except TypeError:
+        raise ParameterError(
+            f"{owner}.{name} [{_UNITS[name]}] must be a number or a list of 3 "
+            f"per-phase numbers (a, b, c), got {value!r}") from None
+    if len(vals) != 3:
+        raise ParameterError(
+            f"{owner}.{name} [{_UNITS[name]}] needs 3 per-phase values (a, b, c), "
+            f"got {len(vals)}")
+    return tuple(_check(owner, name, v, lo=0.0) for v in vals)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class Motor:
+    """Three-phase star-connected surface PMSM (Eq. 5, 6 and 2 of the paper).
+
+    Per-phase values are tuples ``(a, b, c)``; a scalar is broadcast. A short
+    circuit makes them unequal (see :mod:`emaphm.faults`).
+    """
+
+    p: int = 4
+    R: Phase3 = (3.15, 3.15, 3.15)
+    L: Phase3 = (22e-3, 22e-3, 22e-3)
+    c0: Phase3 = (1.0527, 1.0527, 1.0527)
+    ecc: float = 0.0
+    ecc_phase: float = 0.0
+    J_m: float = 7.7e-4
+    C_m: float = 5e-4
+    T_max: float = 18.0
+    I_max: float = 14.14
+
+    def __post_init__(self) -> None:
+        o = "Motor"
+        if isinstance(self.p, bool) or not isinstance(self.p, int) or self.p < 1:
+            raise ParameterError(f"{o}.p [pole pairs, integer] must be an integer >= 1, got {self.p!r}")
+        for name in ("R", "L", "c0"):
+            object.__setattr__(self, name, _phase3(o, name, getattr(self, name)))
+        object.__setattr__(self, "ecc", _check(o, "ecc", self.ecc, lo=0.0, hi=1.0, strict_lo=False))
+        object.__setattr__(self, "ecc_phase", _check(o, "ecc_phase", self.ecc_phase))
+        for name in ("J_m", "T_max", "I_max"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
+        object.__setattr__(self, "C_m", _check(o, "C_m", self.C_m, lo=0.0, strict_lo=False))
+
+    @property
+    def k_T(self) -> float:
+        """Torque per peak q-axis ampere of the healthy motor, ``1.5 * c0`` [N m/A]."""
+        return 1.5 * sum(self.c0) / 3.0
+
+
+@dataclass(frozen=True)
+class Inverter:
+    """Two-level voltage-source inverter on a DC link, with its dq current loop.
+
+    The current loop runs once per PWM period (single update, as Siemens S120
+    drives at 8 kHz do), so ``1/f_pwm`` is also the control period ``T_s``.
+    """
+
+    V_dc: float = 600.0
+    f_pwm: float = 8000.0
+    Kp_i: float = 41.8
+    Ki_i: float = 6000.0
+
+    def __post_init__(self) -> None:
+        o = "Inverter"
+        for name in ("V_dc", "f_pwm", "Kp_i"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
+        object.__setattr__(self, "Ki_i", _check(o, "Ki_i", self.Ki_i, lo=0.0, strict_lo=False))
+
+    @property
+    def T_s(self) -> float:
+        """Control and PWM period [s]."""
+        return 1.0 / self.f_pwm
+
+
+@dataclass(frozen=True)
+class Controller:
+    """Cascade position controller: position PID -> speed PI -> torque reference.
+
+    ``omega_ref = Kp*e + Ki*int(e) + Kd*de/dt`` (derivative on the measured
+    position, i.e. ``-Kd*omega_m``), saturated at ``omega_max``; then
+    ``T_ref = Kp_w*(omega_ref - omega_m) + Ki_w*int(...)``, saturated at the
+    motor's ``T_max`` with clamping anti-windup on both integrators. Fault k8
+    scales ``Kp``. The q-axis current reference is ``T_ref / k_T``: ``k_T`` is
+    the drive's setting for the healthy motor (``1.5*c0``), which a motor fault
+    does not change.
+    """
+
+    Kp: float = 60.0
+    Ki: float = 0.0
+    Kd: float = 0.0
+    omega_max: float = 200.0
+    Kp_w: float = 0.6
+    Ki_w: float = 12.0
+    k_T: float = 1.579
+
+    def __post_init__(self) -> None:
+        o = "Controller"
+        object.__setattr__(self, "Kp", _check(o, "Kp", self.Kp, lo=0.0))
+        object.__setattr__(self, "k_T", _check(o, "k_T", self.k_T, lo=0.0))
+        object.__setattr__(self, "omega_max", _check(o, "omega_max", self.omega_max, lo=0.0))
+        object.__setattr__(self, "Kp_w", _check(o, "Kp_w", self.Kp_w, lo=0.0))
+        for name in ("Ki", "Kd", "Ki_w"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0, strict_lo=False))
+
+
+@dataclass(frozen=True)
+class Transmission:
+    """Dry friction (Borello's discontinuous stick/slip) and backlash."""
+
+    FSJ: float = 0.12
+    FDJ: float = 0.08
+    backlash: float = 2e-4
+
+    def __post_init__(self) -> None:
+        o = "Transmission"
+        for name in ("FSJ", "FDJ", "backlash"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0, strict_lo=False))
+        if self.FDJ > self.FSJ:
+            raise ParameterError(
+                f"Transmission.FDJ [N m] = {self.FDJ:g} exceeds Transmission.FSJ [N m] = "
+                f"{self.FSJ:g}: the dynamic friction torque must not exceed the static one")
+
+
+@dataclass(frozen=True)
+class Load:
+    """The driven load behind the backlash (a control surface referred to the shaft)."""
+
+    J_l: float = 7.7e-4
+    C_l: float = 5e-4
+
+    def __post_init__(self) -> None:
+        o = "Load"
+        object.__setattr__(self, "J_l", _check(o, "J_l", self.J_l, lo=0.0))
+        object.__setattr__(self, "C_l", _check(o, "C_l", self.C_l, lo=0.0, strict_lo=False))
+
+
+_SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
+             "transmission": Transmission, "load": Load}
+
+
+@dataclass(frozen=True)
+class ActuatorParams:
+    """The whole actuator: motor, inverter, controller, transmission, load."""
+
+    motor: Motor = field(default_factory=Motor)
+    inverter: Inverter = field(default_factory=Inverter)
+    controller: Controller = field(default_factory=Controller)
+    transmission: Transmission = field(default_factory=Transmission)
+    load: Load = field(default_factory=Load)
+    name: str = "custom"
+
+    def __post_init__(self) -> None:
+        for sec, cls in _SECTIONS.items():
+            if not isinstance(getattr(self, sec), cls):
+                raise ParameterError(f"ActuatorParams.{sec} must be a {cls.__name__}, "
+                                     f"got {type(getattr(self, sec)).__name__}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain nested dict (JSON/TOML serialisable)."""
+        d: dict[str, Any] = {"name": self.name}
+        for sec in _SECTIONS:
+            sub = asdict(getattr(self, sec))
+            d[sec] = {k: (list(v) if isinstance(v, tuple) else v) for k, v in sub.items()}
+        return d
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any], *, source: str = "parameters",
+                  defaults: "ActuatorParams | None" = None) -> "ActuatorParams":
+        """Build from a nested dict. Sections or fields left out are errors,
+        unless ``defaults`` is given, which then fills them."""
+        if not isinstance(data, dict):
+            raise ParameterError(f"{source}: expected a table of sections, got {type(data).__name__}")
+        unknown = set(data) - set(_SECTIONS) - {"name"}
+        if unknown:
+            raise ParameterError(
+                f"{source}: unknown section(s) {sorted(unknown)}; expected "
+                f"{sorted(_SECTIONS)}")
+        parts: dict[str, Any] = {}
+        for sec, klass in _SECTIONS.items():
+            given = data.get(sec)
+            base = getattr(defaults, sec) if defaults is not None else None
+            if given is None:
+                if base is None:
+                    raise ParameterError(f"{source}: missing section [{sec}] with fields "
+                                         + ", ".join(f"{f.name} [{_UNITS[f.name]}]" for f in fields(klass)))
+                parts[sec] = base
+                continue
+            if not isinstance(given, dict):
+                raise ParameterError(f"{source}: [{sec}] must be a table, got {given!r}")
+            names = {f.name for f in fields(klass)}
+            extra = set(given) - names
+            if extra:
+                raise ParameterError(
+                    f"{source}: unknown field(s) {sorted(extra)} in [{sec}]; known fields: "
+                    + ", ".join(f"{n} [{_UNITS[n]}]" for n in sorted(names)))
+            missing = names - set(given)
+            if missing and base is None:
+                raise ParameterError(
+                    f"{source}: [{sec}] is missing "
+                    + ", ".join(f"{n} [{_UNITS[n]}]" for n in sorted(missing)))
+            kw = {n: given[n] for n in given}
+            parts[sec] = replace(base, **kw) if base is not None else klass(**kw)
+        name = data.get("name", defaults.name if defaults is not None else "custom")
+        return cls(name=str(name), **parts)
+
+
+def siemens_1fk7060() -> ActuatorParams:
+    """The paper's bench: Siemens 1FK7060-2AC71 on an S120 drive (reconstructed).
+
+    Motor values are reconstructed from the 1FK7 family and the order code, NOT
+    taken from the data sheet (the paper's Table 2 is missing from our copy):
+    p = 4, R = 3.15 ohm, L = 22 mH (T_el = 7 ms), k_E = 135 V/krpm line-to-line
+    RMS -> c0 = sqrt(2)*135/sqrt(3)/104.72 = 1.0527 V s/rad peak per phase,
+    J_m = 7.7e-4 kg m^2, T_max = 18 N m, I_max = 10 A RMS = 14.14 A peak.
+    Mechanics and controller are design defaults of emaphm: a load inertia
+    equal to the rotor's, dry friction 0.08 / 0.12 N m (dynamic / static),
+    backlash 2e-4 rad, DC link 600 V, PWM and control at 8 kHz.
+    """
+    c0 = math.sqrt(2.0) * 135.0 / math.sqrt(3.0) / (1000.0 * 2.0 * math.pi / 60.0)
+    return ActuatorParams(motor=Motor(c0=(c0, c0, c0)), controller=Controller(k_T=1.5 * c0),
+                          name="siemens-1fk7060-2ac71")
+
+
+def load_params(path: str | os.PathLike[str], *, partial: bool = False) -> ActuatorParams:
+    """Read parameters from a TOML file with sections [motor], [inverter],
+    [controller], [transmission], [load] (SI units, per-phase values as lists).
+
+    With ``partial=True`` fields left out are taken from :func:`siemens_1fk7060`.
+    """
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise ParameterError(f"parameter file {p} does not exist") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"parameter file {p} is not valid TOML: {exc}") from None
+    return ActuatorParams.from_dict(data, source=str(p),
+                                    defaults=siemens_1fk7060() if partial else None)
+
+
+def save_params(params: ActuatorParams, path: str | os.PathLike[str]) -> Path:
+    """Write parameters as TOML (atomically: a temporary file, then a rename)."""
+    p = Path(path)
+    tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
+    try:
+        with tmp.open("wb") as fh:
+            tomli_w.dump(params.to_dict(), fh)
+        os.replace(tmp, p)
+    finally:
+        tmp.unlink(missing_ok=True)
+    return p

@@ -1,0 +1,258 @@
+"""Position command and load torque profiles.
+
+A :class:`Profile` is data: a duration and two sums of elementary shapes (one
+for the position command ``theta_ref`` [rad], one for the external load
+torque ``T_l`` [N m]). Shapes are small frozen dataclasses evaluated on a
+NumPy time grid, so a profile can be stored in trace metadata and rebuilt.
+
+The default :func:`diagnostic` profile is designed so that every fault of the
+vector ``k`` leaves a mark in the phase currents (see its docstring).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Any, Union
+
+import numpy as np
+
+__all__ = ["Step", "Ramp", "Sine", "Trapezoid", "Constant", "Profile", "ProfileError",
+           "diagnostic", "step", "ramp", "sine", "trapezoid", "PROFILES", "get_profile"]
+
+
+class ProfileError(ValueError):
+    """A profile or one of its shapes is ill-defined."""
+
+
+def _finite(owner: str, **values: float) -> None:
+    for name, v in values.items():
+        if not math.isfinite(v):
+            raise ProfileError(f"{owner}.{name} must be finite, got {v!r}")
+
+
+@dataclass(frozen=True)
+class Step:
+    """``height`` [rad or N m] from time ``t0`` [s] on."""
+
+    t0: float
+    height: float
+
+    def __post_init__(self) -> None:
+        _finite("Step", t0=self.t0, height=self.height)
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        return np.where(t >= self.t0, self.height, 0.0)
+
+
+@dataclass(frozen=True)
+class Ramp:
+    """Linear change by ``height`` between ``t0`` and ``t1`` [s], held afterwards."""
+
+    t0: float
+    t1: float
+    height: float
+
+    def __post_init__(self) -> None:
+        _finite("Ramp", t0=self.t0, t1=self.t1, height=self.height)
+        if not self.t1 > self.t0:
+            raise ProfileError(f"Ramp needs t1 > t0, got t0={self.t0}, t1={self.t1}")
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        return self.height * np.clip((t - self.t0) / (self.t1 - self.t0), 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Sine:
+    """``amplitude * sin(2 pi f (t - t0))`` on ``[t0, t1)``, zero elsewhere."""
+
+    amplitude: float
+    frequency: float
+    t0: float = 0.0
+    t1: float = math.inf
+
+    def __post_init__(self) -> None:
+        _finite("Sine", amplitude=self.amplitude, frequency=self.frequency, t0=self.t0)
+        if self.frequency <= 0 or not self.t1 > self.t0:
+            raise ProfileError("Sine needs frequency > 0 [Hz] and t1 > t0")
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        on = (t >= self.t0) & (t < self.t1)
+        return np.where(on, self.amplitude * np.sin(2 * np.pi * self.frequency * (t - self.t0)), 0.0)
+
+
+@dataclass(frozen=True)
+class Trapezoid:
+    """A move by ``height`` starting at ``t0`` with a trapezoidal speed profile.
+
+    Speed limited to ``v_max`` [rad/s], acceleration to ``a_max`` [rad/s^2]
+    (a triangular profile when the move is too short to reach ``v_max``).
+    """
+
+    t0: float
+    height: float
+    v_max: float
+    a_max: float
+
+    def __post_init__(self) -> None:
+        _finite("Trapezoid", t0=self.t0, height=self.height, v_max=self.v_max, a_max=self.a_max)
+        if self.v_max <= 0 or self.a_max <= 0:
+            raise ProfileError("Trapezoid needs v_max > 0 [rad/s] and a_max > 0 [rad/s^2]")
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        d = abs(self.height)
+        v = min(self.v_max, math.sqrt(d * self.a_max))
+        ta = v / self.a_max                     # acceleration time
+        tc = d / v - ta                         # cruise time (>= 0)
+        tau = np.clip(t - self.t0, 0.0, 2 * ta + tc)
+        acc = 0.5 * self.a_max * np.minimum(tau, ta) ** 2
+        cruise = v * np.clip(tau - ta, 0.0, tc)
+        tdec = np.clip(tau - ta - tc, 0.0, ta)
+        dec = v * tdec - 0.5 * self.a_max * tdec ** 2
+        return math.copysign(1.0, self.height) * (acc + cruise + dec)
+
+
+@dataclass(frozen=True)
+class Constant:
+    """A constant value (a steady load torque, an offset)."""
+
+    value: float
+
+    def __post_init__(self) -> None:
+        _finite("Constant", value=self.value)
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        return np.full(np.shape(t), self.value)
+
+
+Shape = Union[Step, Ramp, Sine, Trapezoid, Constant]
+_SHAPES = {c.__name__: c for c in (Step, Ramp, Sine, Trapezoid, Constant)}
+
+
+def _shape_to_dict(s: Shape) -> dict[str, Any]:
+    return {"shape": type(s).__name__, **asdict(s)}
+
+
+def _shape_from_dict(d: dict[str, Any]) -> Shape:
+    d = dict(d)
+    kind = d.pop("shape", None)
+    if kind not in _SHAPES:
+        raise ProfileError(f"unknown profile shape {kind!r}; known: {', '.join(_SHAPES)}")
+    return _SHAPES[kind](**d)
+
+
+@dataclass(frozen=True)
+class Profile:
+    """Position command and load torque over ``[0, duration]``."""
+
+    duration: float
+    command: tuple[Shape, ...] = ()
+    load: tuple[Shape, ...] = ()
+    name: str = "custom"
+    description: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.duration) and self.duration > 0):
+            raise ProfileError(f"Profile.duration [s] must be > 0, got {self.duration!r}")
+        object.__setattr__(self, "command", tuple(self.command))
+        object.__setattr__(self, "load", tuple(self.load))
+
+    def theta_ref(self, t: np.ndarray) -> np.ndarray:
+        """Position command [rad] at times t [s]."""
+        t = np.asarray(t, dtype=float)
+        return sum((s(t) for s in self.command), np.zeros_like(t))
+
+    def load_torque(self, t: np.ndarray) -> np.ndarray:
+        """External load torque [N m] at times t [s]."""
+        t = np.asarray(t, dtype=float)
+        return sum((s(t) for s in self.load), np.zeros_like(t))
+
+    def grid(self, T_s: float) -> np.ndarray:
+        """Sampling instants ``k*T_s`` covering the duration."""
+        n = int(round(self.duration / T_s))
+        return np.arange(n) * T_s
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "duration": self.duration, "description": self.description,
+                "command": [_shape_to_dict(s) for s in self.command],
+                "load": [_shape_to_dict(s) for s in self.load]}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> "Profile":
+        try:
+            return cls(duration=float(d["duration"]),
+                       command=tuple(_shape_from_dict(s) for s in d.get("command", ())),
+                       load=tuple(_shape_from_dict(s) for s in d.get("load", ())),
+                       name=str(d.get("name", "custom")), description=str(d.get("description", "")))
+        except (KeyError, TypeError) as exc:
+            raise ProfileError(f"cannot rebuild a profile from {d!r}: {exc}") from None
+
+
+def diagnostic(load_torque: float = 0.0) -> Profile:
+    """The default diagnostic test, 0.5 s, designed so that every fault shows.
+
+    ====================  ==========================================  ======================
+    time [s]              command                                     makes visible
+    ====================  ==========================================  ======================
+    0.00 - 0.02           hold at 0                                   initial state
+    0.02                  step +0.5 rad, then hold to 0.10            gain drift (k8): the
+                                                                      step response; friction
+                                                                      (k1) at standstill
+    0.10 - 0.25           ramp +3 pi rad (1.5 revolutions, 63 rad/s)  friction and viscous
+                                                                      current plateau (k1);
+                                                                      eccentricity (k6, k7)
+                                                                      over > 1 revolution;
+                                                                      short circuits (k3-5)
+                                                                      under steady current
+    0.25 - 0.30           hold                                        stop, load overrun
+    0.30 - 0.40           ramp -2 pi rad (reversal, -63 rad/s)        backlash (k2): the gap
+                                                                      crossed at reversal
+    0.42                  step -0.5 rad, hold to 0.50                 gain drift (k8) again
+    ====================  ==========================================  ======================
+
+    The motor turns over about 9.9 rad in all (more than one revolution, as
+    Eq. 2's eccentricity follows the mechanical angle), the steps drive the
+    current near 4 A peak so short circuits change measurable currents.
+    """
+    return Profile(
+        duration=0.5,
+        command=(Step(0.02, 0.5), Ramp(0.10, 0.25, 3 * math.pi), Ramp(0.30, 0.40, -2 * math.pi),
+                 Step(0.42, -0.5)),
+        load=(Constant(load_torque),) if load_torque else (),
+        name="diagnostic",
+        description="step, hold, 1.5 revolutions, hold, reversal, step (0.5 s)",
+    )
+
+
+def step(height: float = 1.0, t0: float = 0.02, duration: float = 0.3) -> Profile:
+    """A single position step of ``height`` rad at ``t0``."""
+    return Profile(duration, (Step(t0, height),), name="step")
+
+
+def ramp(height: float = 2 * math.pi, t0: float = 0.02, t1: float = 0.22,
+         duration: float = 0.3) -> Profile:
+    """A constant-speed move of ``height`` rad between ``t0`` and ``t1``."""
+    return Profile(duration, (Ramp(t0, t1, height),), name="ramp")
+
+
+def sine(amplitude: float = 4.0, frequency: float = 2.0, duration: float = 1.0) -> Profile:
+    """A sinusoidal position command (reversals every half period)."""
+    return Profile(duration, (Sine(amplitude, frequency),), name="sine")
+
+
+def trapezoid(height: float = 2 * math.pi, v_max: float = 80.0, a_max: float = 4000.0,
+              t0: float = 0.02, duration: float = 0.3) -> Profile:
+    """A point-to-point move with a trapezoidal speed profile."""
+    return Profile(duration, (Trapezoid(t0, height, v_max, a_max),), name="trapezoid")
+
+
+PROFILES = {"diagnostic": diagnostic, "step": step, "ramp": ramp, "sine": sine,
+            "trapezoid": trapezoid}
+
+
+def get_profile(name: str) -> Profile:
+    """A built-in profile by name, with its default arguments."""
+    try:
+        return PROFILES[name]()
+    except KeyError:
+        raise ProfileError(f"unknown profile {name!r}; choose one of {', '.join(PROFILES)}") from None
