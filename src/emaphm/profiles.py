@@ -205,9 +205,9 @@ def diagnostic(load_torque: float = 0.0) -> Profile:
                                                                       short circuits (k3-5)
                                                                       under steady current
     0.25 - 0.30           hold                                        stop, load overrun
-    0.30 - 0.40           ramp -2 pi rad (reversal, -63 rad/s)        backlash (k2): the gap
+    0.30 - 0.38           ramp -2 pi rad (reversal, -79 rad/s)        backlash (k2): the gap
                                                                       crossed at reversal
-    0.42                  step -0.5 rad, hold to 0.50                 gain drift (k8) again
+    0.43                  step -0.5 rad, hold to 0.50                 gain drift (k8) again
     ====================  ==========================================  ======================
 
     The motor turns over about 9.9 rad in all (more than one revolution, as
@@ -216,8 +216,8 @@ def diagnostic(load_torque: float = 0.0) -> Profile:
     """
     return Profile(
         duration=0.5,
-        command=(Step(0.02, 0.5), Ramp(0.10, 0.25, 3 * math.pi), Ramp(0.30, 0.40, -2 * math.pi),
-                 Step(0.42, -0.5)),
+        command=(Step(0.02, 0.5), Ramp(0.10, 0.25, 3 * math.pi), Ramp(0.30, 0.38, -2 * math.pi),
+                 Step(0.43, -0.5)),
         load=(Constant(load_torque),) if load_torque else (),
         name="diagnostic",
         description="step, hold, 1.5 revolutions, hold, reversal, step (0.5 s)",

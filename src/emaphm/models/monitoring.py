@@ -120,10 +120,13 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                     out_theta[j, k] = thm
                     out_omega[j, k] = wm
                     out_torque[j, k] = torque(ia, ib, ic, ca, cb, cc)
+                ia0, ib0, ic0 = ia, ib, ic
                 ia, ib, ic, _ = phase_step(ia, ib, ic, d_a * V_dc, d_b * V_dc, d_c * V_dc,
                                            ca * wm, cb * wm, cc * wm,
                                            a[j, 0], a[j, 1], a[j, 2], h[j, 0], h[j, 1], h[j, 2])
-                T_m = torque(ia, ib, ic, ca, cb, cc)
+                # the mechanics see the step's mean torque (trapezoid): second order in
+                # the fast current transients of the coarse step
+                T_m = 0.5 * (torque(ia0, ib0, ic0, ca, cb, cc) + torque(ia, ib, ic, ca, cb, cc))
                 thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
                                                      CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
                                                      CP[j, C_BACKLASH], dt)
@@ -173,9 +176,10 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
         for _ in range(n_sub):
             s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
             ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
-            ia, ib, ic, _ = phase_step.py_func(ia, ib, ic, *(d * inv.V_dc for d in duty),
-                                               ca * wm, cb * wm, cc * wm, a_a, a_b, a_c, h_a, h_b, h_c)
-            T_m = torque.py_func(ia, ib, ic, ca, cb, cc)
+            i_new = phase_step.py_func(ia, ib, ic, *(d * inv.V_dc for d in duty),
+                                       ca * wm, cb * wm, cc * wm, a_a, a_b, a_c, h_a, h_b, h_c)[:3]
+            T_m = 0.5 * (torque.py_func(ia, ib, ic, ca, cb, cc) + torque.py_func(*i_new, ca, cb, cc))
+            ia, ib, ic = i_new
             thm, wm, thl, wl = transmission_step.py_func(
                 thm, wm, thl, wl, T_m, T_load[n], m.J_m, m.C_m, tr.FSJ, tr.FDJ, ld.J_l, ld.C_l,
                 tr.backlash, dt)
