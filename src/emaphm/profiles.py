@@ -17,7 +17,7 @@ from typing import Any, Union
 
 import numpy as np
 
-__all__ = ["Step", "Ramp", "Sine", "Trapezoid", "Constant", "Profile", "ProfileError",
+__all__ = ["Step", "Ramp", "Sine", "Trapezoid", "Constant", "Tabulated", "Profile", "ProfileError",
            "diagnostic", "step", "ramp", "sine", "trapezoid", "PROFILES", "get_profile"]
 
 
@@ -125,8 +125,32 @@ class Constant:
         return np.full(np.shape(t), self.value)
 
 
-Shape = Union[Step, Ramp, Sine, Trapezoid, Constant]
-_SHAPES = {c.__name__: c for c in (Step, Ramp, Sine, Trapezoid, Constant)}
+@dataclass(frozen=True)
+class Tabulated:
+    """Samples ``values`` at times ``t`` [s], linearly interpolated, held at the ends.
+
+    Replays a recorded command (a measured trace's ``theta_ref``).
+    """
+
+    t: tuple[float, ...]
+    values: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        v = np.asarray(self.values, dtype=float)
+        if t.ndim != 1 or t.shape != v.shape or t.size < 2:
+            raise ProfileError("Tabulated needs two 1-D sequences t and values of the same length >= 2")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v)) and np.all(np.diff(t) > 0)):
+            raise ProfileError("Tabulated needs finite values and strictly increasing times")
+        object.__setattr__(self, "t", tuple(t.tolist()))
+        object.__setattr__(self, "values", tuple(v.tolist()))
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        return np.interp(t, self.t, self.values)
+
+
+Shape = Union[Step, Ramp, Sine, Trapezoid, Constant, Tabulated]
+_SHAPES = {c.__name__: c for c in (Step, Ramp, Sine, Trapezoid, Constant, Tabulated)}
 
 
 def _shape_to_dict(s: Shape) -> dict[str, Any]:
@@ -171,6 +195,20 @@ class Profile:
         """Sampling instants ``k*T_s`` covering the duration."""
         n = int(round(self.duration / T_s))
         return np.arange(n) * T_s
+
+    @classmethod
+    def from_samples(cls, t, theta_ref, load_torque=None, name: str = "recorded") -> "Profile":
+        """A profile that replays a recorded command (and load torque) sampled at ``t``.
+
+        Time is shifted so that the first sample is at 0; the duration covers
+        the samples plus one step, so that ``grid(dt)`` returns one point per sample.
+        """
+        t = np.asarray(t, dtype=float)
+        t = t - t[0]
+        dt = float(np.mean(np.diff(t))) if t.size > 1 else 0.0
+        load = (Tabulated(t, load_torque),) if load_torque is not None else ()
+        return cls(duration=float(t[-1] + dt), command=(Tabulated(t, theta_ref),), load=load,
+                   name=name, description=f"recorded command, {t.size} samples")
 
     def to_dict(self) -> dict[str, Any]:
         return {"name": self.name, "duration": self.duration, "description": self.description,

@@ -18,8 +18,8 @@ from ..params import ActuatorParams
 
 # shared parameters P[...]
 (P_POLES, P_J_M, P_C_M, P_T_MAX, P_I_MAX, P_V_DC, P_T_S, P_KP_I, P_KI_I, P_KI, P_KD,
- P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L) = range(17)
-N_P = 17
+ P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0) = range(18)
+N_P = 18
 
 # per-candidate parameters CP[:, ...]
 (C_KP, C_FSJ, C_FDJ, C_BACKLASH, C_R_A, C_R_B, C_R_C, C_L_A, C_L_B, C_L_C,
@@ -27,8 +27,9 @@ N_P = 17
 N_CP = 15
 
 
-def pack_shared(params: ActuatorParams) -> np.ndarray:
-    """The shared parameter vector P."""
+def pack_shared(params: ActuatorParams, theta0: float = 0.0) -> np.ndarray:
+    """The shared parameter vector P; ``theta0`` [rad] is the initial motor
+    (and load) angle, at rest (a recorded trace need not start at zero)."""
     m, inv, ctl, load = params.motor, params.inverter, params.controller, params.load
     P = np.empty(N_P)
     P[P_POLES] = m.p
@@ -48,10 +49,11 @@ def pack_shared(params: ActuatorParams) -> np.ndarray:
     P[P_K_T] = ctl.k_T
     P[P_J_L] = load.J_l
     P[P_C_L] = load.C_l
+    P[P_THETA0] = theta0
     return P
 
 
-def pack(params: ActuatorParams) -> tuple[np.ndarray, np.ndarray]:
+def pack(params: ActuatorParams, theta0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``(P, CP)`` for one actuator as it is (faults already applied); CP has one row."""
     m, tr, ctl = params.motor, params.transmission, params.controller
     row = np.empty(N_CP)
@@ -64,10 +66,11 @@ def pack(params: ActuatorParams) -> tuple[np.ndarray, np.ndarray]:
     row[C_C0_A:C_C0_C + 1] = m.c0
     row[C_ECC] = m.ecc
     row[C_ECC_PHASE] = m.ecc_phase
-    return pack_shared(params), row[None, :]
+    return pack_shared(params, theta0), row[None, :]
 
 
-def pack_population(nominal: ActuatorParams, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def pack_population(nominal: ActuatorParams, K: np.ndarray,
+                    theta0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``(P, CP)`` for a population of fault vectors ``K`` (n_pop, 8) on a healthy actuator.
 
     Rows of K are not range-checked here (the optimizers keep them in the box);
@@ -76,7 +79,7 @@ def pack_population(nominal: ActuatorParams, K: np.ndarray) -> tuple[np.ndarray,
     K = np.atleast_2d(np.asarray(K, dtype=float))
     if K.ndim != 2 or K.shape[1] != N_K:
         raise ValueError(f"population of fault vectors must have shape (n_pop, {N_K}), got {K.shape}")
-    P, base = pack(nominal)
+    P, base = pack(nominal, theta0)
     CP = np.repeat(base, K.shape[0], axis=0)
     CP[:, C_KP] *= gain_scale(K[:, 7])
     fs = friction_scale(K[:, 0])

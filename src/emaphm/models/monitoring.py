@@ -36,7 +36,7 @@ from .inverter import modulate
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_L_A, C_L_B, C_L_C, C_R_A, C_R_B, C_R_C, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
-                     P_T_MAX, P_T_S, P_V_DC, pack, pack_population)
+                     P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack, pack_population)
 from .mechanics import transmission_step
 from .pmsm import back_emf_coeffs, phase_step, rl_coeffs, torque
 
@@ -76,9 +76,9 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
         for ph in range(3):
             a[j, ph], h[j, ph] = rl_coeffs(CP[j, C_R_A + ph], CP[j, C_L_A + ph], dt)
     # state
-    th_m = np.zeros(n_pop)
+    th_m = np.full(n_pop, P[P_THETA0])
     w_m = np.zeros(n_pop)
-    th_l = np.zeros(n_pop)
+    th_l = np.full(n_pop, P[P_THETA0])
     w_l = np.zeros(n_pop)
     I = np.zeros((n_pop, 3))
     integ = np.zeros((n_pop, 4))
@@ -139,7 +139,8 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             I[j, 0], I[j, 1], I[j, 2] = ia, ib, ic
 
 
-def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1) -> dict[str, np.ndarray]:
+def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1,
+                       theta0: float = 0.0) -> dict[str, np.ndarray]:
     """Readable single-candidate monitoring model in plain Python (slow).
 
     Uses the same physics functions as the kernel (their pure-Python
@@ -157,7 +158,8 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
     T_load = profile.load_torque(t)
     coeffs = [rl_coeffs.py_func(m.R[ph], m.L[ph], dt) for ph in range(3)]
     (a_a, h_a), (a_b, h_b), (a_c, h_c) = coeffs
-    thm = wm = thl = wl = 0.0
+    thm = thl = theta0
+    wm = wl = 0.0
     ia = ib = ic = 0.0
     integ = (0.0, 0.0, 0.0, 0.0)
     out = {name: np.zeros(t.size) for name in ("theta_m", "omega_m", "torque")}
@@ -217,11 +219,14 @@ class MonitoringModel:
         Test profile (default: :func:`emaphm.profiles.diagnostic`).
     n_sub : int
         Sub-steps per control period; the step is ``T_s / n_sub``.
+    theta0 : float
+        Initial motor angle [rad] (the actuator starts at rest).
     """
 
     params: ActuatorParams = field(default_factory=siemens_1fk7060)
     profile: Profile = field(default_factory=diagnostic)
     n_sub: int = 1
+    theta0: float = 0.0
 
     def __post_init__(self) -> None:
         if isinstance(self.n_sub, bool) or not isinstance(self.n_sub, int) or self.n_sub < 1:
@@ -254,7 +259,7 @@ class MonitoringModel:
 
     def simulate_population(self, K) -> PopulationResult:
         """Traces of every candidate in ``K`` (n_pop, 8)."""
-        P, CP = pack_population(self.params, K)
+        P, CP = pack_population(self.params, K, self.theta0)
         empty = np.zeros((0, 3))
         out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
         return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)
@@ -275,13 +280,13 @@ class MonitoringModel:
         if i_target.shape != (n, 3) or weights.shape != (n, 3):
             raise ValueError(f"target currents and weights must have shape ({n}, 3) on the model "
                              f"grid, got {i_target.shape} and {weights.shape}")
-        P, CP = pack_population(self.params, K)
+        P, CP = pack_population(self.params, K, self.theta0)
         _, _, fitness, status = self._run(CP, P, i_target, weights, False)
         return fitness, status
 
     def simulate_params(self, params: ActuatorParams) -> PopulationResult:
         """Traces of an actuator given by its (possibly faulty) parameters."""
-        P, CP = pack(params)
+        P, CP = pack(params, self.theta0)
         empty = np.zeros((0, 3))
         out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
         return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)

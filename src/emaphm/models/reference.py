@@ -30,7 +30,7 @@ from .controller import control_step
 from .inverter import modulate, on_fraction, triangle
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_L_A, C_R_A, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I,
-                     P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_V_DC, pack)
+                     P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack)
 from .mechanics import transmission_step
 from .pmsm import back_emf_coeffs, phase_step, rl_coeffs, torque
 
@@ -100,9 +100,9 @@ def _rm_kernel(P, cp, theta_ref, T_load, n_sub, pwm,
     a_c, h_c = rl_coeffs(cp[C_R_A + 2], cp[C_L_A + 2], dt)
     R_a, R_b, R_c = cp[C_R_A], cp[C_R_A + 1], cp[C_R_A + 2]
     L_a, L_b, L_c = cp[C_L_A], cp[C_L_A + 1], cp[C_L_A + 2]
-    thm = 0.0
+    thm = P[P_THETA0]
     wm = 0.0
-    thl = 0.0
+    thl = P[P_THETA0]
     wl = 0.0
     ia = 0.0
     ib = 0.0

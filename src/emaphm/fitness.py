@@ -1,0 +1,133 @@
+"""Fitness of candidate fault vectors against a measured trace (paper Eq. 4).
+
+    e = sum_i sum_j (I_MM,ij - I_meas,ij)^2 / ((dI_meas,ij/dT)^2 + 1) * dT
+
+summed over the samples ``i`` and the three phases ``j``; the derivative is
+taken by central differences (``numpy.gradient``) on the measured currents and
+divided by the step ``dT``. The weighting depends only on the measured trace,
+so it is computed once. The measured trace is resampled onto the monitoring
+model's grid (its control instants). Option ``mode="equivalent"`` compares the
+single equivalent current instead of the three phases: the magnitude of the
+current space vector ``sqrt(i_alpha^2 + i_beta^2)`` (equal to the phase
+amplitude for balanced currents).
+
+:class:`Eq4Objective` is the batch objective the optimizers see: ``(n_pop, 8)
+-> (n_pop,)``, infinite for a diverged candidate.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+
+from .models.monitoring import MonitoringModel
+from .params import ActuatorParams, siemens_1fk7060
+from .profiles import Profile, ProfileError
+from .traces import Trace, TraceError, resample, validate
+
+__all__ = ["eq4_weights", "equivalent_current", "Eq4Objective", "FITNESS_MODES"]
+
+FITNESS_MODES = ("phases", "equivalent")
+
+
+def eq4_weights(i_meas: np.ndarray, dT: float) -> np.ndarray:
+    """Per-sample weights ``dT / ((dI/dT)^2 + 1)`` of Eq. 4, same shape as ``i_meas``."""
+    i_meas = np.asarray(i_meas, dtype=float)
+    dIdT = np.gradient(i_meas, axis=0) / dT
+    return dT / (dIdT * dIdT + 1.0)
+
+
+def equivalent_current(i_abc: np.ndarray) -> np.ndarray:
+    """Magnitude of the current space vector, ``(..., 3) -> (...)`` [A]."""
+    i_abc = np.asarray(i_abc, dtype=float)
+    i_al = (2.0 * i_abc[..., 0] - i_abc[..., 1] - i_abc[..., 2]) / 3.0
+    i_be = (i_abc[..., 1] - i_abc[..., 2]) / np.sqrt(3.0)
+    return np.hypot(i_al, i_be)
+
+
+@dataclass
+class _Stats:
+    calls: int = 0
+    evaluations: int = 0
+    kernel_s: float = 0.0
+    diverged: int = 0
+
+
+@dataclass(frozen=True)
+class Eq4Objective:
+    """Eq. 4 between the monitoring model and measured currents, for a population.
+
+    Build it with :meth:`from_trace`. Calling it with ``K`` (n_pop, 8) returns
+    the fitness (n_pop,). ``stats`` counts calls, evaluations, diverged
+    candidates and the seconds spent in the model kernel.
+    """
+
+    model: MonitoringModel
+    target: np.ndarray            # (n, 3) measured currents on the model grid, or (n, 1)
+    weights: np.ndarray           # same shape
+    mode: Literal["phases", "equivalent"] = "phases"
+    stats: _Stats = field(default_factory=_Stats, compare=False)
+
+    @classmethod
+    def from_trace(cls, trace: Trace, params: ActuatorParams | None = None, *, n_sub: int = 1,
+                   mode: str = "phases", load_torque: np.ndarray | None = None) -> "Eq4Objective":
+        """Fitness against ``trace``: the model replays its command from its first angle.
+
+        The load torque is the one of the profile stored in the trace's metadata
+        (a simulated trace) unless given; a bench trace without it gets zero.
+        """
+        if mode not in FITNESS_MODES:
+            raise ValueError(f"unknown fitness mode {mode!r}; choose one of {', '.join(FITNESS_MODES)}")
+        params = params if params is not None else siemens_1fk7060()
+        validate(trace, min_rotation=0.0)
+        T_s = params.inverter.T_s
+        t0 = float(trace.t[0])
+        n = int(np.floor((float(trace.t[-1]) - t0) / T_s + 1e-9)) + 1
+        if n < 16:
+            raise TraceError(f"trace lasts {trace.duration:.3g} s, fewer than 16 control periods of "
+                             f"{T_s:g} s; record at least one full diagnostic profile (0.5 s)")
+        t_model = np.arange(n) * T_s
+        on_grid = resample(trace, t0 + t_model)
+        if load_torque is None:
+            load_torque = np.zeros(n)
+            prof = trace.meta.get("profile") if isinstance(trace.meta, dict) else None
+            if isinstance(prof, dict):
+                try:
+                    load_torque = Profile.from_dict(prof).load_torque(t_model)
+                except ProfileError:
+                    pass
+        else:
+            load_torque = np.asarray(load_torque, dtype=float)
+            if load_torque.shape != (n,):
+                raise ValueError(f"load_torque must have shape ({n},) on the model grid")
+        profile = Profile.from_samples(t_model, on_grid.theta_ref, load_torque)
+        model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]))
+        i = np.asarray(on_grid.i_abc)
+        target = equivalent_current(i)[:, None] if mode == "equivalent" else i
+        return cls(model, np.ascontiguousarray(target), np.ascontiguousarray(eq4_weights(target, T_s)),
+                   mode)
+
+    @property
+    def n_samples(self) -> int:
+        return self.target.shape[0]
+
+    def __call__(self, K: np.ndarray) -> np.ndarray:
+        K = np.atleast_2d(np.asarray(K, dtype=float))
+        t0 = time.perf_counter()
+        if self.mode == "phases":
+            f, status = self.model.weighted_sse(K, self.target, self.weights)
+        else:
+            pop = self.model.simulate_population(K)
+            d = equivalent_current(pop.i_abc) - self.target[None, :, 0]
+            f = np.sum(self.weights[None, :, 0] * d * d, axis=1)
+            status = pop.status
+            f[status != 0] = np.inf
+        s = self.stats
+        s.kernel_s += time.perf_counter() - t0
+        s.calls += 1
+        s.evaluations += K.shape[0]
+        s.diverged += int(np.count_nonzero(status))
+        return f

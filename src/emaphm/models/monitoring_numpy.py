@@ -1,0 +1,302 @@
+"""The monitoring model (MM) vectorised with NumPy: time loop in Python, population in arrays.
+
+This module exists for two reasons:
+
+* it is the **vectorised-NumPy baseline** of ``benchmarks/bench_models.py``,
+  the way the MM would be written without a compiler, against which the Numba
+  kernel :func:`emaphm.models.monitoring._kernel` is measured;
+* it is an **independent check of the kernel's branch logic**: every scalar
+  ``if`` of the physics functions (clamping anti-windup, speed/current/voltage
+  saturation, min-max modulation, Borello stick/slip friction, backlash
+  contact, divergence freeze) is rewritten here as a whole-population
+  ``np.where`` mask, so a branch taken wrongly on either side shows up as a
+  disagreement in ``tests/test_monitoring_numpy.py``.
+
+It evaluates the SAME equations in the SAME order of floating-point operations
+as ``_kernel`` and the scalar functions it is built from (``control_step``,
+``modulate``, ``back_emf_coeffs``, ``phase_step``, ``torque``,
+``transmission_step``), so the two agree to round-off; the only sources of
+difference are the elementary functions (NumPy's ``sin``, ``cos``, ``exp``,
+``expm1`` against the libm calls Numba emits), a few ulp at most.
+
+It is slow (a few hundred NumPy calls per control period whatever the
+population size): use :class:`emaphm.models.monitoring.MonitoringModel` for work.
+
+Shapes: ``P (N_P,)`` and ``CP (n_pop, N_CP)`` from
+:func:`emaphm.models.layout.pack_population`; ``theta_ref`` [rad] and
+``T_load`` [N m] ``(n,)`` on the control grid ``k*T_s``; ``i_target`` [A]
+and ``weights`` [1/A^2] ``(n, 3)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP, C_L_A, C_R_A,
+                     P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W,
+                     P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_V_DC)
+from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED
+from .pmsm import COS_2PI_3, SIN_2PI_3
+
+__all__ = ["weighted_sse_numpy", "simulate_population_numpy"]
+
+SQRT3 = math.sqrt(3.0)
+
+
+# --- vectorised counterparts of the scalar physics functions (same operation order) ---
+
+def _sat(u, limit):
+    """``min(max(u, -limit), limit)`` elementwise."""
+    return np.minimum(np.maximum(u, -limit), limit)
+
+
+def _pi_step(error, integral, Kp, Ki, limit, T_s):
+    """Clamped PI (controller.pi_step): ``(saturated output, new integral)``."""
+    u = Kp * error + integral
+    y = _sat(u, limit)
+    integrate = (y == u) | ((u > limit) & (error < 0.0)) | ((u < -limit) & (error > 0.0))
+    return y, np.where(integrate, integral + Ki * error * T_s, integral)
+
+
+def _control_step(theta_ref, theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e,
+                  int_e, int_w, int_d, int_q, Kp, P):
+    """controller.control_step over the population; ``Kp (n_pop,)``, the rest from ``P``."""
+    Ki, Kd, omega_max = P[P_KI], P[P_KD], P[P_OMEGA_MAX]
+    Kp_w, Ki_w, T_max, k_T, I_max = P[P_KP_W], P[P_KI_W], P[P_T_MAX], P[P_K_T], P[P_I_MAX]
+    Kp_i, Ki_i, V_dc, T_s = P[P_KP_I], P[P_KI_I], P[P_V_DC], P[P_T_S]
+    e = theta_ref - theta_m
+    w_ref, int_e = _pi_step(e, int_e, Kp, Ki, omega_max, T_s)
+    w_ref = _sat(w_ref - Kd * omega_m, omega_max)
+    T_ref, int_w = _pi_step(w_ref - omega_m, int_w, Kp_w, Ki_w, T_max, T_s)
+    i_q_ref = _sat(T_ref / k_T, I_max)
+    # clarke, park
+    i_al = (2.0 * i_a - i_b - i_c) / 3.0
+    i_be = (i_b - i_c) / SQRT3
+    i_d = i_al * cos_e + i_be * sin_e
+    i_q = i_al * sin_e - i_be * cos_e
+    v_lim = V_dc / math.sqrt(3.0)
+    v_d, int_d = _pi_step(-i_d, int_d, Kp_i, Ki_i, v_lim, T_s)
+    v_q, int_q = _pi_step(i_q_ref - i_q, int_q, Kp_i, Ki_i, v_lim, T_s)
+    v_q = v_q + (k_T / 1.5) * omega_m
+    mag = np.sqrt(v_d * v_d + v_q * v_q)
+    over = mag > v_lim
+    scale = v_lim / np.where(over, mag, 1.0)
+    v_d = np.where(over, v_d * scale, v_d)
+    v_q = np.where(over, v_q * scale, v_q)
+    # inv_park, inv_clarke
+    v_al = v_d * cos_e + v_q * sin_e
+    v_be = v_d * sin_e - v_q * cos_e
+    v_a = v_al
+    v_b = -0.5 * v_al + 0.5 * SQRT3 * v_be
+    v_c = -0.5 * v_al - 0.5 * SQRT3 * v_be
+    return v_a, v_b, v_c, int_e, int_w, int_d, int_q
+
+
+def _modulate(v_a, v_b, v_c, V_dc):
+    """inverter.modulate: min-max injection, duties clipped to [0, 1]."""
+    hi = np.maximum(v_a, np.maximum(v_b, v_c))
+    lo = np.minimum(v_a, np.minimum(v_b, v_c))
+    off = 0.5 * V_dc - 0.5 * (hi + lo)
+    return tuple(np.minimum(np.maximum((v + off) / V_dc, 0.0), 1.0) for v in (v_a, v_b, v_c))
+
+
+def _back_emf_coeffs(theta_m, sin_e, cos_e, c0, ecc, ecc_phase, any_ecc):
+    """pmsm.back_emf_coeffs; ``c0 (n_pop, 3)``. Returns ``c_a, c_b, c_c``."""
+    s_a = sin_e
+    s_b = sin_e * COS_2PI_3 - cos_e * SIN_2PI_3
+    s_c = sin_e * COS_2PI_3 + cos_e * SIN_2PI_3
+    r_a, r_b, r_c = c0[:, 0] * s_a, c0[:, 1] * s_b, c0[:, 2] * s_c
+    if not any_ecc:
+        return r_a, r_b, r_c
+    g = theta_m + ecc_phase
+    cg = np.cos(g)
+    sg = np.sin(g)
+    m_a = 1.0 + ecc * cg
+    m_b = 1.0 + ecc * (cg * COS_2PI_3 - sg * SIN_2PI_3)
+    m_c = 1.0 + ecc * (cg * COS_2PI_3 + sg * SIN_2PI_3)
+    no = ecc == 0.0           # the kernel's ``if ecc == 0.0`` branch
+    return (np.where(no, r_a, r_a * m_a), np.where(no, r_b, r_b * m_b),
+            np.where(no, r_c, r_c * m_c))
+
+
+def _torque(i_a, i_b, i_c, c_a, c_b, c_c):
+    return c_a * i_a + c_b * i_b + c_c * i_c
+
+
+def _friction_step(omega, T_act, FSJ, FDJ, J, dt):
+    """mechanics.friction_step (Borello stick/slip) with masks for its four exits."""
+    moving = omega != 0.0
+    sgn = np.where(omega > 0.0, 1.0, -1.0)
+    w = omega + dt * (T_act - FDJ * sgn) / J
+    w = np.where(w * sgn <= 0.0, 0.0, w)                    # stops inside the step
+    sgn_t = np.where(T_act > 0.0, 1.0, -1.0)
+    breakaway = np.where(np.abs(T_act) <= FSJ, 0.0, dt * (T_act - FSJ * sgn_t) / J)
+    return np.where(moving, w, breakaway)
+
+
+def _transmission_step(theta_m, omega_m, theta_l, omega_l, T_m, T_l,
+                       J_m, C_m, FSJ, FDJ, J_l, C_l, backlash, dt):
+    """mechanics.transmission_step: free motion, or the coupled body where the gap closes."""
+    w_m = _friction_step(omega_m, T_m - C_m * omega_m, FSJ, FDJ, J_m, dt)
+    w_l = omega_l + dt * (-T_l - C_l * omega_l) / J_l
+    th_m = theta_m + 0.5 * dt * (w_m + omega_m)
+    th_l = theta_l + 0.5 * dt * (w_l + omega_l)
+    half = 0.5 * backlash
+    gap = th_m - th_l
+    free = (-half <= gap) & (gap <= half)
+    if free.all():
+        return th_m, w_m, th_l, w_l
+    side = np.where(gap > 0.0, 1.0, -1.0)
+    J = J_m + J_l
+    w0 = (J_m * omega_m + J_l * omega_l) / J
+    w = _friction_step(w0, T_m - T_l - (C_m + C_l) * w0, FSJ, FDJ, J, dt)
+    th_c = theta_m + 0.5 * dt * (w + omega_m)
+    return (np.where(free, th_m, th_c), np.where(free, w_m, w),
+            np.where(free, th_l, th_c - side * half), np.where(free, w_l, w))
+
+
+# --- the assembly ----------------------------------------------------------------------
+
+def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
+    P = np.asarray(P, dtype=float)
+    CP = np.atleast_2d(np.asarray(CP, dtype=float))
+    theta_ref = np.asarray(theta_ref, dtype=float)
+    T_load = np.asarray(T_load, dtype=float)
+    if isinstance(n_sub, bool) or int(n_sub) != n_sub or n_sub < 1:
+        raise ValueError(f"n_sub must be an integer >= 1, got {n_sub!r}")
+    n_sub = int(n_sub)
+    n_pop, n = CP.shape[0], theta_ref.shape[0]
+    if T_load.shape != (n,):
+        raise ValueError(f"theta_ref and T_load must have the same shape (n,), got "
+                         f"{theta_ref.shape} and {T_load.shape}")
+    with_fit = i_target is not None
+    if with_fit and (i_target.shape != (n, 3) or weights.shape != (n, 3)):
+        raise ValueError(f"target currents and weights must have shape ({n}, 3), got "
+                         f"{i_target.shape} and {weights.shape}")
+    p = P[P_POLES]
+    T_s = P[P_T_S]
+    dt = T_s / n_sub
+    J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
+    V_dc = P[P_V_DC]
+    Kp = CP[:, C_KP]
+    FSJ, FDJ, backlash = CP[:, C_FSJ], CP[:, C_FDJ], CP[:, C_BACKLASH]
+    c0 = CP[:, C_C0_A:C_C0_A + 3]
+    ecc, ecc_phase = CP[:, C_ECC], CP[:, C_ECC_PHASE]
+    any_ecc = bool(np.any(ecc != 0.0))
+    # exact RL coefficients (pmsm.rl_coeffs), (n_pop, 3)
+    R, L = CP[:, C_R_A:C_R_A + 3], CP[:, C_L_A:C_L_A + 3]
+    x = dt * R / L
+    a = np.exp(-x)
+    h = -np.expm1(-x) / R
+    a_a, a_b, a_c = a[:, 0], a[:, 1], a[:, 2]
+    h_a, h_b, h_c = h[:, 0], h[:, 1], h[:, 2]
+    h_sum = h_a + h_b + h_c
+    # state
+    zeros = np.zeros(n_pop)
+    th_m, w_m, th_l, w_l = zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
+    i_a, i_b, i_c = zeros.copy(), zeros.copy(), zeros.copy()
+    integ = [zeros.copy() for _ in range(4)]
+    fitness = np.zeros(n_pop)
+    alive = np.ones(n_pop, dtype=bool)
+    if store:
+        out_i = np.zeros((n_pop, n, 3))
+        out_th, out_w, out_tq = np.zeros((n_pop, n)), np.zeros((n_pop, n)), np.zeros((n_pop, n))
+    for k in range(n):
+        ref = theta_ref[k]
+        T_l = T_load[k]
+        # frozen (diverged) candidates keep their last good state and are masked below
+        thm, wm, thl, wl, ia, ib, ic = th_m, w_m, th_l, w_l, i_a, i_b, i_c
+        if with_fit:
+            da = ia - i_target[k, 0]
+            db = ib - i_target[k, 1]
+            dc = ic - i_target[k, 2]
+            inc = weights[k, 0] * da * da + weights[k, 1] * db * db + weights[k, 2] * dc * dc
+            fitness = np.where(alive, fitness + inc, fitness)
+        s_e = np.sin(p * thm)
+        c_e = np.cos(p * thm)
+        v_a, v_b, v_c, e0, e1, e2, e3 = _control_step(ref, thm, wm, ia, ib, ic, s_e, c_e,
+                                                      *integ, Kp, P)
+        d_a, d_b, d_c = _modulate(v_a, v_b, v_c, V_dc)
+        u_a, u_b, u_c = d_a * V_dc, d_b * V_dc, d_c * V_dc
+        for s in range(n_sub):
+            if s > 0:
+                s_e = np.sin(p * thm)
+                c_e = np.cos(p * thm)
+            ca, cb, cc = _back_emf_coeffs(thm, s_e, c_e, c0, ecc, ecc_phase, any_ecc)
+            if s == 0 and store:
+                out_i[alive, k, 0] = ia[alive]
+                out_i[alive, k, 1] = ib[alive]
+                out_i[alive, k, 2] = ic[alive]
+                out_th[alive, k] = thm[alive]
+                out_w[alive, k] = wm[alive]
+                out_tq[alive, k] = _torque(ia, ib, ic, ca, cb, cc)[alive]
+            # pmsm.phase_step
+            e_a, e_b, e_c = ca * wm, cb * wm, cc * wm
+            free = (a_a * ia + a_b * ib + a_c * ic + h_a * (u_a - e_a) + h_b * (u_b - e_b)
+                    + h_c * (u_c - e_c))
+            v_n = free / h_sum
+            ja = a_a * ia + h_a * (u_a - e_a - v_n)
+            jb = a_b * ib + h_b * (u_b - e_b - v_n)
+            jc = a_c * ic + h_c * (u_c - e_c - v_n)
+            T_m = 0.5 * (_torque(ia, ib, ic, ca, cb, cc) + _torque(ja, jb, jc, ca, cb, cc))
+            ia, ib, ic = ja, jb, jc
+            thm, wm, thl, wl = _transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
+                                                  FSJ, FDJ, J_l, C_l, backlash, dt)
+        ok = ((np.abs(ia) < I_DIVERGED) & (np.abs(ib) < I_DIVERGED) & (np.abs(ic) < I_DIVERGED)
+              & (np.abs(wm) < OMEGA_DIVERGED) & (np.abs(thm) < 1e9))
+        newly = alive & ~ok
+        if newly.any():
+            fitness = np.where(newly, np.inf, fitness)
+            alive = alive & ok
+        keep = alive
+        th_m, w_m = np.where(keep, thm, th_m), np.where(keep, wm, w_m)
+        th_l, w_l = np.where(keep, thl, th_l), np.where(keep, wl, w_l)
+        i_a, i_b, i_c = np.where(keep, ia, i_a), np.where(keep, ib, i_b), np.where(keep, ic, i_c)
+        integ = [np.where(keep, new, old) for new, old in zip((e0, e1, e2, e3), integ)]
+    status = np.where(alive, 0, STATUS_DIVERGED).astype(np.int64)
+    if store:
+        return {"i_abc": out_i, "theta_m": out_th, "omega_m": out_w, "torque": out_tq,
+                "status": status}
+    return fitness, status
+
+
+def weighted_sse_numpy(P, CP, theta_ref, T_load, n_sub, i_target, weights):
+    """Fitness (Eq. 4) of every candidate: ``sum_k sum_j weights[k, j] (i_j - i_target[k, j])^2``.
+
+    Parameters
+    ----------
+    P, CP : ndarray
+        Shared ``(N_P,)`` and per-candidate ``(n_pop, N_CP)`` parameters, as
+        :func:`emaphm.models.layout.pack_population` returns them.
+    theta_ref, T_load : ndarray (n,)
+        Position command [rad] and load torque [N m] at the control instants.
+    n_sub : int
+        Sub-steps per control period.
+    i_target, weights : ndarray (n, 3)
+        Target phase currents [A] and their weights.
+
+    Returns
+    -------
+    fitness : ndarray (n_pop,)
+        ``inf`` for a candidate that diverged.
+    status : ndarray (n_pop,) of int64
+        0 ok, 1 diverged (:data:`emaphm.models.monitoring.STATUS_DIVERGED`).
+    """
+    i_target = np.asarray(i_target, dtype=float)
+    weights = np.asarray(weights, dtype=float)
+    with np.errstate(all="ignore"):   # frozen/diverging candidates may overflow; masked
+        return _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, False)
+
+
+def simulate_population_numpy(P, CP, theta_ref, T_load, n_sub) -> dict[str, np.ndarray]:
+    """Traces of every candidate, sampled at the control instants.
+
+    Arguments as :func:`weighted_sse_numpy`. Returns a dict with ``i_abc
+    (n_pop, n, 3)`` [A], ``theta_m`` [rad], ``omega_m`` [rad/s], ``torque``
+    [N m] ``(n_pop, n)`` and ``status (n_pop,)``; a diverged candidate's traces
+    stop where it left the physical range and are zero after, as the kernel's.
+    """
+    with np.errstate(all="ignore"):
+        return _run(P, CP, theta_ref, T_load, n_sub, None, None, True)
