@@ -1,0 +1,287 @@
+"""Command-line interface: a thin layer over the library.
+
+    emaphm simulate   simulate an actuator and write its trace (CSV or Parquet)
+    emaphm scenarios  list the named fault scenarios
+    emaphm diagnose   identify the faults of a trace (or of a simulated scenario)
+    emaphm params     write the default parameters as a TOML file to edit
+
+Bad input exits with status 2 and a message that says what to fix.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from . import __version__
+
+EXIT_USAGE = 2
+
+
+class UsageError(Exception):
+    """Bad input found after parsing; printed without a traceback, exit status 2."""
+
+
+def _load_params(path: str | None):
+    from .params import load_params, siemens_1fk7060
+
+    return load_params(path, partial=True) if path else siemens_1fk7060()
+
+
+def _check_out_path(path: str, suffixes: tuple[str, ...], what: str) -> Path:
+    p = Path(path)
+    if p.suffix.lower() not in suffixes:
+        raise UsageError(f"{what} {path!r} must end in {' or '.join(suffixes)}")
+    if not p.parent.exists():
+        raise UsageError(f"{what} {path!r}: folder {p.parent} does not exist; create it first")
+    return p
+
+
+def _seed(value: str) -> int:
+    try:
+        s = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}") from None
+    if s < 0:
+        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}")
+    return s
+
+
+# ----------------------------------------------------------------------------- scenarios
+def cmd_scenarios(args: argparse.Namespace) -> int:
+    from .faults import K_NAMES, SCENARIOS
+
+    if args.json:
+        print(json.dumps({n: k.tolist() for n, k in SCENARIOS.items()}))
+        return 0
+    width = max(len(n) for n in SCENARIOS)
+    print(f"{'scenario':{width}s}  k = [{', '.join(K_NAMES)}]")
+    for name, k in SCENARIOS.items():
+        print(f"{name:{width}s}  {','.join(f'{x:g}' for x in k)}")
+    return 0
+
+
+# ----------------------------------------------------------------------------- simulate
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .faults import as_k, scenario
+    from .models.reference import Sensors
+    from .plots import plot_trace
+    from .simulate import DEFAULT_SENSORS, simulate
+    from .traces import write_trace
+
+    if (args.k is None) == (args.scenario is None):
+        raise UsageError("give exactly one of --k K1,...,K8 or --scenario NAME (see `emaphm scenarios`)")
+    out = _check_out_path(args.out, (".csv", ".parquet"), "--out")
+    plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
+    k = as_k(args.k) if args.k is not None else scenario(args.scenario)
+    params = _load_params(args.params)
+    if args.noise is None:
+        sensors = DEFAULT_SENSORS if args.seed is not None else Sensors()
+    else:
+        sensors = Sensors(current_noise=args.noise, current_lsb=DEFAULT_SENSORS.current_lsb)
+    if sensors.current_noise > 0 and args.seed is None:
+        raise UsageError("sensor noise needs --seed S (randomness always flows from an explicit seed)")
+    t0 = time.perf_counter()
+    trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed)
+    if args.scenario:
+        trace = trace.with_meta(scenario=args.scenario)
+    elapsed = time.perf_counter() - t0
+    write_trace(trace, out)
+    print(f"wrote {out} ({trace.n} samples, {trace.duration:.3f} s, {args.model} model, "
+          f"simulated in {elapsed:.2f} s)", file=sys.stderr)
+    if plot:
+        overlay = None
+        if not np.allclose(k, scenario("nominal")) and not args.no_overlay:
+            overlay = simulate(scenario("nominal"), model=args.model, params=params).with_meta(
+                scenario="nominal")
+        plot_trace(trace, overlay, path=plot)
+        print(f"wrote {plot}", file=sys.stderr)
+    return 0
+
+
+# ----------------------------------------------------------------------------- diagnose
+class _Progress:
+    """One status line on stderr: iteration, best fitness, evaluations per second."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled
+        self.t0 = time.perf_counter()
+        self.last = 0.0
+
+    def __call__(self, state: Any) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self.last < 0.1:
+            return
+        self.last = now
+        rate = state.nfev / max(now - self.t0, 1e-9)
+        sys.stderr.write(f"\r  iteration {state.nit:4d}  best fitness {state.best_f:.4e}  "
+                         f"{state.nfev:6d} evaluations  {rate:7.0f} evals/s")
+        sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+def _table(ident, diag) -> str:
+    from .faults import K_LABELS, K_NAMES
+
+    lines = [f"{'k':4s} {'component':26s} {'identified':>10s}"
+             + (f" {'true':>8s}" if ident.k_true is not None else "")]
+    for i, (name, label) in enumerate(zip(K_NAMES, K_LABELS)):
+        row = f"k{i + 1:<3d} {label:26s} {ident.k[i]:10.4f}"
+        if ident.k_true is not None:
+            row += f" {ident.k_true[i]:8.4f}"
+        lines.append(row)
+    lines.append("")
+    lines.append(f"algorithm {ident.algorithm}, seed {ident.seed}: {ident.evaluations} evaluations, "
+                 f"{ident.iterations} iterations in {ident.elapsed_s:.2f} s "
+                 f"({ident.evals_per_s:.0f} evals/s, {100 * ident.kernel_s / max(ident.elapsed_s, 1e-12):.0f}% "
+                 f"in the model kernel), stop: {ident.reason}")
+    lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}")
+    if ident.error_pct is not None:
+        lines.append(f"identification error (Eq. 9) {ident.error_pct:.2f}%")
+    lines.append("")
+    lines.append("verdict: " + ("HEALTHY" if diag.healthy else "FAULTY"))
+    for f in diag.faults:
+        lines.append(f"  - {f.mode}{' (phase ' + f.phase + ')' if f.phase else ''}: {f.reading}")
+    return "\n".join(lines)
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from .diagnosis import diagnose
+    from .faults import scenario
+    from .identify import identify, parse_budget
+    from .optim import ALGORITHMS
+    from .plots import plot_identification
+    from .simulate import DEFAULT_SENSORS, simulate
+    from .traces import read_trace
+
+    if (args.trace is None) == (args.scenario is None):
+        raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
+    if args.algorithm not in ALGORITHMS:
+        raise UsageError(f"unknown algorithm {args.algorithm!r}; choose one of {', '.join(sorted(ALGORITHMS))}")
+    budget: Any = args.budget
+    if isinstance(budget, str) and budget.strip().isdigit():
+        budget = int(budget)
+    try:
+        parse_budget(budget)
+    except ValueError as exc:
+        raise UsageError(f"--budget: {exc}") from None
+    plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
+    params = _load_params(args.params)
+    if args.trace is not None:
+        path = Path(args.trace)
+        if not path.exists():
+            raise UsageError(f"trace file {path} does not exist")
+        trace = read_trace(path)
+    else:
+        k_true = scenario(args.scenario)
+        print(f"simulating scenario {args.scenario} on the reference model "
+              f"(switching PWM, sensor noise {DEFAULT_SENSORS.current_noise * 1e3:.0f} mA rms, "
+              f"seed {args.seed})", file=sys.stderr)
+        trace = simulate(k_true, model="reference", params=params, sensors=DEFAULT_SENSORS,
+                         seed=args.seed).with_meta(scenario=args.scenario)
+    progress = _Progress(enabled=not args.quiet and sys.stderr.isatty())
+    if not args.quiet:
+        print(f"identifying with {args.algorithm.upper()} (seed {args.seed})", file=sys.stderr)
+    try:
+        ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
+                         callback=progress)
+    finally:
+        progress.close()
+    diag = diagnose(ident.k, params=params)
+    if args.json:
+        out = {**ident.to_dict(), **diag.to_dict(), "scenario": args.scenario,
+               "trace": args.trace, "version": __version__}
+        if not args.history:
+            out.pop("history", None)
+        print(json.dumps(out))
+    else:
+        print(_table(ident, diag))
+    if plot:
+        plot_identification(trace, ident, path=plot)
+        print(f"wrote {plot}", file=sys.stderr)
+    return 0
+
+
+# ----------------------------------------------------------------------------- params
+def cmd_params(args: argparse.Namespace) -> int:
+    from .params import save_params, siemens_1fk7060
+
+    out = _check_out_path(args.out, (".toml",), "--out")
+    save_params(siemens_1fk7060(), out)
+    print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it and "
+          "pass it with --params", file=sys.stderr)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="emaphm", description=__doc__.split("\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--version", action="version", version=f"emaphm {__version__}")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("simulate", help="simulate an actuator and write its trace")
+    s.add_argument("--model", choices=("reference", "monitoring"), default="reference")
+    s.add_argument("--k", help="fault vector, 8 comma-separated values in [0,1], e.g. 0.75,0,0,0,0,0,0.5,0.5")
+    s.add_argument("--scenario", help="a named scenario (see `emaphm scenarios`)")
+    s.add_argument("--out", required=True, help="output trace, .csv or .parquet")
+    s.add_argument("--plot", help="also write a figure (.png/.svg/.pdf)")
+    s.add_argument("--no-overlay", action="store_true", help="do not overlay the nominal run on the plot")
+    s.add_argument("--seed", type=_seed, help="seed of the sensor noise (enables realistic sensors)")
+    s.add_argument("--noise", type=float, help="current noise in A rms (default 0.02 with --seed, else 0)")
+    s.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
+    s.set_defaults(func=cmd_simulate)
+
+    c = sub.add_parser("scenarios", help="list the named fault scenarios")
+    c.add_argument("--json", action="store_true")
+    c.set_defaults(func=cmd_scenarios)
+
+    d = sub.add_parser("diagnose", help="identify the faults of a trace")
+    d.add_argument("trace", nargs="?", help="trace file (.csv or .parquet)")
+    d.add_argument("--scenario", help="simulate this scenario on the reference model and diagnose it")
+    d.add_argument("--algorithm", default="pso", help="pso (default), de or gwo")
+    d.add_argument("--seed", type=_seed, default=0, help="seed of the optimizer (and of the sensor noise)")
+    d.add_argument("--budget", help="evaluations (e.g. 5000) or wall-clock seconds (e.g. 10s); "
+                                    "default: the paper's stopping rules")
+    d.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    d.add_argument("--history", action="store_true", help="include the convergence history in the JSON")
+    d.add_argument("--plot", help="write measured vs identified currents and convergence (.png)")
+    d.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
+    d.add_argument("--quiet", action="store_true", help="no progress line")
+    d.set_defaults(func=cmd_diagnose)
+
+    p = sub.add_parser("params", help="write the default actuator parameters to a TOML file")
+    p.add_argument("--out", required=True)
+    p.set_defaults(func=cmd_params)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except UsageError as exc:
+        print(f"emaphm {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except (ValueError, FileNotFoundError) as exc:   # TraceError, ParameterError, FaultVectorError...
+        print(f"emaphm {args.command}: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print(f"emaphm {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
