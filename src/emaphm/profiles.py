@@ -103,7 +103,7 @@ class Trapezoid:
         d = abs(self.height)
         v = min(self.v_max, math.sqrt(d * self.a_max))
         ta = v / self.a_max                     # acceleration time
-        tc = d / v - ta                         # cruise time (>= 0)
+        tc = max(d / v - ta, 0.0)               # cruise time (rounding can make it -0)
         tau = np.clip(t - self.t0, 0.0, 2 * ta + tc)
         acc = 0.5 * self.a_max * np.minimum(tau, ta) ** 2
         cruise = v * np.clip(tau - ta, 0.0, tc)

@@ -69,6 +69,8 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     dt = T_s / n_sub
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
     V_dc = P[P_V_DC]
+    Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
+    T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
     # per-candidate exact RL coefficients for this step
     a = np.empty((n_pop, 3))
     h = np.empty((n_pop, 3))
@@ -103,8 +105,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             v_a, v_b, v_c, T_ref, e0, e1, e2, e3 = control_step(
                 ref, thm, wm, ia, ib, ic, s_e, c_e,
                 integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3],
-                CP[j, C_KP], P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W],
-                P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I], V_dc, T_s)
+                CP[j, C_KP], Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s)
             integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
             d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
             for s in range(n_sub):
