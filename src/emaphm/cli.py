@@ -11,6 +11,7 @@ Bad input exits with status 2 and a message that says what to fix.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import sys
 import time
@@ -264,6 +265,16 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("params", help="write the default actuator parameters to a TOML file")
     p.add_argument("--out", required=True)
     p.set_defaults(func=cmd_params)
+
+    # subcommands of the campaign and prognosis layers live beside their code
+    for module in ("emaphm.campaign.cli", "emaphm.prognosis.cli"):
+        try:
+            register = importlib.import_module(module).register
+        except ModuleNotFoundError as exc:
+            if exc.name is None or not module.startswith(exc.name):
+                raise
+            continue
+        register(sub)
     return ap
 
 
