@@ -7,6 +7,7 @@ the box ``[0, 1]^8``) to an optimizer of :mod:`emaphm.optim` and returns an
 
 from __future__ import annotations
 
+import json
 import re
 import time
 from dataclasses import dataclass, field
@@ -111,7 +112,7 @@ class Identification:
             "evals_per_s": float(self.evals_per_s),
             "reason": self.reason,
             "diverged": int(self.diverged),
-            "options": self.options,
+            "options": _jsonable(self.options),
             "history": [float(x) for x in self.history],
             "polish_evaluations": int(self.polish_evaluations),
             "polish_s": float(self.polish_s),
@@ -123,6 +124,37 @@ class Identification:
             d["error_pct"] = float(self.error_pct)
             d["error_pct_raw"] = self.error_pct_raw
         return d
+
+
+#: Largest number of evaluations the polish may spend (it usually needs 150-500).
+POLISH_MAX_EVALUATIONS = 2000
+
+
+def _terms(termination: Any) -> list[Any]:
+    if termination is None:
+        return []
+    return list(getattr(termination, "terms", None) or [termination])
+
+
+def _remaining_evaluations(termination: Any, used: int, cap: int) -> int:
+    left = cap
+    for term in _terms(termination):
+        if isinstance(term, MaxEvaluations):
+            left = min(left, term.n - used)
+    return left
+
+
+def _remaining_seconds(termination: Any, used: float) -> float:
+    left = float("inf")
+    for term in _terms(termination):
+        if isinstance(term, WallClock):
+            left = min(left, term.seconds - used)
+    return left
+
+
+def _jsonable(value: Any) -> Any:
+    """Options as plain JSON values (NumPy scalars and arrays included)."""
+    return json.loads(json.dumps(value, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o)))
 
 
 def _k_true(trace: Trace) -> np.ndarray | None:
@@ -162,8 +194,10 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     polish
         Refine the metaheuristic's best point by a batched compass search
         (:func:`emaphm.optim.local.compass_search`, step 0.05 down to 1e-4,
-        at most 2000 evaluations; about 0.1 s). False gives the bare algorithm,
-        as in the paper.
+        at most 2000 evaluations; about 0.1 s). It is charged to an evaluation
+        or wall-clock budget (and skipped when too little is left), and skipped
+        when a callback stopped the run. False gives the bare algorithm, as in
+        the paper.
     search
         Search space (:mod:`emaphm.search`): ``"ecc-xy"`` (default, Cartesian
         eccentricity) or ``"k"`` (the paper's, k itself).
@@ -194,8 +228,13 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     z, fit, n_polish, history = res.x, float(res.fun), 0, np.asarray(res.history, dtype=float)
     k_raw = np.clip(to_k(z, search)[0], 0.0, 1.0)
     polish_s = 0.0
-    if polish and np.isfinite(res.fun):
-        pol = compass_search(fitness, z, box, f0=float(res.fun))
+    # the polish is charged to the budget and skipped when a callback stopped the run
+    polish_evals = _remaining_evaluations(termination, res.nfev, POLISH_MAX_EVALUATIONS)
+    polish_time = _remaining_seconds(termination, time.perf_counter() - t0)
+    if (polish and np.isfinite(res.fun) and res.reason != "callback"
+            and polish_evals >= 2 * z.size and polish_time > 0):
+        pol = compass_search(fitness, z, box, f0=float(res.fun), max_evals=polish_evals,
+                             max_seconds=polish_time)
         z, fit, n_polish, polish_s = pol.x, float(pol.fun), pol.nfev, pol.elapsed_s
         history = np.concatenate([history, pol.history[1:]])
     k = np.clip(to_k(z, search)[0], 0.0, 1.0)

@@ -56,6 +56,7 @@ from typing import Any
 import tomli_w
 
 __all__ = [
+    "C0_1FK7060",
     "ParameterError",
     "Motor",
     "Inverter",
@@ -74,6 +75,10 @@ class ParameterError(ValueError):
 
 
 Phase3 = tuple[float, float, float]
+
+#: Back-EMF coefficient of the reconstructed 1FK7060-2AC71: k_E = 135 V per 1000 rpm
+#: (line-to-line RMS) -> peak per phase per mechanical rad/s [V s/rad].
+C0_1FK7060 = math.sqrt(2.0) * 135.0 / math.sqrt(3.0) / (1000.0 * 2.0 * math.pi / 60.0)
 
 # unit of every field, used in error messages and in the TOML comments
 _UNITS: dict[str, str] = {
@@ -151,7 +156,7 @@ class Motor:
     p: int = 4
     R: Phase3 = (3.15, 3.15, 3.15)
     L: Phase3 = (22e-3, 22e-3, 22e-3)
-    c0: Phase3 = (1.0527, 1.0527, 1.0527)
+    c0: Phase3 = (C0_1FK7060, C0_1FK7060, C0_1FK7060)
     ecc: float = 0.0
     ecc_phase: float = 0.0
     J_m: float = 7.7e-4
@@ -221,7 +226,7 @@ class Controller:
     omega_max: float = 200.0
     Kp_w: float = 0.6
     Ki_w: float = 12.0
-    k_T: float = 1.579
+    k_T: float = 1.5 * C0_1FK7060
 
     def __post_init__(self) -> None:
         o = "Controller"
@@ -340,15 +345,13 @@ def siemens_1fk7060() -> ActuatorParams:
     Motor values are reconstructed from the 1FK7 family and the order code, NOT
     taken from the data sheet (the paper's Table 2 is missing from our copy):
     p = 4, R = 3.15 ohm, L = 22 mH (T_el = 7 ms), k_E = 135 V/krpm line-to-line
-    RMS -> c0 = sqrt(2)*135/sqrt(3)/104.72 = 1.0527 V s/rad peak per phase,
+    RMS -> c0 = sqrt(2)*135/sqrt(3)/104.72 = 1.0526 V s/rad peak per phase,
     J_m = 7.7e-4 kg m^2, T_max = 18 N m, I_max = 10 A RMS = 14.14 A peak.
     Mechanics and controller are design defaults of emaphm: a load inertia
     equal to the rotor's, dry friction 0.08 / 0.12 N m (dynamic / static),
     backlash 2e-4 rad, DC link 600 V, PWM and control at 8 kHz.
     """
-    c0 = math.sqrt(2.0) * 135.0 / math.sqrt(3.0) / (1000.0 * 2.0 * math.pi / 60.0)
-    return ActuatorParams(motor=Motor(c0=(c0, c0, c0)), controller=Controller(k_T=1.5 * c0),
-                          name="siemens-1fk7060-2ac71")
+    return ActuatorParams(name="siemens-1fk7060-2ac71")
 
 
 def load_params(path: str | os.PathLike[str], *, partial: bool = False) -> ActuatorParams:

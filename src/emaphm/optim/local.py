@@ -27,7 +27,7 @@ __all__ = ["compass_search"]
 
 def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bounds: Any, *,
                    f0: float | None = None, step: float = 0.05, tol: float = 1e-4,
-                   max_evals: int = 2000) -> OptimizeResult:
+                   max_evals: int = 2000, max_seconds: float = float("inf")) -> OptimizeResult:
     """Polish ``x0`` by compass search inside ``bounds``.
 
     =========  ======  =========================================================
@@ -37,13 +37,16 @@ def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bound
     f0         --      its fitness, if known (saves one evaluation)
     step       unit    initial poll step as a fraction of each bound's width
     tol        unit    stop when the step falls below this fraction
-    max_evals  --      evaluation budget (a poll is never cut short)
+    max_evals  --      evaluation budget (a poll that would exceed it is not started)
+    max_seconds s      wall-clock budget, checked before each poll
     =========  ======  =========================================================
 
     Returns an :class:`OptimizeResult` whose ``history`` holds the best
-    fitness after each poll and whose ``reason`` is ``"step_tolerance"`` or
-    ``"max_evaluations"``.
+    fitness after each poll and whose ``reason`` is ``"step_tolerance"``,
+    ``"max_evaluations"`` or ``"wall_clock"``.
     """
+    if not max_seconds > 0:
+        raise ValueError(f"compass_search: max_seconds must be > 0, got {max_seconds!r}")
     if not (0 < tol < step <= 1):
         raise ValueError(f"compass_search needs 0 < tol < step <= 1, got tol={tol}, step={step}")
     if isinstance(max_evals, bool) or not isinstance(max_evals, (int, np.integer)) or max_evals < 1:
@@ -64,6 +67,9 @@ def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bound
     while step >= tol:
         if nfev + 2 * n > max_evals:
             reason = "max_evaluations"
+            break
+        if time.perf_counter() - t0 >= max_seconds:
+            reason = "wall_clock"
             break
         U = np.clip(u + step * directions, 0.0, 1.0)
         f = sanitize_fitness(objective(b.from_unit(U)), U.shape[0])

@@ -1,0 +1,43 @@
+"""Shared test configuration and fixtures.
+
+Hypothesis runs under the ``emaphm`` profile unless ``HYPOTHESIS_PROFILE``
+names another: no deadline (the first call of a Numba function compiles it),
+derandomised (the same examples on every run, so a failure reproduces), and
+no example database (tests write nothing into the repository).
+"""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from hypothesis import HealthCheck, settings
+
+settings.register_profile(
+    "emaphm",
+    deadline=None,
+    derandomize=True,
+    database=None,
+    print_blob=True,
+    suppress_health_check=[HealthCheck.too_slow],
+)
+settings.register_profile("emaphm-explore", parent=settings.get_profile("emaphm"),
+                          derandomize=False, max_examples=1000)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "emaphm"))
+
+
+@pytest.fixture(scope="session")
+def nominal_params():
+    """The default actuator (Siemens 1FK7060 bench, reconstructed)."""
+    from emaphm.params import siemens_1fk7060
+
+    return siemens_1fk7060()
+
+
+@pytest.fixture(scope="session")
+def diag_profile():
+    """The default 0.5 s diagnostic profile."""
+    from emaphm.profiles import diagnostic
+
+    return diagnostic()
+

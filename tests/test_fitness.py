@@ -1,0 +1,334 @@
+"""Eq. 4 fitness and the batch objective :class:`emaphm.fitness.Eq4Objective`.
+
+Layers: the weights and the sum of Eq. 4 by hand on tiny arrays; the objective against
+a by-hand computation from the monitoring model's own traces; its minimum at the true
+``k`` of a noise-free monitoring-model trace (where it is exactly zero); the
+measured-trace plumbing (resampling onto the model grid, a trace that does not start at
+angle 0 or time 0, the load torque from the metadata); the bookkeeping (stats) and misuse.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from emaphm.faults import SCENARIOS
+from emaphm.fitness import FITNESS_MODES, Eq4Objective, eq4_weights, equivalent_current
+from emaphm.models.monitoring import MonitoringModel
+from emaphm.profiles import Constant, Profile, diagnostic
+from emaphm.simulate import simulate
+from emaphm.traces import Trace, TraceError, resample
+
+T_S = 1.25e-4          # control period of the default preset (8 kHz)
+P_POLES = 4            # pole pairs of the default preset
+
+
+# ----------------------------------------------------------------------------- fixtures
+@pytest.fixture(scope="module")
+def mm_gain_low():
+    """Noise-free monitoring-model trace of the gain-low scenario (k8 = 0.25)."""
+    return simulate(scenario="gain-low", model="monitoring")
+
+
+@pytest.fixture(scope="module")
+def obj_gain_low(mm_gain_low):
+    return Eq4Objective.from_trace(mm_gain_low)
+
+
+@pytest.fixture(scope="module")
+def rm_friction_high():
+    """Noise-free reference-model trace of friction-high (k1 = 0.75), on the 8 kHz grid."""
+    return simulate(scenario="friction-high")
+
+
+def _scan(k_true, index, values):
+    """Population that varies component ``index`` of ``k_true`` over ``values``."""
+    K = np.tile(np.asarray(k_true, dtype=float), (len(values), 1))
+    K[:, index] = values
+    return K
+
+
+def _rebuild(trace, **changes):
+    """A trace with some arrays replaced (the metadata kept unless given)."""
+    fields = dict(t=trace.t, theta_ref=trace.theta_ref, theta_m=trace.theta_m,
+                  omega_m=trace.omega_m, i_abc=trace.i_abc, torque=trace.torque, meta=trace.meta)
+    fields.update(changes)
+    return Trace(**fields)
+
+
+# ----------------------------------------------------------------------------- Eq. 4 by hand
+def test_eq4_weights_by_hand():
+    # i = t^2 sampled at dT = 0.5: numpy.gradient gives one-sided differences at the ends
+    # and central ones inside: [1, 2, 4, 5] per sample, i.e. [2, 4, 8, 10] A/s.
+    dT = 0.5
+    i = np.array([0.0, 1.0, 4.0, 9.0])
+    w = eq4_weights(i, dT)
+    expected = dT / (np.array([2.0, 4.0, 8.0, 10.0]) ** 2 + 1.0)
+    np.testing.assert_allclose(w, expected, rtol=1e-15)
+    np.testing.assert_allclose(w, [0.1, 0.5 / 17, 0.5 / 65, 0.5 / 101], rtol=1e-15)
+
+
+def test_eq4_weights_are_per_phase_along_time():
+    # three phases: a constant (derivative 0 -> weight dT), a ramp of slope 3 A/s, and t^2
+    dT = 0.5
+    i = np.column_stack([np.full(4, 7.0), 1.5 * np.arange(4), np.array([0.0, 1.0, 4.0, 9.0])])
+    w = eq4_weights(i, dT)
+    assert w.shape == (4, 3)
+    np.testing.assert_allclose(w[:, 0], dT)
+    np.testing.assert_allclose(w[:, 1], dT / (3.0 ** 2 + 1.0))
+    np.testing.assert_allclose(w[:, 2], eq4_weights(i[:, 2], dT))
+
+
+def test_eq4_sum_over_samples_and_phases_by_hand():
+    # Eq. 4 written out term by term on a 4 x 3 example, against the vectorised form
+    dT = 0.5
+    meas = np.array([[0.0, 1.0, -1.0], [1.0, 0.5, -1.5], [4.0, -2.0, -2.0], [9.0, -4.0, -5.0]])
+    mm = meas + np.array([[0.1, 0.0, -0.1], [0.2, 0.1, -0.3], [0.0, 0.0, 0.0], [-0.5, 0.2, 0.3]])
+    total = 0.0
+    for j in range(3):
+        col = meas[:, j]
+        for n in range(4):
+            lo, hi = max(n - 1, 0), min(n + 1, 3)
+            dIdT = (col[hi] - col[lo]) / (hi - lo) / dT
+            total += (mm[n, j] - meas[n, j]) ** 2 / (dIdT ** 2 + 1.0) * dT
+    assert np.sum(eq4_weights(meas, dT) * (mm - meas) ** 2) == pytest.approx(total, rel=1e-14)
+
+
+def test_equivalent_current_of_balanced_phases_is_the_amplitude():
+    theta = np.linspace(0.0, 4 * np.pi, 97)
+    amp = 3.7
+    i_abc = amp * np.column_stack([np.cos(theta), np.cos(theta - 2 * np.pi / 3),
+                                   np.cos(theta + 2 * np.pi / 3)])
+    np.testing.assert_allclose(equivalent_current(i_abc), amp, rtol=1e-12)
+    # and a single sample (shape (3,) -> scalar), e.g. i_a = 2, i_b = i_c = -1
+    assert float(equivalent_current([2.0, -1.0, -1.0])) == pytest.approx(2.0)
+
+
+# ----------------------------------------------------------------------------- the objective
+def test_objective_equals_by_hand_from_population_traces(mm_gain_low, obj_gain_low):
+    obj = obj_gain_low
+    rng = np.random.default_rng(7)
+    K = np.vstack([SCENARIOS["gain-low"], SCENARIOS["nominal"], rng.random((5, 8))])
+    pop = obj.model.simulate_population(K)
+    assert not pop.status.any()
+    # the weights and the target by hand from the measured trace (already on the model grid)
+    np.testing.assert_array_equal(obj.target, mm_gain_low.i_abc)
+    w = T_S / ((np.gradient(mm_gain_low.i_abc, axis=0) / T_S) ** 2 + 1.0)
+    np.testing.assert_allclose(obj.weights, w, rtol=1e-14)
+    by_hand = np.sum(w[None] * (pop.i_abc - mm_gain_low.i_abc[None]) ** 2, axis=(1, 2))
+    np.testing.assert_allclose(obj(K), by_hand, rtol=1e-9, atol=1e-300)
+
+
+def test_objective_zero_at_truth_and_larger_away(obj_gain_low):
+    k_true = SCENARIOS["gain-low"]
+    f_true = obj_gain_low(k_true[None, :])
+    assert f_true.shape == (1,)
+    assert f_true[0] < 1e-20          # same model, same grid, no noise: zero to round-off
+    rng = np.random.default_rng(0)
+    away = np.clip(k_true + rng.normal(0.0, 0.1, (8, 8)), 0.0, 1.0)
+    assert np.all(obj_gain_low(away) > 1e3 * max(f_true[0], 1e-30))
+    assert obj_gain_low(SCENARIOS["nominal"][None, :])[0] > 1e-5
+
+
+def test_objective_scan_has_its_minimum_at_the_truth(obj_gain_low):
+    values = np.linspace(0.0, 1.0, 21)                 # 0.25 is values[5]
+    f = obj_gain_low(_scan(SCENARIOS["gain-low"], 7, values))
+    assert int(np.argmin(f)) == 5
+    assert np.all(np.diff(f[:6]) < 0) and np.all(np.diff(f[5:]) > 0)   # unimodal in k8
+
+
+def test_objective_accepts_a_single_vector_and_returns_one_value(obj_gain_low):
+    f1 = obj_gain_low(SCENARIOS["nominal"])
+    f2 = obj_gain_low(SCENARIOS["nominal"][None, :])
+    assert f1.shape == (1,) and f1[0] == f2[0]
+
+
+def test_population_order_does_not_matter(obj_gain_low):
+    rng = np.random.default_rng(3)
+    K = rng.random((6, 8))
+    perm = rng.permutation(6)
+    np.testing.assert_array_equal(obj_gain_low(K)[perm], obj_gain_low(K[perm]))
+
+
+def test_stats_count_calls_and_evaluations(mm_gain_low):
+    obj = Eq4Objective.from_trace(mm_gain_low)
+    assert (obj.stats.calls, obj.stats.evaluations, obj.stats.diverged) == (0, 0, 0)
+    obj(np.tile(SCENARIOS["nominal"], (5, 1)))
+    obj(np.tile(SCENARIOS["nominal"], (3, 1)))
+    obj(SCENARIOS["nominal"])
+    assert obj.stats.calls == 3
+    assert obj.stats.evaluations == 9
+    assert obj.stats.diverged == 0
+    assert obj.stats.kernel_s > 0.0
+
+
+def test_model_replays_the_trace_command(mm_gain_low, obj_gain_low):
+    m = obj_gain_low.model
+    assert isinstance(m, MonitoringModel)
+    assert m.t.size == mm_gain_low.n == obj_gain_low.n_samples
+    np.testing.assert_allclose(m.t, np.arange(mm_gain_low.n) * T_S, rtol=0, atol=1e-15)
+    pop = m.simulate(SCENARIOS["nominal"])
+    np.testing.assert_allclose(pop.theta_ref, mm_gain_low.theta_ref, atol=1e-12)
+    assert m.theta0 == 0.0
+
+
+# ----------------------------------------------------------------------------- measured traces
+def test_trace_on_a_finer_grid_gives_the_same_objective(rm_friction_high):
+    # 2x finer: every model instant is a sample of the finer trace, so resampling back is
+    # exact and the objective is the same
+    base = Eq4Objective.from_trace(rm_friction_high)
+    fine = resample(rm_friction_high, np.arange(2 * rm_friction_high.n - 1) * (T_S / 2))
+    obj = Eq4Objective.from_trace(fine)
+    assert obj.n_samples == base.n_samples
+    np.testing.assert_allclose(obj.target, base.target, rtol=0, atol=1e-12)
+    K = _scan(SCENARIOS["friction-high"], 0, np.linspace(0.5, 1.0, 11))
+    np.testing.assert_allclose(obj(K), base(K), rtol=1e-9)
+
+
+def test_trace_on_another_grid_is_resampled_onto_the_model_grid(rm_friction_high):
+    # a 10 kHz acquisition of the same run: the objective lives on the 8 kHz model grid
+    # and its minimiser along k1 stays where it was
+    rm = rm_friction_high
+    acq = resample(rm, np.arange(0.0, rm.t[-1], 1e-4))
+    assert acq.n != rm.n
+    obj = Eq4Objective.from_trace(acq)
+    base = Eq4Objective.from_trace(rm)
+    n = obj.n_samples
+    assert n == int(np.floor(acq.t[-1] / T_S + 1e-9)) + 1
+    np.testing.assert_allclose(obj.model.t, np.arange(n) * T_S, atol=1e-15)
+    assert obj.target.shape == obj.weights.shape == (n, 3)
+    # the resampled target follows the original currents (linear interpolation twice)
+    i_peak = np.abs(rm.i_abc).max()
+    assert np.abs(obj.target - base.target[:n]).max() < 0.05 * i_peak
+    values = np.linspace(0.6, 0.9, 31)                 # step 0.01, 0.75 is values[15]
+    K = _scan(SCENARIOS["friction-high"], 0, values)
+    i_obj, i_base = int(np.argmin(obj(K))), int(np.argmin(base(K)))
+    assert abs(i_obj - i_base) <= 1
+    assert abs(values[i_obj] - 0.75) <= 0.02
+
+
+def test_trace_starting_at_another_angle_is_replayed_from_that_angle(mm_gain_low):
+    # a quarter turn is a whole number of electrical periods (p = 4), so the currents of
+    # the shifted trace are still the physical ones: the objective stays zero at the truth
+    # only if the model starts from the trace's first angle (theta0)
+    shift = 2 * np.pi / P_POLES
+    tr = _rebuild(mm_gain_low, theta_ref=mm_gain_low.theta_ref + shift,
+                  theta_m=mm_gain_low.theta_m + shift)
+    obj = Eq4Objective.from_trace(tr)
+    assert obj.model.theta0 == pytest.approx(shift, abs=1e-15)
+    pop = obj.model.simulate(SCENARIOS["gain-low"])
+    assert pop.theta_m[0, 0] == pytest.approx(shift, abs=1e-15)
+    assert pop.theta_ref[0] == pytest.approx(shift, abs=1e-12)
+    np.testing.assert_allclose(pop.theta_m[0], tr.theta_m, atol=1e-9)
+    assert obj(SCENARIOS["gain-low"])[0] < 1e-20
+    assert obj(SCENARIOS["nominal"])[0] > 1e-5
+
+
+def test_trace_starting_at_an_arbitrary_angle(diag_profile, nominal_params):
+    # a trace recorded from 1 rad (not a multiple of an electrical period)
+    theta0 = 1.0
+    profile = Profile(duration=diag_profile.duration,
+                      command=diag_profile.command + (Constant(theta0),), name="shifted")
+    k = SCENARIOS["gain-low"]
+    r = MonitoringModel(nominal_params, profile, theta0=theta0).simulate(k)
+    tr = Trace(t=r.t, theta_ref=r.theta_ref, theta_m=r.theta_m[0], omega_m=r.omega_m[0],
+               i_abc=r.i_abc[0], meta={"k": k.tolist()})
+    obj = Eq4Objective.from_trace(tr)
+    assert obj.model.theta0 == pytest.approx(theta0)
+    assert obj.model.simulate(k).theta_m[0, 0] == pytest.approx(theta0)
+    assert obj(k)[0] < 1e-20
+    f = obj(_scan(k, 7, np.linspace(0.0, 1.0, 21)))
+    assert int(np.argmin(f)) == 5
+    # the same trace replayed from angle 0 would not match at all
+    wrong = Eq4Objective(MonitoringModel(nominal_params, obj.model.profile), obj.target,
+                         obj.weights)
+    assert wrong(k)[0] > 1e-6
+
+
+def test_trace_starting_at_a_later_time(mm_gain_low, obj_gain_low):
+    tr = _rebuild(mm_gain_low, t=mm_gain_low.t + 12.5)
+    obj = Eq4Objective.from_trace(tr)
+    assert obj.n_samples == obj_gain_low.n_samples
+    np.testing.assert_allclose(obj.model.t, obj_gain_low.model.t, atol=1e-15)
+    K = _scan(SCENARIOS["gain-low"], 7, np.linspace(0.0, 1.0, 5))
+    np.testing.assert_allclose(obj(K), obj_gain_low(K), rtol=1e-6, atol=1e-12)
+
+
+def test_load_torque_comes_from_the_trace_metadata(nominal_params):
+    # a simulated trace under a constant load: the objective replays that load
+    prof = diagnostic(load_torque=0.5)
+    tr = simulate(scenario="gain-low", model="monitoring", profile=prof)
+    obj = Eq4Objective.from_trace(tr)
+    assert obj(SCENARIOS["gain-low"])[0] < 1e-20
+    # without the metadata (a bench trace) the load is zero and the truth no longer fits
+    bare = _rebuild(tr, meta={})
+    assert Eq4Objective.from_trace(bare)(SCENARIOS["gain-low"])[0] > 1e-6
+    # ... unless the load is given explicitly
+    n = obj.n_samples
+    given = Eq4Objective.from_trace(bare, load_torque=np.full(n, 0.5))
+    assert given(SCENARIOS["gain-low"])[0] < 1e-20
+    with pytest.raises(ValueError, match="load_torque must have shape"):
+        Eq4Objective.from_trace(bare, load_torque=np.zeros(n - 1))
+
+
+# ----------------------------------------------------------------------------- equivalent mode
+def test_equivalent_mode_is_minimal_at_the_truth(mm_gain_low):
+    obj = Eq4Objective.from_trace(mm_gain_low, mode="equivalent")
+    assert obj.mode == "equivalent"
+    assert obj.target.shape == obj.weights.shape == (mm_gain_low.n, 1)
+    np.testing.assert_allclose(obj.target[:, 0], equivalent_current(mm_gain_low.i_abc))
+    values = np.linspace(0.0, 1.0, 21)
+    f = obj(_scan(SCENARIOS["gain-low"], 7, values))
+    assert f.shape == (21,)
+    assert int(np.argmin(f)) == 5 and f[5] < 1e-20
+    assert np.all(f[np.arange(21) != 5] > 1e-7)
+    assert obj.stats.evaluations == 21 and obj.stats.calls == 1
+
+
+def test_equivalent_mode_by_hand(mm_gain_low):
+    obj = Eq4Objective.from_trace(mm_gain_low, mode="equivalent")
+    K = np.vstack([SCENARIOS["nominal"], SCENARIOS["gain-high"]])
+    pop = obj.model.simulate_population(K)
+    meas = equivalent_current(mm_gain_low.i_abc)
+    w = eq4_weights(meas, T_S)
+    by_hand = np.sum(w[None] * (equivalent_current(pop.i_abc) - meas[None]) ** 2, axis=1)
+    np.testing.assert_allclose(obj(K), by_hand, rtol=1e-12)
+
+
+def test_a_short_circuit_is_told_apart_from_the_same_short_on_another_phase():
+    # the per-phase weighting of Eq. 4 (and the equivalent current too) separates a short
+    # on phase A from the same short on phase B or C
+    tr = simulate(scenario="short-circuit-high", model="monitoring")
+    k_a = SCENARIOS["short-circuit-high"]
+    k_b, k_c = k_a.copy(), k_a.copy()
+    k_b[2], k_b[3] = 0.0, 0.75
+    k_c[2], k_c[4] = 0.0, 0.75
+    K = np.vstack([k_a, k_b, k_c])
+    for mode in FITNESS_MODES:
+        f = Eq4Objective.from_trace(tr, mode=mode)(K)
+        assert f[0] < 1e-20, mode
+        assert np.all(f[1:] > 1e-5), mode
+
+
+# ----------------------------------------------------------------------------- misuse
+def test_unknown_mode_raises(mm_gain_low):
+    assert FITNESS_MODES == ("phases", "equivalent")
+    with pytest.raises(ValueError, match="unknown fitness mode 'current'"):
+        Eq4Objective.from_trace(mm_gain_low, mode="current")
+
+
+def test_too_short_trace_raises(mm_gain_low):
+    # a valid trace (>= 100 samples) on a fine grid that covers fewer than 16 control periods
+    n = 150
+    t = np.arange(n) * 1e-5
+    tr = Trace(t=t, theta_ref=np.zeros(n), theta_m=np.zeros(n), omega_m=np.zeros(n),
+               i_abc=np.zeros((n, 3)))
+    with pytest.raises(TraceError, match="fewer than 16 control periods"):
+        Eq4Objective.from_trace(tr)
+
+
+def test_invalid_trace_raises(mm_gain_low):
+    i = np.array(mm_gain_low.i_abc)
+    i[10, 1] = np.nan
+    with pytest.raises(TraceError, match="non-finite"):
+        Eq4Objective.from_trace(_rebuild(mm_gain_low, i_abc=i))

@@ -1,0 +1,315 @@
+"""Fault identification (:func:`emaphm.identify.identify`): the problem layer wired to
+the optimizers.
+
+Layers: known answers (each algorithm recovers the ``k`` of a noise-free monitoring-model
+trace with its defaults, and PSO the ``k`` of a noisy reference-model trace); same-seed
+determinism; the budget, seed, algorithm and callback contracts; the result as data
+(``model_trace``, ``to_dict``).
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from emaphm.faults import K_NAMES, SCENARIOS, error_pct
+from emaphm.fitness import Eq4Objective
+from emaphm.identify import Identification, identify, parse_budget
+from emaphm.models.monitoring import MonitoringModel
+from emaphm.optim import ALGORITHMS, MaxEvaluations, MaxIterations, WallClock
+from emaphm.simulate import DEFAULT_SENSORS, simulate
+from emaphm.traces import Trace, TraceError
+
+T_S = 1.25e-4
+ALGOS = sorted(ALGORITHMS)
+#: Options of the cheap runs where only the plumbing matters.
+SMALL = {"pop_size": 20}
+
+#: Keys of Identification.to_dict() that the CLI and the reports rely on.
+DOC_KEYS = {"algorithm", "seed", "k", "k_named", "fitness", "evaluations", "iterations",
+            "elapsed_s", "kernel_s", "evals_per_s", "reason", "diverged", "options", "history"}
+
+
+# ----------------------------------------------------------------------------- fixtures
+@pytest.fixture(scope="module")
+def mm_gain_low():
+    """Noise-free monitoring-model trace of gain-low (k8 = 0.25): the MM can match it exactly."""
+    return simulate(scenario="gain-low", model="monitoring")
+
+
+@pytest.fixture(scope="module")
+def objective(mm_gain_low):
+    return Eq4Objective.from_trace(mm_gain_low)
+
+
+@pytest.fixture(scope="module")
+def cheap(mm_gain_low, objective):
+    """A short PSO run for the tests about the result's plumbing, not its accuracy."""
+    return identify(mm_gain_low, "pso", seed=5, budget=400, options=SMALL, objective=objective)
+
+
+def _strip_k(trace: Trace) -> Trace:
+    """The same signals as a bench trace would have them: no true k in the metadata."""
+    return Trace(t=trace.t, theta_ref=trace.theta_ref, theta_m=trace.theta_m,
+                 omega_m=trace.omega_m, i_abc=trace.i_abc, meta={"source": "bench"})
+
+
+# ----------------------------------------------------------------------------- known answers
+@pytest.mark.parametrize("algorithm", ALGOS)
+def test_recovers_gain_low_with_defaults(mm_gain_low, objective, algorithm):
+    ident = identify(mm_gain_low, algorithm, seed=1, objective=objective)
+    assert isinstance(ident, Identification)
+    assert ident.algorithm == algorithm
+    np.testing.assert_array_equal(ident.k_true, SCENARIOS["gain-low"])
+    assert ident.error_pct < 1.0, (algorithm, ident.k.round(4).tolist())
+    assert ident.error_pct == pytest.approx(error_pct(ident.k, SCENARIOS["gain-low"]))
+    assert abs(ident.k[7] - 0.25) < 0.01
+    # the identified k is where the objective is smallest: its own fitness, below nominal's
+    assert ident.fitness == pytest.approx(objective(ident.k)[0], rel=1e-12, abs=1e-300)
+    assert ident.fitness < 1e-3 * objective(SCENARIOS["nominal"])[0]
+    assert np.all((ident.k >= 0.0) & (ident.k <= 1.0))
+    assert ident.reason in ("max_iterations", "stall")
+    assert 1 <= ident.iterations <= len(ident.history)    # the polish's polls come after
+    assert np.all(np.diff(ident.history) <= 0.0)          # best-so-far never worsens
+    assert ident.history[-1] == ident.fitness
+    assert ident.diverged >= 0
+    assert 0.0 < ident.kernel_s <= ident.elapsed_s
+
+
+def test_recovers_friction_high_from_a_noisy_reference_trace():
+    # the paper's setting: RM with switching PWM and a realistic acquisition chain, MM identifies
+    trace = simulate(scenario="friction-high", sensors=DEFAULT_SENSORS, seed=3)
+    assert trace.meta["model"] == "reference"
+    ident = identify(trace, "pso", seed=0)
+    assert ident.error_pct < 1.0, ident.k.round(4).tolist()
+    assert abs(ident.k[0] - 0.75) < 0.02
+
+
+# ----------------------------------------------------------------------------- determinism
+@pytest.mark.parametrize("algorithm", ALGOS)
+def test_same_seed_same_result_other_seed_other_result(mm_gain_low, objective, algorithm):
+    kw = dict(budget=300, options=SMALL, objective=objective, polish=False)
+    a = identify(mm_gain_low, algorithm, seed=11, **kw)
+    b = identify(mm_gain_low, algorithm, seed=11, **kw)
+    c = identify(mm_gain_low, algorithm, seed=12, **kw)
+    np.testing.assert_array_equal(a.k, b.k)
+    assert a.fitness == b.fitness
+    assert (a.evaluations, a.iterations, a.reason) == (b.evaluations, b.iterations, b.reason)
+    np.testing.assert_array_equal(a.history, b.history)
+    assert not np.array_equal(a.k, c.k)
+    assert a.fitness != c.fitness
+
+
+def test_same_seed_same_result_with_the_default_polish(mm_gain_low, objective):
+    kw = dict(budget=300, options=SMALL, objective=objective)
+    a = identify(mm_gain_low, "pso", seed=4, **kw)
+    b = identify(mm_gain_low, "pso", seed=4, **kw)
+    np.testing.assert_array_equal(a.k, b.k)
+    assert (a.fitness, a.evaluations, a.iterations) == (b.fitness, b.evaluations, b.iterations)
+    np.testing.assert_array_equal(a.history, b.history)
+
+
+def test_prebuilt_objective_gives_the_same_result(mm_gain_low):
+    kw = dict(seed=2, budget=200, options=SMALL, polish=False)
+    fresh = identify(mm_gain_low, "de", **kw)
+    obj = Eq4Objective.from_trace(mm_gain_low)
+    reused = identify(mm_gain_low, "de", objective=obj, **kw)
+    np.testing.assert_array_equal(fresh.k, reused.k)
+    assert fresh.fitness == reused.fitness
+    # the objective counted the run's evaluations (plus the final model_trace run is not
+    # an objective call)
+    assert obj.stats.evaluations == reused.evaluations
+
+
+# ----------------------------------------------------------------------------- budgets
+def test_parse_budget_forms():
+    assert parse_budget(None) is None
+    assert parse_budget(5000) == MaxEvaluations(5000)
+    assert parse_budget(np.int64(5000)) == MaxEvaluations(5000)
+    assert parse_budget("5000") == MaxEvaluations(5000)
+    assert parse_budget("5000evals") == MaxEvaluations(5000)
+    assert parse_budget(" 5000 eval ") == MaxEvaluations(5000)
+    assert parse_budget("2s") == WallClock(2.0)
+    assert parse_budget("2.5s") == WallClock(2.5)
+    term = MaxIterations(7)
+    assert parse_budget(term) is term
+
+
+@pytest.mark.parametrize("budget, match", [
+    (0, "positive number of evaluations, got 0"),
+    (-1, "positive number of evaluations, got -1"),
+    ("abc", "budget 'abc' not understood"),
+    ("-5", "not understood"),
+    ("0", "budget must be positive"),
+    ("0s", "budget must be positive"),
+    ("1.5", "whole number"),
+    (1.5, "budget must be evaluations"),
+    (True, "budget must be a number of evaluations or seconds, got True"),
+    (False, "got False"),
+    ([100], "budget must be evaluations"),
+])
+def test_parse_budget_rejects(budget, match):
+    with pytest.raises(ValueError, match=match):
+        parse_budget(budget)
+
+
+def test_bad_budget_raises_before_any_work(mm_gain_low):
+    obj = Eq4Objective.from_trace(mm_gain_low)
+    with pytest.raises(ValueError, match="positive"):
+        identify(mm_gain_low, "pso", seed=0, budget=0, objective=obj)
+    assert obj.stats.evaluations == 0
+
+
+def test_evaluation_budget_is_respected_by_the_search(mm_gain_low, objective):
+    ident = identify(mm_gain_low, "pso", seed=0, budget=1234, objective=objective, polish=False)
+    assert ident.reason == "max_evaluations"
+    assert 1234 <= ident.evaluations < 1234 + 50           # at most one population more
+    assert ident.evaluations % 50 == 0
+    assert ident.options["budget"] == "1234"
+
+
+def test_evaluation_budget_counts_in_populations(mm_gain_low, objective):
+    ident = identify(mm_gain_low, "gwo", seed=0, budget="250evals", options=SMALL,
+                     objective=objective, polish=False)
+    assert ident.reason == "max_evaluations"
+    assert ident.evaluations == 260 and ident.iterations == 13
+
+
+def test_evaluation_budget_is_respected_with_the_default_polish(mm_gain_low, objective):
+    ident = identify(mm_gain_low, "pso", seed=0, budget=1500, objective=objective)
+    assert ident.evaluations <= 1500 + 50
+
+
+def test_wall_clock_budget(mm_gain_low, objective):
+    ident = identify(mm_gain_low, "pso", seed=0, budget="0.5s", objective=objective,
+                     polish=False)
+    assert ident.reason == "wall_clock"
+    assert 0.5 <= ident.elapsed_s < 0.5 + 5.0
+    # far more than the paper's 200 iterations would not fit; far fewer would mean it
+    # stopped on something else
+    assert ident.iterations >= 2
+
+
+def test_callback_stops_the_search(mm_gain_low, objective):
+    seen = []
+
+    def stop_after_three(state):
+        seen.append((state.nit, state.nfev, state.best_f))
+        return state.nit >= 3
+
+    ident = identify(mm_gain_low, "pso", seed=0, options=SMALL, objective=objective,
+                     callback=stop_after_three, polish=False)
+    assert ident.reason == "callback"
+    assert ident.iterations == 3 and ident.evaluations == 60
+    assert [s[0] for s in seen] == [1, 2, 3]
+    assert [s[1] for s in seen] == [20, 40, 60]
+    assert ident.fitness == seen[-1][2]
+    assert len(ident.history) == 3
+
+
+def test_callback_stops_the_search_with_the_default_polish(mm_gain_low, objective):
+    ident = identify(mm_gain_low, "pso", seed=0, options=SMALL, objective=objective,
+                     callback=lambda state: state.nit >= 3)
+    assert ident.reason == "callback"
+    assert ident.evaluations == 60
+
+
+# ----------------------------------------------------------------------------- misuse
+def test_unknown_algorithm_raises(mm_gain_low):
+    with pytest.raises(ValueError, match=r"unknown algorithm 'nelder-mead'; choose one of de, gwo, pso"):
+        identify(mm_gain_low, "nelder-mead", seed=0)
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, True, "1", None])
+def test_bad_seed_raises(mm_gain_low, seed):
+    with pytest.raises(ValueError, match="seed must be a non-negative integer, got"):
+        identify(mm_gain_low, "pso", seed=seed)
+
+
+def test_seed_is_required(mm_gain_low):
+    with pytest.raises(TypeError):
+        identify(mm_gain_low, "pso")       # randomness always flows from an explicit seed
+
+
+def test_bad_optimizer_option_raises(mm_gain_low):
+    with pytest.raises(ValueError, match="pop_size"):
+        identify(mm_gain_low, "pso", seed=0, options={"pop_size": 1})
+
+
+def test_invalid_trace_raises(mm_gain_low):
+    i = np.array(mm_gain_low.i_abc)
+    i[100, 0] = np.nan
+    bad = Trace(t=mm_gain_low.t, theta_ref=mm_gain_low.theta_ref, theta_m=mm_gain_low.theta_m,
+                omega_m=mm_gain_low.omega_m, i_abc=i, meta=mm_gain_low.meta)
+    with pytest.raises(TraceError, match="non-finite"):
+        identify(bad, "pso", seed=0, budget=100)
+
+
+# ----------------------------------------------------------------------------- results as data
+def test_k_true_and_error_only_for_traces_that_carry_k(mm_gain_low, cheap):
+    assert cheap.k_true is not None and cheap.error_pct is not None
+    bench = identify(_strip_k(mm_gain_low), "pso", seed=5, budget=100, options=SMALL,
+                     polish=False)
+    assert bench.k_true is None and bench.error_pct is None
+    d = bench.to_dict()
+    assert "k_true" not in d and "error_pct" not in d
+    json.dumps(d)
+
+
+def test_model_trace_is_the_monitoring_model_at_k(mm_gain_low, objective, cheap):
+    mt = cheap.model_trace
+    assert isinstance(mt, Trace)
+    np.testing.assert_allclose(mt.t, objective.model.t, atol=1e-15)
+    np.testing.assert_allclose(np.diff(mt.t), T_S, rtol=1e-9)
+    assert mt.meta["model"] == "monitoring"
+    assert mt.meta["k"] == cheap.k.tolist()
+    assert mt.meta["identified_from"] == "gain-low"
+    pop = MonitoringModel(objective.model.params, objective.model.profile).simulate(cheap.k)
+    np.testing.assert_allclose(mt.i_abc, pop.i_abc[0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(mt.theta_m, pop.theta_m[0], rtol=0, atol=1e-12)
+    assert mt.torque is not None
+
+
+def test_model_trace_keeps_the_trace_start_time(mm_gain_low):
+    later = Trace(t=mm_gain_low.t + 3.0, theta_ref=mm_gain_low.theta_ref,
+                  theta_m=mm_gain_low.theta_m, omega_m=mm_gain_low.omega_m,
+                  i_abc=mm_gain_low.i_abc, meta=mm_gain_low.meta)
+    ident = identify(later, "pso", seed=5, budget=100, options=SMALL, polish=False)
+    assert ident.model_trace.t[0] == pytest.approx(3.0)
+    assert ident.model_trace.n == mm_gain_low.n
+
+
+def test_to_dict_is_json_with_the_documented_keys(cheap):
+    d = cheap.to_dict()
+    text = json.dumps(d)
+    back = json.loads(text)
+    assert DOC_KEYS | {"k_true", "error_pct"} <= set(back)
+    assert back["algorithm"] == "pso" and back["seed"] == 5
+    assert back["k"] == cheap.k.tolist()
+    assert list(back["k_named"]) == list(K_NAMES)
+    assert back["k_named"]["gain"] == cheap.k[7]
+    assert back["fitness"] == cheap.fitness
+    assert back["evaluations"] == cheap.evaluations and back["iterations"] == cheap.iterations
+    assert back["k_true"] == SCENARIOS["gain-low"].tolist()
+    assert back["error_pct"] == pytest.approx(cheap.error_pct)
+    assert back["history"] == cheap.history.tolist()
+    assert back["options"]["pop_size"] == 20 and back["options"]["mode"] == "phases"
+    assert back["evals_per_s"] == pytest.approx(cheap.evaluations / cheap.elapsed_s)
+
+
+def test_to_dict_is_json_with_numpy_options(mm_gain_low, objective):
+    ident = identify(mm_gain_low, "pso", seed=5, budget=60, options={"pop_size": np.int64(20)},
+                     objective=objective, polish=False)
+    json.dumps(ident.to_dict())
+
+
+def test_equivalent_mode_is_passed_through(mm_gain_low):
+    ident = identify(mm_gain_low, "pso", seed=0, budget=200, options=SMALL, mode="equivalent",
+                     polish=False)
+    assert ident.options["mode"] == "equivalent"
+    eq = Eq4Objective.from_trace(mm_gain_low, mode="equivalent")
+    assert ident.fitness == pytest.approx(eq(ident.k)[0], rel=1e-12)
+    with pytest.raises(ValueError, match="unknown fitness mode"):
+        identify(mm_gain_low, "pso", seed=0, budget=100, mode="bogus")

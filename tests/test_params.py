@@ -1,0 +1,208 @@
+"""Actuator parameters: preset values, validation messages, TOML round trips, immutability."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from emaphm.params import (ActuatorParams, Controller, Inverter, Load, Motor, ParameterError,
+                           Transmission, load_params, save_params, siemens_1fk7060)
+
+# k_E = 135 V per 1000 rpm, line-to-line RMS -> peak per-phase V s/rad (motor-defaults.md)
+C0_DATASHEET = math.sqrt(2.0) * 135.0 / math.sqrt(3.0) / 104.72
+
+
+# --------------------------------------------------------------------------- preset
+
+def test_preset_back_emf_coefficient_from_voltage_constant():
+    m = siemens_1fk7060().motor
+    # 104.72 rad/s is 1000 rpm rounded; the preset uses 1000*2*pi/60 exactly
+    for c in m.c0:
+        assert c == pytest.approx(C0_DATASHEET, rel=5e-6)
+        assert c == pytest.approx(math.sqrt(2.0) * 135.0 / math.sqrt(3.0) / (1000 * 2 * math.pi / 60),
+                                  rel=1e-14)
+    # = 1.05259 V s/rad (the docs round it to "about 1.05"; 1.0527 is the bare Motor() default)
+    assert m.c0[0] == pytest.approx(1.0526, abs=1e-4)
+
+
+def test_preset_motor_and_drive_values():
+    p = siemens_1fk7060()
+    m, ctl = p.motor, p.controller
+    assert m.p == 4
+    assert m.R == (3.15, 3.15, 3.15)
+    assert m.L == (22e-3, 22e-3, 22e-3)
+    assert m.J_m == 7.7e-4
+    assert m.T_max == 18.0
+    assert m.I_max == pytest.approx(10.0 * math.sqrt(2.0), rel=1e-3)   # 10 A RMS, peak
+    assert m.ecc == 0.0 and m.ecc_phase == 0.0
+    # the drive's torque constant is the healthy motor's 1.5*c0 (peak amperes)
+    assert ctl.k_T == pytest.approx(1.5 * m.c0[0], rel=1e-14)
+    assert m.k_T == pytest.approx(1.5 * m.c0[0], rel=1e-14)
+    # k_T in N m per A RMS is about 2.2 (data sheet class)
+    assert m.k_T * math.sqrt(2.0) == pytest.approx(2.23, abs=0.02)
+    # electrical time constant about 7 ms
+    assert m.L[0] / m.R[0] == pytest.approx(7e-3, rel=0.01)
+    # friction levels: dynamic below static
+    tr = p.transmission
+    assert 0 < tr.FDJ <= tr.FSJ
+    assert p.inverter.T_s == pytest.approx(1.0 / p.inverter.f_pwm)
+    assert p.name == "siemens-1fk7060-2ac71"
+
+
+def test_scalar_is_broadcast_to_three_phases():
+    m = Motor(R=2.0, L=0.01, c0=1.0)
+    assert m.R == (2.0, 2.0, 2.0)
+    assert m.L == (0.01, 0.01, 0.01)
+    assert m.c0 == (1.0, 1.0, 1.0)
+    assert all(isinstance(x, float) for x in m.R)
+
+
+# --------------------------------------------------------------------------- validation
+
+@pytest.mark.parametrize("build, match", [
+    (lambda: Motor(R=-1.0), r"Motor\.R \[ohm\] must be > 0, got -1"),
+    (lambda: Motor(L=(0.02, 0.0, 0.02)), r"Motor\.L \[H\] must be > 0, got 0"),
+    (lambda: Motor(R=(1.0, 2.0)), r"Motor\.R \[ohm\] needs 3 per-phase values"),
+    (lambda: Motor(c0="x"), r"Motor\.c0 \[V s/rad\]"),
+    (lambda: Motor(p=0), r"Motor\.p \[pole pairs, integer\]"),
+    (lambda: Motor(p=4.0), r"Motor\.p \[pole pairs, integer\]"),
+    (lambda: Motor(ecc=1.5), r"Motor\.ecc \[-, 0\.\.1\] must be <= 1"),
+    (lambda: Motor(J_m=float("nan")), r"Motor\.J_m \[kg m\^2\] must be finite"),
+    (lambda: Motor(C_m=-1e-3), r"Motor\.C_m \[N m s/rad\] must be >= 0"),
+    (lambda: Inverter(V_dc=-600.0), r"Inverter\.V_dc \[V\] must be > 0"),
+    (lambda: Inverter(f_pwm=0.0), r"Inverter\.f_pwm \[Hz\] must be > 0"),
+    (lambda: Controller(Kp=-60.0), r"Controller\.Kp \[1/s\] must be > 0"),
+    (lambda: Controller(k_T=True), r"Controller\.k_T \[N m/A peak\] must be a number"),
+    (lambda: Transmission(FSJ=-0.1), r"Transmission\.FSJ \[N m\] must be >= 0"),
+    (lambda: Transmission(backlash=-1e-4), r"Transmission\.backlash \[rad\] must be >= 0"),
+    (lambda: Transmission(FSJ=0.1, FDJ=0.2),
+     r"Transmission\.FDJ \[N m\] = 0\.2 exceeds Transmission\.FSJ \[N m\] = 0\.1"),
+    (lambda: Load(J_l=0.0), r"Load\.J_l \[kg m\^2\] must be > 0"),
+    (lambda: ActuatorParams(motor="not a motor"), r"ActuatorParams\.motor must be a Motor"),
+])
+def test_invalid_values_name_field_and_unit(build, match):
+    with pytest.raises(ParameterError, match=match):
+        build()
+
+
+def test_parameter_error_is_a_value_error():
+    assert issubclass(ParameterError, ValueError)
+
+
+@pytest.mark.parametrize("obj, attr, value", [
+    (Motor(), "R", (1.0, 1.0, 1.0)),
+    (Inverter(), "V_dc", 1.0),
+    (Controller(), "Kp", 1.0),
+    (Transmission(), "FSJ", 1.0),
+    (Load(), "J_l", 1.0),
+    (siemens_1fk7060(), "motor", Motor()),
+])
+def test_frozen(obj, attr, value):
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        setattr(obj, attr, value)
+
+
+# --------------------------------------------------------------------------- dicts and TOML
+
+def _faulty_looking():
+    """A parameter set with unequal phases and every section changed."""
+    return ActuatorParams(
+        motor=Motor(p=3, R=(1.0, 2.0, 3.0), L=(1e-3, 2e-3, 3e-3), c0=(0.5, 0.6, 0.7), ecc=0.3,
+                    ecc_phase=-1.2, J_m=1e-3, C_m=1e-4, T_max=10.0, I_max=12.0),
+        inverter=Inverter(V_dc=300.0, f_pwm=10000.0, Kp_i=20.0, Ki_i=3000.0),
+        controller=Controller(Kp=40.0, Ki=1.0, Kd=0.01, omega_max=150.0, Kp_w=0.3, Ki_w=5.0, k_T=0.9),
+        transmission=Transmission(FSJ=0.2, FDJ=0.1, backlash=1e-3),
+        load=Load(J_l=2e-3, C_l=1e-3),
+        name="bench-b",
+    )
+
+
+@pytest.mark.parametrize("params", [siemens_1fk7060(), _faulty_looking()], ids=["preset", "custom"])
+def test_dict_round_trip(params):
+    d = params.to_dict()
+    assert d["motor"]["R"] == list(params.motor.R)
+    assert ActuatorParams.from_dict(d) == params
+
+
+@pytest.mark.parametrize("params", [siemens_1fk7060(), _faulty_looking()], ids=["preset", "custom"])
+def test_toml_round_trip(tmp_path, params):
+    path = save_params(params, tmp_path / "actuator.toml")
+    assert path.exists()
+    assert load_params(path) == params
+    assert load_params(path, partial=True) == params
+    # atomic write leaves no temporary file behind
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["actuator.toml"]
+
+
+def test_partial_file_fills_defaults(tmp_path):
+    path = tmp_path / "partial.toml"
+    path.write_text('name = "mine"\n[motor]\nR = 4.0\n[transmission]\nbacklash = 1e-3\n')
+    p = load_params(path, partial=True)
+    d = siemens_1fk7060()
+    assert p.motor.R == (4.0, 4.0, 4.0)
+    assert p.transmission.backlash == 1e-3
+    assert p.name == "mine"
+    # everything else from the preset
+    assert p.motor.L == d.motor.L and p.motor.c0 == d.motor.c0
+    assert p.transmission.FSJ == d.transmission.FSJ
+    assert p.inverter == d.inverter and p.controller == d.controller and p.load == d.load
+
+
+def test_partial_file_is_still_validated(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("[transmission]\nFDJ = 1.0\n")          # above the preset FSJ
+    with pytest.raises(ParameterError, match=r"Transmission\.FDJ \[N m\].*exceeds"):
+        load_params(path, partial=True)
+
+
+def test_missing_field_is_named_with_unit(tmp_path):
+    d = siemens_1fk7060().to_dict()
+    del d["motor"]["L"]
+    with pytest.raises(ParameterError, match=r"\[motor\] is missing L \[H\]"):
+        ActuatorParams.from_dict(d)
+    # through a file: the path is in the message
+    import tomli_w
+    path = tmp_path / "missing.toml"
+    path.write_bytes(tomli_w.dumps(d).encode())
+    with pytest.raises(ParameterError, match=r"missing\.toml: \[motor\] is missing L \[H\]"):
+        load_params(path)
+
+
+def test_missing_section_lists_its_fields():
+    d = siemens_1fk7060().to_dict()
+    del d["load"]
+    with pytest.raises(ParameterError, match=r"missing section \[load\] with fields J_l \[kg m\^2\]"):
+        ActuatorParams.from_dict(d)
+
+
+def test_unknown_field_and_section_are_errors(tmp_path):
+    d = siemens_1fk7060().to_dict()
+    d["motor"]["Rs"] = 3.0
+    with pytest.raises(ParameterError, match=r"unknown field\(s\) \['Rs'\] in \[motor\]; known fields:.*R \[ohm\]"):
+        ActuatorParams.from_dict(d)
+    d = siemens_1fk7060().to_dict()
+    d["gearbox"] = {"ratio": 10}
+    with pytest.raises(ParameterError, match=r"unknown section\(s\) \['gearbox'\]"):
+        ActuatorParams.from_dict(d)
+    path = tmp_path / "typo.toml"
+    path.write_text("[motor]\nRr = 3.0\n")
+    with pytest.raises(ParameterError, match=r"unknown field\(s\) \['Rr'\] in \[motor\]"):
+        load_params(path, partial=True)
+
+
+def test_negative_value_in_file(tmp_path):
+    path = tmp_path / "neg.toml"
+    path.write_text("[load]\nJ_l = -1e-3\n")
+    with pytest.raises(ParameterError, match=r"Load\.J_l \[kg m\^2\] must be > 0, got -0\.001"):
+        load_params(path, partial=True)
+
+
+def test_unreadable_files(tmp_path):
+    with pytest.raises(ParameterError, match="does not exist"):
+        load_params(tmp_path / "nope.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[motor\nR = ")
+    with pytest.raises(ParameterError, match="not valid TOML"):
+        load_params(bad)

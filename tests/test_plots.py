@@ -1,0 +1,158 @@
+"""Figures (:mod:`emaphm.plots`): they only read traces and results, never simulate, and
+save atomically. Files go to ``tmp_path`` only."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+matplotlib = pytest.importorskip("matplotlib")
+
+from matplotlib.figure import Figure  # noqa: E402
+
+from emaphm.identify import identify  # noqa: E402
+from emaphm.plots import plot_identification, plot_trace, save_figure  # noqa: E402
+from emaphm.simulate import simulate  # noqa: E402
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+# the modules themselves (a package attribute of the same name could shadow them)
+monitoring = importlib.import_module("emaphm.models.monitoring")
+simulate_mod = importlib.import_module("emaphm.simulate")
+
+
+@pytest.fixture(scope="module")
+def faulty():
+    return simulate(scenario="backlash-high", model="monitoring").with_meta(scenario="backlash-high")
+
+
+@pytest.fixture(scope="module")
+def nominal():
+    return simulate(model="monitoring").with_meta(scenario="nominal")
+
+
+@pytest.fixture(scope="module")
+def ident(faulty):
+    return identify(faulty, "pso", seed=0, budget=100, options={"pop_size": 20}, polish=False)
+
+
+def _assert_png(path):
+    data = path.read_bytes()
+    assert data.startswith(PNG_SIGNATURE)
+    assert len(data) > 10_000
+
+
+def _no_simulation(monkeypatch):
+    def boom(*args, **kwargs):
+        raise AssertionError("a plot ran a simulation")
+
+    monkeypatch.setattr(monitoring.MonitoringModel, "simulate_population", boom)
+    monkeypatch.setattr(monitoring.MonitoringModel, "simulate", boom)
+    monkeypatch.setattr(monitoring.MonitoringModel, "weighted_sse", boom)
+    monkeypatch.setattr(simulate_mod, "simulate", boom)
+    monkeypatch.setattr(simulate_mod, "run_reference", boom)
+
+
+# ----------------------------------------------------------------------------- plot_trace
+def test_plot_trace_alone(faulty, tmp_path):
+    path = tmp_path / "trace.png"
+    fig = plot_trace(faulty, path=path)
+    assert isinstance(fig, Figure)
+    assert len(fig.axes) == 4
+    assert [a.get_ylabel() for a in fig.axes] == ["position [rad]", "i_a [A]", "i_b [A]",
+                                                  "i_c [A]"]
+    # command and position on the first axes, one current per phase on the others
+    assert len(fig.axes[0].lines) == 2
+    np.testing.assert_array_equal(fig.axes[1].lines[0].get_ydata(), faulty.i_abc[:, 0])
+    assert "backlash-high" in fig._suptitle.get_text()
+    _assert_png(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["trace.png"]
+
+
+def test_plot_trace_with_overlay(faulty, nominal, tmp_path, monkeypatch):
+    _no_simulation(monkeypatch)
+    path = tmp_path / "overlay.png"
+    fig = plot_trace(faulty, nominal, path=path)
+    assert len(fig.axes) == 4
+    assert len(fig.axes[0].lines) == 3
+    for j, ax in enumerate(fig.axes[1:]):
+        assert len(ax.lines) == 2
+        ydata = [np.asarray(line.get_ydata()) for line in ax.lines]
+        assert any(np.array_equal(y, nominal.i_abc[:, j]) for y in ydata)
+        assert any(np.array_equal(y, faulty.i_abc[:, j]) for y in ydata)
+    _assert_png(path)
+
+
+def test_plot_trace_without_path_writes_nothing(faulty, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    fig = plot_trace(faulty, title="custom")
+    assert fig._suptitle.get_text() == "custom"
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("suffix, magic", [(".svg", b"<?xml"), (".pdf", b"%PDF")])
+def test_plot_trace_other_formats(faulty, tmp_path, suffix, magic):
+    path = tmp_path / f"trace{suffix}"
+    plot_trace(faulty, path=path)
+    assert path.read_bytes().startswith(magic)
+
+
+# ----------------------------------------------------------------------------- plot_identification
+def test_plot_identification_reads_only(faulty, ident, tmp_path, monkeypatch):
+    _no_simulation(monkeypatch)
+    path = tmp_path / "ident.png"
+    fig = plot_identification(faulty, ident, path=path)
+    assert isinstance(fig, Figure)
+    assert len(fig.axes) == 4
+    # measured and model currents come from the trace and the Identification as they are
+    for j, ax in enumerate(fig.axes[:3]):
+        np.testing.assert_array_equal(ax.lines[0].get_ydata(), faulty.i_abc[:, j])
+        np.testing.assert_array_equal(ax.lines[1].get_ydata(), ident.model_trace.i_abc[:, j])
+    np.testing.assert_array_equal(fig.axes[3].lines[0].get_ydata(), ident.history)
+    assert fig.axes[3].get_yscale() == "log"
+    title = fig._suptitle.get_text()
+    assert "PSO seed 0" in title and f"{ident.evaluations} evaluations" in title
+    assert "(Eq. 9)" in title
+    _assert_png(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ident.png"]
+
+
+# ----------------------------------------------------------------------------- save_figure
+def test_save_into_a_missing_folder_raises_and_leaves_nothing(faulty, tmp_path):
+    target = tmp_path / "missing" / "x.png"
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        plot_trace(faulty, path=target)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_failed_save_leaves_no_temp_file_and_keeps_the_old_file(faulty, tmp_path):
+    fig = plot_trace(faulty)
+    target = tmp_path / "x.unknownformat"
+    with pytest.raises(ValueError):                        # matplotlib: unsupported format
+        save_figure(fig, target)
+    assert list(tmp_path.iterdir()) == []
+    # an existing figure is replaced only by a complete new one
+    good = tmp_path / "x.png"
+    save_figure(fig, good)
+    first = good.read_bytes()
+    (tmp_path / "y.png").write_bytes(b"old")
+
+    class Broken(Figure):
+        def savefig(self, fname, **kw):
+            with open(fname, "wb") as fh:
+                fh.write(b"half a figure")
+            raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError, match="disk full"):
+        save_figure(Broken(), tmp_path / "y.png")
+    assert (tmp_path / "y.png").read_bytes() == b"old"
+    assert good.read_bytes() == first
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.png", "y.png"]
+
+
+def test_save_figure_returns_the_path(faulty, tmp_path):
+    fig = plot_trace(faulty)
+    out = save_figure(fig, str(tmp_path / "z.png"))
+    assert out == tmp_path / "z.png"
+    _assert_png(out)

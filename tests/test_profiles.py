@@ -1,0 +1,191 @@
+"""Command and load profiles: shapes' known values, round trips, the diagnostic test's coverage."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from emaphm.profiles import (PROFILES, Constant, Profile, ProfileError, Ramp, Sine, Step,
+                             Tabulated, Trapezoid, diagnostic, get_profile)
+
+T_S = 125e-6                     # the default control period
+fine = st.floats(allow_nan=False, allow_infinity=False)
+
+
+# --------------------------------------------------------------------------- shapes
+
+def test_step_known_values():
+    s = Step(t0=0.02, height=0.5)
+    t = np.array([0.0, 0.019999, 0.02, 0.021, 1.0])
+    assert s(t).tolist() == [0.0, 0.0, 0.5, 0.5, 0.5]
+
+
+def test_ramp_known_values_and_slope():
+    r = Ramp(t0=0.1, t1=0.25, height=3 * math.pi)
+    t = np.arange(0.0, 0.4, T_S)
+    y = r(t)
+    assert np.all(y[t <= 0.1] == 0.0)
+    assert np.allclose(y[t >= 0.25], 3 * math.pi, rtol=0, atol=1e-12)
+    inside = (t > 0.1 + 2 * T_S) & (t < 0.25 - 2 * T_S)
+    slope = np.gradient(y, t)[inside]
+    assert slope == pytest.approx(3 * math.pi / 0.15, rel=1e-9)      # 62.8 rad/s
+    assert r(np.array([0.175]))[0] == pytest.approx(1.5 * math.pi)
+
+
+def test_sine_known_values():
+    s = Sine(amplitude=2.0, frequency=5.0, t0=0.1, t1=0.3)
+    t = np.array([0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4])
+    np.testing.assert_allclose(s(t), [0.0, 0.0, 2.0, 0.0, -2.0, 0.0, 0.0], atol=1e-12)
+
+
+def test_tabulated_interpolates_and_holds_the_ends():
+    tab = Tabulated(t=(0.0, 0.1, 0.3), values=(1.0, 2.0, 0.0))
+    x = tab(np.array([-1.0, 0.0, 0.05, 0.1, 0.2, 0.3, 5.0]))
+    np.testing.assert_allclose(x, [1.0, 1.0, 1.5, 2.0, 1.0, 0.0, 0.0], rtol=0, atol=1e-15)
+    assert isinstance(Tabulated(t=np.array([0.0, 1.0]), values=[0, 1]).t, tuple)
+
+
+def test_profile_from_samples_replays_a_recorded_command():
+    rng = np.random.default_rng(0)
+    t = 2.5 + np.arange(400) * T_S                    # a recording need not start at 0
+    theta = np.cumsum(rng.normal(size=400)) * 1e-3
+    load = rng.normal(size=400) * 0.1
+    p = Profile.from_samples(t, theta, load)
+    g = p.grid(T_S)
+    assert g.size == 400
+    np.testing.assert_allclose(g, t - t[0], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(p.theta_ref(g), theta, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(p.load_torque(g), load, rtol=0, atol=1e-12)
+    assert Profile.from_dict(json.loads(json.dumps(p.to_dict()))) == p
+
+
+def test_constant():
+    assert Constant(1.5)(np.zeros((4,))).tolist() == [1.5] * 4
+
+
+@given(t0=st.floats(0.0, 0.1), height=st.floats(-20.0, 20.0).filter(lambda h: abs(h) > 1e-3),
+       v_max=st.floats(1.0, 200.0), a_max=st.floats(100.0, 2e4))
+def test_trapezoid_reaches_height_within_limits(t0, height, v_max, a_max):
+    tr = Trapezoid(t0=t0, height=height, v_max=v_max, a_max=a_max)
+    d = abs(height)
+    v = min(v_max, math.sqrt(d * a_max))
+    t_end = t0 + d / v + v / a_max                   # total move time
+    dt = min(1e-4, (t_end - t0) / 2000)
+    t = np.arange(0.0, t_end + 0.05, dt)
+    y = tr(t)
+    assert np.all(y[t <= t0] == 0.0)
+    assert y[-1] == pytest.approx(height, rel=1e-9, abs=1e-12)
+    assert tr(np.array([t_end + 1.0]))[0] == pytest.approx(height, rel=1e-9, abs=1e-12)
+    # monotone towards the target
+    assert np.all(np.diff(y) * math.copysign(1.0, height) >= -1e-12)
+    speed = np.diff(y) / dt
+    assert np.max(np.abs(speed)) <= v_max * (1 + 1e-9)
+    acc = np.diff(speed) / dt
+    assert np.max(np.abs(acc)) <= a_max * (1 + 1e-6) + 1e-9
+    # the peak speed is the limit (trapezoid) or the triangle's peak
+    assert np.max(np.abs(speed)) == pytest.approx(v, rel=0.02)
+
+
+def test_trapezoid_is_exactly_zero_before_start():
+    # regression: the triangular case's cruise time once rounded to -4e-17, which np.clip
+    # turned into a -3.9e-17 rad command before t0
+    tr = Trapezoid(t0=0.0, height=0.3125, v_max=6.0, a_max=100.0)   # triangular profile
+    assert tr(np.array([0.0]))[0] == 0.0
+
+
+def test_trapezoid_known_cruise():
+    tr = Trapezoid(t0=0.0, height=10.0, v_max=50.0, a_max=1000.0)
+    # 0.05 s up to speed (1.25 rad), 0.15 s cruise (7.5 rad), 0.05 s down
+    assert tr(np.array([0.05, 0.2, 0.25]))[:].tolist() == pytest.approx([1.25, 8.75, 10.0])
+
+
+@pytest.mark.parametrize("build, match", [
+    (lambda: Step(float("nan"), 1.0), r"Step\.t0 must be finite"),
+    (lambda: Ramp(0.2, 0.1, 1.0), r"Ramp needs t1 > t0"),
+    (lambda: Sine(1.0, 0.0), r"Sine needs frequency > 0"),
+    (lambda: Trapezoid(0.0, 1.0, -1.0, 10.0), r"Trapezoid needs v_max > 0"),
+    (lambda: Constant(float("inf")), r"Constant\.value must be finite"),
+    (lambda: Tabulated((0.0, 0.2, 0.1), (0.0, 1.0, 2.0)), r"strictly increasing times"),
+    (lambda: Tabulated((0.0, 0.1), (0.0, 1.0, 2.0)), r"same length >= 2"),
+    (lambda: Tabulated((0.0, 0.1), (0.0, float("nan"))), r"finite values"),
+    (lambda: Profile(0.0), r"Profile\.duration \[s\] must be > 0"),
+    (lambda: Profile.from_dict({"duration": 1.0, "command": [{"shape": "Spline"}]}),
+     r"unknown profile shape 'Spline'"),
+    (lambda: Profile.from_dict({"command": []}), r"cannot rebuild a profile"),
+    (lambda: get_profile("chirp"), r"unknown profile 'chirp'; choose one of"),
+])
+def test_profile_errors(build, match):
+    with pytest.raises(ProfileError, match=match):
+        build()
+
+
+# --------------------------------------------------------------------------- Profile
+
+def test_profile_sums_shapes_and_grid():
+    p = Profile(0.5, command=(Step(0.1, 1.0), Ramp(0.2, 0.3, 2.0)), load=(Constant(0.3), Step(0.4, -0.1)))
+    t = p.grid(T_S)
+    assert t.size == 4000 and t[0] == 0.0 and t[1] == pytest.approx(T_S) and t[-1] < 0.5
+    assert p.theta_ref(np.array([0.05, 0.15, 0.25, 0.35])).tolist() == pytest.approx([0, 1, 2, 3])
+    assert p.load_torque(np.array([0.0, 0.45])).tolist() == pytest.approx([0.3, 0.2])
+    assert Profile(0.1).theta_ref(t).shape == t.shape and not Profile(0.1).theta_ref(t).any()
+
+
+@pytest.mark.parametrize("profile", [diagnostic(), diagnostic(load_torque=0.5),
+                                     *[f() for f in PROFILES.values()],
+                                     Profile(1.0, (Sine(1.0, 2.0, 0.1, 0.9), Trapezoid(0.0, -2.0, 10.0, 100.0)),
+                                             (Constant(0.1),), name="mix", description="all shapes"),
+                                     Profile(0.2, (Tabulated((0.0, 0.1, 0.2), (0.0, 1.0, -1.0)),),
+                                             (Tabulated((0.0, 0.2), (0.1, 0.3)),), name="tabulated")],
+                         ids=lambda p: p.name)
+def test_profile_dict_round_trip(profile):
+    d = profile.to_dict()
+    back = Profile.from_dict(d)
+    assert back == profile
+    assert back.description == profile.description
+    # through JSON as well (trace metadata)
+    assert Profile.from_dict(json.loads(json.dumps(d))) == profile
+    t = profile.grid(T_S)
+    np.testing.assert_array_equal(back.theta_ref(t), profile.theta_ref(t))
+    np.testing.assert_array_equal(back.load_torque(t), profile.load_torque(t))
+
+
+def test_builtin_profiles_by_name():
+    for name in PROFILES:
+        assert get_profile(name).name == name
+
+
+# --------------------------------------------------------------------------- diagnostic
+
+def test_diagnostic_profile_coverage():
+    p = diagnostic()
+    assert p.duration == 0.5 and p.name == "diagnostic"
+    t = p.grid(T_S)
+    y = p.theta_ref(t)
+    v = np.diff(y) / T_S
+    # more than one mechanical revolution (eccentricity follows the mechanical angle)
+    assert y.max() - y.min() > 2 * math.pi
+    assert np.sum(np.abs(np.diff(y))) > 2 * 2 * math.pi
+    # a reversal: command speed of both signs (backlash shows only there)
+    smooth = np.abs(np.diff(y)) < 0.1                  # leave out the steps
+    assert np.any(v[smooth] > 10.0) and np.any(v[smooth] < -10.0)
+    # holds: intervals of zero command speed of at least 20 ms, before and after motion
+    still = np.abs(np.diff(y)) == 0.0
+    runs, n = [], 0
+    for s in still:
+        n = n + 1 if s else 0
+        runs.append(n)
+    assert max(runs) * T_S >= 0.02
+    assert np.all(still[(t[:-1] > 0.255) & (t[:-1] < 0.295)])      # hold after the ramp
+    assert np.all(still[(t[:-1] > 0.021) & (t[:-1] < 0.099)])      # hold after the first step
+    # steps: jumps of 0.5 rad within one sample (gain drift shows in step responses)
+    jumps = np.flatnonzero(np.abs(np.diff(y)) > 0.4)
+    assert len(jumps) == 2
+    assert np.diff(y)[jumps].tolist() == pytest.approx([0.5, -0.5])
+    # no load torque by default; a constant one on request
+    assert not p.load_torque(t).any()
+    assert diagnostic(0.3).load_torque(t) == pytest.approx(np.full(t.size, 0.3))
