@@ -15,9 +15,10 @@ This module exists for two reasons:
 It evaluates the SAME equations in the SAME order of floating-point operations
 as ``_kernel`` and the scalar functions it is built from (``control_step``,
 ``modulate``, ``back_emf_coeffs``, ``phase_step``, ``torque``,
-``transmission_step``), so the two agree to round-off; the only sources of
-difference are the elementary functions (NumPy's ``sin``, ``cos``, ``exp``,
-``expm1`` against the libm calls Numba emits), a few ulp at most.
+``transmission_step``), so the two agree to round-off; the only source of
+difference is NumPy's ``sin`` and ``cos`` against the libm calls Numba emits
+(an ulp, now and then). The RL coefficients, computed once per candidate, use
+the same scalar ``math.exp``/``math.expm1`` as the kernel.
 
 It is slow (a few hundred NumPy calls per control period whatever the
 population size): use :class:`emaphm.models.monitoring.MonitoringModel` for work.
@@ -185,11 +186,13 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
     c0 = CP[:, C_C0_A:C_C0_A + 3]
     ecc, ecc_phase = CP[:, C_ECC], CP[:, C_ECC_PHASE]
     any_ecc = bool(np.any(ecc != 0.0))
-    # exact RL coefficients (pmsm.rl_coeffs), (n_pop, 3)
+    # exact RL coefficients (pmsm.rl_coeffs), (n_pop, 3): computed once with the scalar
+    # libm calls the kernel makes, as NumPy's SIMD exp/expm1 can differ by an ulp and a
+    # candidate whose current loop is unstable amplifies the star point's round-off at rest
     R, L = CP[:, C_R_A:C_R_A + 3], CP[:, C_L_A:C_L_A + 3]
     x = dt * R / L
-    a = np.exp(-x)
-    h = -np.expm1(-x) / R
+    a = np.array([math.exp(-v) for v in x.ravel()]).reshape(x.shape)
+    h = -np.array([math.expm1(-v) for v in x.ravel()]).reshape(x.shape) / R
     a_a, a_b, a_c = a[:, 0], a[:, 1], a[:, 2]
     h_a, h_b, h_c = h[:, 0], h[:, 1], h[:, 2]
     h_sum = h_a + h_b + h_c

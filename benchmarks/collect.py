@@ -1,0 +1,46 @@
+"""Assemble BENCHMARKS.md from the sections the benchmark scripts write.
+
+Each script in ``benchmarks/`` writes its own measured section under
+``benchmarks/results/*.md`` (with its machine and date); this only
+concatenates them, in a fixed order, under a short header.
+
+Run: ``python benchmarks/collect.py``.
+"""
+
+from pathlib import Path
+
+ROOT = Path(__file__).parent
+ORDER = ["models.md", "model_report.md", "identification.md", "false_alarms.md", "optim.md",
+         "campaign.md", "prognosis.md"]
+HEADER = """# Benchmarks
+
+Measured numbers only: each section below is written by the script named in it, on the
+machine and at the date it states. Re-run a script and then `python benchmarks/collect.py`
+to refresh this file. Timings are taken on one core per process unless said otherwise;
+the machines are shared, so compare ratios measured side by side in one run.
+
+| section | script |
+|---|---|
+| monitoring/reference model speed | `benchmarks/bench_models.py` |
+| model agreement and sensitivity | `benchmarks/model_report.py` |
+| identification accuracy and speed (paper Table 3 layout) | `benchmarks/bench_identification.py` |
+| false alarms and fault naming | `benchmarks/bench_false_alarms.py` |
+| optimizers vs scipy and library baselines | `benchmarks/bench_optim.py` |
+| the paper's full campaign | `benchmarks/run_paper_campaign.py` |
+| prognosis | see `docs/prognosis.md` |
+
+"""
+
+
+def main() -> None:
+    parts = [HEADER]
+    results = ROOT / "results"
+    names = [n for n in ORDER if (results / n).exists()]
+    names += sorted(p.name for p in results.glob("*.md") if p.name not in ORDER)
+    for name in names:
+        parts.append((results / name).read_text().strip() + "\n")
+    (ROOT.parent / "BENCHMARKS.md").write_text("\n".join(parts))
+
+
+if __name__ == "__main__":
+    main()
