@@ -21,7 +21,7 @@ import pytest
 
 from emaphm.faults import SCENARIOS
 from emaphm.models.layout import pack_population
-from emaphm.models.monitoring import STATUS_DIVERGED, MonitoringModel
+from emaphm.models.monitoring import STATUS_DIVERGED, STATUS_TRIPPED, MonitoringModel
 from emaphm.models.monitoring_numpy import simulate_population_numpy, weighted_sse_numpy
 
 TOL = 1e-9            # rtol and atol on currents [A], angles [rad], speeds [rad/s], torque [N m]
@@ -74,7 +74,7 @@ def test_named_scenarios_and_zero_corner_are_well_conditioned(case):
 def test_status_agrees(case):
     _, kernel, vec, _, _, _ = case
     np.testing.assert_array_equal(vec["status"], kernel.status)
-    assert kernel.status[-1] == STATUS_DIVERGED       # the all-ones corner leaves the range
+    assert kernel.status[-1] == STATUS_TRIPPED        # the all-ones corner trips on overcurrent
 
 
 def test_traces_agree_to_round_off_on_well_conditioned_candidates(case):
@@ -100,7 +100,9 @@ def test_weighted_sse_agrees(case):
     f_kernel, s_kernel = mm.weighted_sse(K, i_target, weights)
     f_vec, s_vec = weighted_sse_numpy(P, CP, *_inputs(mm), mm.n_sub, i_target, weights)
     np.testing.assert_array_equal(s_vec, s_kernel)
-    assert np.all(np.isinf(f_vec[s_vec != 0])) and np.all(np.isinf(f_kernel[s_kernel != 0]))
+    dead = s_vec == STATUS_DIVERGED
+    assert np.all(np.isinf(f_vec[dead])) and np.all(np.isinf(f_kernel[dead]))
+    assert np.all(np.isfinite(f_kernel[~dead]))          # a tripped drive still has a fitness
     ok = well & (s_kernel == 0)
     np.testing.assert_allclose(f_vec[ok], f_kernel[ok], rtol=TOL)
     assert np.all(np.isfinite(f_vec[s_vec == 0]))

@@ -23,7 +23,7 @@ from typing import Literal
 
 import numpy as np
 
-from .models.monitoring import MonitoringModel
+from .models.monitoring import STATUS_DIVERGED, MonitoringModel
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
@@ -124,10 +124,10 @@ class Eq4Objective:
             d = equivalent_current(pop.i_abc) - self.target[None, :, 0]
             f = np.sum(self.weights[None, :, 0] * d * d, axis=1)
             status = pop.status
-            f[status != 0] = np.inf
+            f[status == STATUS_DIVERGED] = np.inf
         s = self.stats
         s.kernel_s += time.perf_counter() - t0
         s.calls += 1
         s.evaluations += K.shape[0]
-        s.diverged += int(np.count_nonzero(status))
+        s.diverged += int(np.count_nonzero(status == STATUS_DIVERGED))
         return f

@@ -22,6 +22,7 @@ field                      unit                meaning
 ``Inverter.f_pwm``         Hz                  PWM carrier frequency (= control rate)
 ``Inverter.Kp_i``          V/A                 dq current controller, proportional
 ``Inverter.Ki_i``          V/(A s)             dq current controller, integral
+``Inverter.I_trip``        A                   overcurrent trip level (peak phase current)
 ``Controller.Kp``          1/s                 position loop proportional gain
 ``Controller.Ki``          1/s^2               position loop integral gain
 ``Controller.Kd``          --                  position loop derivative gain
@@ -96,6 +97,7 @@ _UNITS: dict[str, str] = {
     "f_pwm": "Hz",
     "Kp_i": "V/A",
     "Ki_i": "V/(A s)",
+    "I_trip": "A peak",
     "Kp": "1/s",
     "Ki": "1/s^2",
     "Kd": "-",
@@ -188,16 +190,23 @@ class Inverter:
 
     The current loop runs once per PWM period (single update, as Siemens S120
     drives at 8 kHz do), so ``1/f_pwm`` is also the control period ``T_s``.
+    A sampled phase current above ``I_trip`` trips the drive: from then on
+    the inverter holds the active short circuit (all low-side switches on,
+    every leg at 0 V), the usual safe state of a PMSM drive, and the
+    controller stops. Healthy operation peaks near 8 A on the diagnostic
+    profile; a current loop that a heavy short circuit has made unstable
+    trips instead of ringing at hundreds of amperes.
     """
 
     V_dc: float = 600.0
     f_pwm: float = 8000.0
     Kp_i: float = 41.8
     Ki_i: float = 6000.0
+    I_trip: float = 25.0
 
     def __post_init__(self) -> None:
         o = "Inverter"
-        for name in ("V_dc", "f_pwm", "Kp_i"):
+        for name in ("V_dc", "f_pwm", "Kp_i", "I_trip"):
             object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
         object.__setattr__(self, "Ki_i", _check(o, "Ki_i", self.Ki_i, lo=0.0, strict_lo=False))
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from . import __version__
 from .faults import as_k, scenario as scenario_k
-from .models.monitoring import MonitoringModel
+from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
 from .models.reference import Sensors, run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
@@ -67,11 +67,17 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     sensors = sensors if sensors is not None else Sensors()
     if model == "reference":
         out = run_reference(params, kk, profile, n_sub=n_sub or 128, pwm=pwm)
+        status = "tripped" if out["trip_time"] is not None else "ok"
     else:
         mm = MonitoringModel(params, profile, n_sub=n_sub or 1)
         r = mm.simulate(kk)
         out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
                "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}
+        status = {STATUS_OK: "ok", STATUS_TRIPPED: "tripped"}.get(int(r.status[0]), "diverged")
+    if status == "diverged":
+        raise ValueError(f"the monitoring model diverged for k = {kk.tolist()}: its state left "
+                         "the physical range; check the parameters (e.g. the current loop gains "
+                         "against the inductance)")
     rng = np.random.default_rng(seed) if seed is not None else None
     theta_m, i_abc = sensors.apply(out["theta_m"], out["i_abc"], rng)
     meta = {
@@ -85,6 +91,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
                     "encoder_counts": sensors.encoder_counts},
         "n_sub": n_sub or (128 if model == "reference" else 1),
         "pwm": bool(pwm) if model == "reference" else False,
+        "drive": status,
         "emaphm_version": __version__,
     }
     return Trace(t=out["t"], theta_ref=out["theta_ref"], theta_m=theta_m, omega_m=out["omega_m"],

@@ -5,8 +5,12 @@ speed PI     -> torque reference (saturated at T_max)
 i_q,ref = T_ref / k_T (saturated at I_max), i_d,ref = 0
 dq current PI with back-EMF feed-forward -> phase voltage references
 
-Every integrator uses clamping anti-windup: it holds while its output is
-saturated and the error would push further into saturation. The controller
+Every integrator has back-calculation anti-windup (Astrom & Hagglund): while
+the output saturates, the integral is pulled towards the saturated value with
+the tracking time constant ``T_t = Kp/Ki`` (the integral time). Unlike a
+clamp that switches integration on and off, this is continuous in the gains,
+so the fitness landscape has no step where a transient just touches a limit.
+The controller
 knows the healthy motor only (``k_T``, its ``c0 = k_T/1.5``); faults change
 the plant, never the controller's model of it, except k8, which drifts ``Kp``.
 """
@@ -24,15 +28,14 @@ def _sat(u, limit):
 
 @jit
 def pi_step(error, integral, Kp, Ki, limit, T_s):
-    """One clamped PI update: returns (saturated output, new integral).
+    """One PI update with back-calculation: returns (saturated output, new integral).
 
-    The integral is in output units (it already carries Ki).
+    The integral is in output units (it already carries Ki);
+    ``d(integral)/dt = Ki*error + (Ki/Kp)*(y - u)``.
     """
     u = Kp * error + integral
     y = _sat(u, limit)
-    if y == u or (u > limit and error < 0.0) or (u < -limit and error > 0.0):
-        integral += Ki * error * T_s
-    return y, integral
+    return y, integral + T_s * Ki * (error + (y - u) / Kp)
 
 
 @jit

@@ -73,3 +73,9 @@ def on_fraction(d, c_start, c_end):
     if c_end > c_start:
         return min(max((d - c_start) / (c_end - c_start), 0.0), 1.0)
     return 1.0 - min(max((c_start - d) / (c_start - c_end), 0.0), 1.0)
+
+
+@jit
+def overcurrent(i_a, i_b, i_c, I_trip):
+    """True when a sampled phase current exceeds the trip level (drive protection)."""
+    return abs(i_a) > I_trip or abs(i_b) > I_trip or abs(i_c) > I_trip

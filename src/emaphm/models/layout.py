@@ -18,8 +18,8 @@ from ..params import ActuatorParams
 
 # shared parameters P[...]
 (P_POLES, P_J_M, P_C_M, P_T_MAX, P_I_MAX, P_V_DC, P_T_S, P_KP_I, P_KI_I, P_KI, P_KD,
- P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0) = range(18)
-N_P = 18
+ P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0, P_I_TRIP) = range(19)
+N_P = 19
 
 # per-candidate parameters CP[:, ...]
 (C_KP, C_FSJ, C_FDJ, C_BACKLASH, C_R_A, C_R_B, C_R_C, C_L_A, C_L_B, C_L_C,
@@ -50,6 +50,7 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0) -> np.ndarray:
     P[P_J_L] = load.J_l
     P[P_C_L] = load.C_l
     P[P_THETA0] = theta0
+    P[P_I_TRIP] = inv.I_trip
     return P
 
 

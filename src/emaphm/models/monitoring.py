@@ -17,7 +17,9 @@ Two implementations that tests hold equal to round-off:
 A candidate whose state leaves the physical range (``|i| > I_DIVERGED`` A,
 ``|omega| > OMEGA_DIVERGED`` rad/s, or a non-finite value) is frozen, flagged
 in ``status`` and given infinite fitness: a diverging candidate is a value,
-not an exception.
+not an exception. A candidate whose drive trips on overcurrent
+(``Inverter.I_trip``) goes on with the inverter in active short circuit and
+is flagged ``STATUS_TRIPPED``; its fitness stays finite (and large).
 """
 
 from __future__ import annotations
@@ -32,21 +34,22 @@ from ..params import ActuatorParams, siemens_1fk7060
 from ..profiles import Profile, diagnostic
 from ._jit import jit
 from .controller import control_step
-from .inverter import modulate
+from .inverter import modulate, overcurrent
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_L_A, C_L_B, C_L_C, C_R_A, C_R_B, C_R_C, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
-                     P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack, pack_population)
+                     P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack, pack_population)
 from .mechanics import transmission_step
 from .pmsm import back_emf_coeffs, phase_step, rl_coeffs, torque
 
 __all__ = ["MonitoringModel", "PopulationResult", "simulate_reference", "I_DIVERGED",
-           "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED"]
+           "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
 
 I_DIVERGED = 1e4        # A
 OMEGA_DIVERGED = 1e5    # rad/s
 STATUS_OK = 0
 STATUS_DIVERGED = 1
+STATUS_TRIPPED = 2
 
 
 @jit
@@ -71,6 +74,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     V_dc = P[P_V_DC]
     Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
     T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
+    I_trip = P[P_I_TRIP]
     # per-candidate exact RL coefficients for this step
     a = np.empty((n_pop, 3))
     h = np.empty((n_pop, 3))
@@ -91,7 +95,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
         ref = theta_ref[k]
         T_l = T_load[k]
         for j in range(n_pop):
-            if status[j] != 0:
+            if status[j] == STATUS_DIVERGED:
                 continue
             thm, wm, thl, wl = th_m[j], w_m[j], th_l[j], w_l[j]
             ia, ib, ic = I[j, 0], I[j, 1], I[j, 2]
@@ -102,12 +106,18 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                 fitness[j] += weights[k, 0] * da * da + weights[k, 1] * db * db + weights[k, 2] * dc * dc
             s_e = math.sin(p * thm)
             c_e = math.cos(p * thm)
-            v_a, v_b, v_c, T_ref, e0, e1, e2, e3 = control_step(
-                ref, thm, wm, ia, ib, ic, s_e, c_e,
-                integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3],
-                CP[j, C_KP], Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s)
-            integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
-            d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
+            if status[j] == STATUS_OK and overcurrent(ia, ib, ic, I_trip):
+                status[j] = STATUS_TRIPPED
+            if status[j] == STATUS_TRIPPED:          # active short circuit, controller stopped
+                d_a = d_b = d_c = 0.0
+            else:
+                v_a, v_b, v_c, T_ref, e0, e1, e2, e3 = control_step(
+                    ref, thm, wm, ia, ib, ic, s_e, c_e,
+                    integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3],
+                    CP[j, C_KP], Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i,
+                    V_dc, T_s)
+                integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
+                d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
             for s in range(n_sub):
                 if s > 0:
                     s_e = math.sin(p * thm)
@@ -163,6 +173,7 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
     wm = wl = 0.0
     ia = ib = ic = 0.0
     integ = (0.0, 0.0, 0.0, 0.0)
+    tripped = False
     out = {name: np.zeros(t.size) for name in ("theta_m", "omega_m", "torque")}
     out["i_abc"] = np.zeros((t.size, 3))
     for n in range(t.size):
@@ -171,11 +182,15 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
         out["i_abc"][n] = ia, ib, ic
         ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
         out["torque"][n] = torque.py_func(ia, ib, ic, ca, cb, cc)
-        v_a, v_b, v_c, _, *integ = control_step.py_func(
-            ref[n], thm, wm, ia, ib, ic, s_e, c_e, *integ,
-            ctl.Kp, ctl.Ki, ctl.Kd, ctl.omega_max, ctl.Kp_w, ctl.Ki_w, m.T_max, ctl.k_T, m.I_max,
-            inv.Kp_i, inv.Ki_i, inv.V_dc, T_s)
-        duty = modulate.py_func(v_a, v_b, v_c, inv.V_dc)
+        tripped = tripped or overcurrent.py_func(ia, ib, ic, inv.I_trip)
+        if tripped:                     # active short circuit, controller stopped
+            duty = (0.0, 0.0, 0.0)
+        else:
+            v_a, v_b, v_c, _, *integ = control_step.py_func(
+                ref[n], thm, wm, ia, ib, ic, s_e, c_e, *integ,
+                ctl.Kp, ctl.Ki, ctl.Kd, ctl.omega_max, ctl.Kp_w, ctl.Ki_w, m.T_max, ctl.k_T,
+                m.I_max, inv.Kp_i, inv.Ki_i, inv.V_dc, T_s)
+            duty = modulate.py_func(v_a, v_b, v_c, inv.V_dc)
         for _ in range(n_sub):
             s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
             ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
@@ -195,7 +210,7 @@ class PopulationResult:
     """Traces of a population, sampled at the control instants ``t``.
 
     ``i_abc (n_pop, n, 3)`` [A], ``theta_m, omega_m, torque (n_pop, n)``,
-    ``status (n_pop,)`` (0 ok, 1 diverged; a diverged candidate's traces stop
+    ``status (n_pop,)`` (0 ok, 1 diverged, 2 tripped; a diverged candidate's traces stop
     where it left the physical range and are zero after).
     """
 
@@ -273,7 +288,8 @@ class MonitoringModel:
         """``sum_k sum_j weights (i_j - i_target)^2`` per candidate, without storing traces.
 
         ``i_target, weights`` have shape (n, 3) on the model grid :attr:`t`.
-        Returns ``(fitness (n_pop,), status (n_pop,))``; diverged candidates get ``inf``.
+        Returns ``(fitness (n_pop,), status (n_pop,))``; diverged candidates get ``inf``,
+        tripped ones (status 2) their finite fitness.
         """
         n = self._t.size
         i_target = np.ascontiguousarray(i_target, dtype=float)

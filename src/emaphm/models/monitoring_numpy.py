@@ -6,7 +6,7 @@ This module exists for two reasons:
   the way the MM would be written without a compiler, against which the Numba
   kernel :func:`emaphm.models.monitoring._kernel` is measured;
 * it is an **independent check of the kernel's branch logic**: every scalar
-  ``if`` of the physics functions (clamping anti-windup, speed/current/voltage
+  ``if`` of the physics functions (overcurrent trip, speed/current/voltage
   saturation, min-max modulation, Borello stick/slip friction, backlash
   contact, divergence freeze) is rewritten here as a whole-population
   ``np.where`` mask, so a branch taken wrongly on either side shows up as a
@@ -37,8 +37,9 @@ import numpy as np
 
 from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP, C_L_A, C_R_A,
                      P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W,
-                     P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_V_DC)
-from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED
+                     P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_V_DC, P_THETA0,
+                     P_I_TRIP)
+from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
 from .pmsm import COS_2PI_3, SIN_2PI_3
 
 __all__ = ["weighted_sse_numpy", "simulate_population_numpy"]
@@ -54,11 +55,10 @@ def _sat(u, limit):
 
 
 def _pi_step(error, integral, Kp, Ki, limit, T_s):
-    """Clamped PI (controller.pi_step): ``(saturated output, new integral)``."""
+    """PI with back-calculation (controller.pi_step): ``(saturated output, new integral)``."""
     u = Kp * error + integral
     y = _sat(u, limit)
-    integrate = (y == u) | ((u > limit) & (error < 0.0)) | ((u < -limit) & (error > 0.0))
-    return y, np.where(integrate, integral + Ki * error * T_s, integral)
+    return y, integral + T_s * Ki * (error + (y - u) / Kp)
 
 
 def _control_step(theta_ref, theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e,
@@ -198,7 +198,8 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
     h_sum = h_a + h_b + h_c
     # state
     zeros = np.zeros(n_pop)
-    th_m, w_m, th_l, w_l = zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
+    th_m, w_m, th_l, w_l = zeros + P[P_THETA0], zeros.copy(), zeros + P[P_THETA0], zeros.copy()
+    tripped = np.zeros(n_pop, dtype=bool)
     i_a, i_b, i_c = zeros.copy(), zeros.copy(), zeros.copy()
     integ = [zeros.copy() for _ in range(4)]
     fitness = np.zeros(n_pop)
@@ -219,9 +220,14 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
             fitness = np.where(alive, fitness + inc, fitness)
         s_e = np.sin(p * thm)
         c_e = np.cos(p * thm)
+        # overcurrent trip (inverter.overcurrent): active short circuit, controller stopped
+        I_trip = P[P_I_TRIP]
+        tripped = tripped | (alive & ((np.abs(ia) > I_trip) | (np.abs(ib) > I_trip)
+                                      | (np.abs(ic) > I_trip)))
         v_a, v_b, v_c, e0, e1, e2, e3 = _control_step(ref, thm, wm, ia, ib, ic, s_e, c_e,
                                                       *integ, Kp, P)
-        d_a, d_b, d_c = _modulate(v_a, v_b, v_c, V_dc)
+        e0, e1, e2, e3 = (np.where(tripped, old, new) for new, old in zip((e0, e1, e2, e3), integ))
+        d_a, d_b, d_c = (np.where(tripped, 0.0, d) for d in _modulate(v_a, v_b, v_c, V_dc))
         u_a, u_b, u_c = d_a * V_dc, d_b * V_dc, d_c * V_dc
         for s in range(n_sub):
             if s > 0:
@@ -258,7 +264,7 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
         th_l, w_l = np.where(keep, thl, th_l), np.where(keep, wl, w_l)
         i_a, i_b, i_c = np.where(keep, ia, i_a), np.where(keep, ib, i_b), np.where(keep, ic, i_c)
         integ = [np.where(keep, new, old) for new, old in zip((e0, e1, e2, e3), integ)]
-    status = np.where(alive, 0, STATUS_DIVERGED).astype(np.int64)
+    status = np.where(alive, np.where(tripped, STATUS_TRIPPED, 0), STATUS_DIVERGED).astype(np.int64)
     if store:
         return {"i_abc": out_i, "theta_m": out_th, "omega_m": out_w, "torque": out_tq,
                 "status": status}

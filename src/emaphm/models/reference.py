@@ -27,10 +27,11 @@ from ..params import ActuatorParams
 from ..profiles import Profile
 from ._jit import jit
 from .controller import control_step
-from .inverter import modulate, on_fraction, triangle
+from .inverter import modulate, on_fraction, overcurrent, triangle
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_L_A, C_R_A, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I,
-                     P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack)
+                     P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC,
+                     pack)
 from .mechanics import transmission_step
 from .pmsm import back_emf_coeffs, phase_step, rl_coeffs, torque
 
@@ -83,11 +84,12 @@ class Sensors:
 
 @jit
 def _rm_kernel(P, cp, theta_ref, T_load, n_sub, pwm,
-               out_i, out_theta, out_omega, out_torque, out_energy):
+               out_i, out_theta, out_omega, out_torque, out_energy, trip_index):
     """One actuator over ``theta_ref.shape[0]`` control periods at step ``T_s/n_sub``.
 
     ``out_energy (n, 4)`` receives cumulative [input, copper loss, air-gap
-    (T_m * omega_m), stored magnetic] energies in J at each sample.
+    (T_m * omega_m), stored magnetic] energies in J at each sample;
+    ``trip_index[0]`` the sample at which the drive tripped on overcurrent (-1: never).
     """
     n = theta_ref.shape[0]
     p = P[P_POLES]
@@ -114,6 +116,8 @@ def _rm_kernel(P, cp, theta_ref, T_load, n_sub, pwm,
     E_in = 0.0
     E_cu = 0.0
     E_ag = 0.0
+    tripped = False
+    trip_index[0] = -1
     for k in range(n):
         s_e = math.sin(p * thm)
         c_e = math.cos(p * thm)
@@ -129,11 +133,17 @@ def _rm_kernel(P, cp, theta_ref, T_load, n_sub, pwm,
         out_energy[k, 1] = E_cu
         out_energy[k, 2] = E_ag
         out_energy[k, 3] = 0.5 * (L_a * ia * ia + L_b * ib * ib + L_c * ic * ic)
-        v_a, v_b, v_c, T_ref, i0, i1, i2, i3 = control_step(
-            theta_ref[k], thm, wm, ia, ib, ic, s_e, c_e, i0, i1, i2, i3,
-            cp[C_KP], P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W],
-            P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I], V_dc, T_s)
-        d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
+        if not tripped and overcurrent(ia, ib, ic, P[P_I_TRIP]):
+            tripped = True
+            trip_index[0] = k
+        if tripped:                    # active short circuit, controller stopped
+            d_a = d_b = d_c = 0.0
+        else:
+            v_a, v_b, v_c, T_ref, i0, i1, i2, i3 = control_step(
+                theta_ref[k], thm, wm, ia, ib, ic, s_e, c_e, i0, i1, i2, i3,
+                cp[C_KP], P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W],
+                P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I], V_dc, T_s)
+            d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
         for s in range(n_sub):
             if s > 0:
                 s_e = math.sin(p * thm)
@@ -169,7 +179,8 @@ def run_reference(params: ActuatorParams, k, profile: Profile, *, n_sub: int = 1
     """Simulate the faulty actuator ``apply_faults(params, k)`` with ideal sensors.
 
     Returns a dict ``t, theta_ref, theta_m, omega_m, i_abc (n, 3), torque,
-    energy (n, 4)`` sampled at the control instants ``k*T_s``.
+    energy (n, 4)`` sampled at the control instants ``k*T_s``, and
+    ``trip_time`` [s] when the drive tripped on overcurrent (None if never).
     """
     if isinstance(n_sub, bool) or not isinstance(n_sub, int) or n_sub < 2 or n_sub % 2:
         raise ValueError(f"reference model n_sub must be an even integer >= 2 (sub-steps per "
@@ -182,7 +193,8 @@ def run_reference(params: ActuatorParams, k, profile: Profile, *, n_sub: int = 1
     n = t.size
     out = {"i_abc": np.zeros((n, 3)), "theta_m": np.zeros(n), "omega_m": np.zeros(n),
            "torque": np.zeros(n), "energy": np.zeros((n, 4))}
+    trip = np.full(1, -1, dtype=np.int64)
     _rm_kernel(P, CP[0], ref, load, n_sub, bool(pwm), out["i_abc"], out["theta_m"],
-               out["omega_m"], out["torque"], out["energy"])
-    out.update(t=t, theta_ref=ref)
+               out["omega_m"], out["torque"], out["energy"], trip)
+    out.update(t=t, theta_ref=ref, trip_time=None if trip[0] < 0 else float(t[trip[0]]))
     return out
