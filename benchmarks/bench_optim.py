@@ -1,0 +1,269 @@
+"""Benchmark of emaphm.optim against reference implementations at equal budgets.
+
+Run from the repository root::
+
+    python benchmarks/bench_optim.py            # writes benchmarks/results/optim.md
+    python benchmarks/bench_optim.py --seeds 3 --out /tmp/optim.md
+
+What it measures, on the 8-D sphere, Rastrigin and Rosenbrock functions (f* = 0):
+
+* quality: median over seeds of the best f after 10,000 evaluations (50 members x 200
+  iterations, initial population included) for our DE, PSO and GWO, scipy's
+  differential_evolution (rand/1/bin with our F and CR, and scipy's own defaults:
+  best/1/bin, dithered F in [0.5, 1), CR 0.7; both with 50 members, vectorised,
+  deferred updating, no polishing, no early stop) and, when niapy is installed, niapy's
+  PSO and GWO run on the unit-box form of the problem;
+* wall time: median seconds per run;
+* overhead: microseconds per iteration of the optimizer's own work, i.e. the run's wall
+  time minus the time spent inside the objective, divided by the iterations (median
+  over all runs), for a population of 50 and 8 variables. The fault-identification
+  objective evaluates 50 simulations in ~10 ms per iteration, the yardstick for "tiny".
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy
+from scipy.optimize import differential_evolution
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+from emaphm.optim import DE, GWO, PSO, MaxIterations, minimize  # noqa: E402
+
+try:  # optional reference (test-only dependency)
+    import niapy
+    from niapy.algorithms.basic import GreyWolfOptimizer, ParticleSwarmAlgorithm
+    from niapy.problems import Problem
+    from niapy.task import Task
+    from niapy.util.repair import limit
+except ImportError:  # pragma: no cover
+    niapy = None
+
+N_VAR, N_POP, N_ITER = 8, 50, 200
+BUDGET = N_POP * N_ITER
+
+
+def sphere(X):
+    return np.sum(X**2, axis=-1)
+
+
+def rastrigin(X):
+    return 10.0 * X.shape[-1] + np.sum(X**2 - 10.0 * np.cos(2.0 * np.pi * X), axis=-1)
+
+
+def rosenbrock(X):
+    return np.sum(100.0 * (X[..., 1:] - X[..., :-1] ** 2) ** 2 + (1.0 - X[..., :-1]) ** 2, axis=-1)
+
+
+PROBLEMS = {
+    "sphere": (sphere, ([-5.12] * N_VAR, [5.12] * N_VAR)),
+    "rastrigin": (rastrigin, ([-5.12] * N_VAR, [5.12] * N_VAR)),
+    "rosenbrock": (rosenbrock, ([-5.0] * N_VAR, [10.0] * N_VAR)),
+}
+
+
+# ----------------------------------------------------------------------------- runners
+# Each runner: (f, bounds, seed, n_iter) -> best f. n_iter counts the initial population.
+
+
+def ours(opt_factory):
+    def run(f, bounds, seed, n_iter):
+        res = minimize(f, bounds, opt_factory(n_iter), seed=seed, termination=MaxIterations(n_iter))
+        return res.fun
+
+    return run
+
+
+def scipy_de(**options):
+    def run(f, bounds, seed, n_iter):
+        lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
+        rng = np.random.default_rng(seed)
+        res = differential_evolution(
+            lambda x: f(x.T),
+            list(zip(lo, hi, strict=True)),
+            maxiter=n_iter - 1,
+            init=lo + rng.random((N_POP, N_VAR)) * (hi - lo),
+            polish=False,
+            tol=0.0,
+            atol=0.0,
+            vectorized=True,
+            updating="deferred",
+            rng=rng,
+            **options,
+        )
+        return res.fun
+
+    return run
+
+
+def niapy_run(make_algo):
+    def run(f, bounds, seed, n_iter):
+        lo = np.asarray(bounds[0], float)
+        width = np.asarray(bounds[1], float) - lo
+
+        class UnitBox(Problem):
+            def __init__(self):
+                super().__init__(dimension=N_VAR, lower=0.0, upper=1.0)
+
+            def _evaluate(self, u):
+                return float(f((lo + u * width)[None, :])[0])
+
+        task = Task(problem=UnitBox(), max_evals=N_POP * n_iter)
+        return make_algo(seed).run(task)[1]
+
+    return run
+
+
+def contenders():
+    c = {
+        "emaphm DE (rand/1/bin, F 0.5, CR 0.9)": ours(lambda n: DE(pop_size=N_POP, max_iter=n)),
+        "emaphm PSO (w 0.7298, c 1.49618, v_max 0.2)": ours(lambda n: PSO(pop_size=N_POP, max_iter=n)),
+        "emaphm GWO (a: 2 -> 0 over the budget)": ours(lambda n: GWO(pop_size=N_POP, max_iter=n)),
+        "scipy DE, same settings (rand1bin, 0.5, 0.9)": scipy_de(
+            strategy="rand1bin", mutation=0.5, recombination=0.9
+        ),
+        "scipy DE, its defaults (best1bin, F~U(0.5,1), CR 0.7)": scipy_de(),
+    }
+    if niapy is not None:
+        c["niapy PSO (same w, c1, c2, clamp; unit box)"] = niapy_run(
+            lambda s: ParticleSwarmAlgorithm(
+                population_size=N_POP, w=0.7298, c1=1.49618, c2=1.49618,
+                min_velocity=-0.2, max_velocity=0.2, repair=limit, seed=s,
+            )
+        )
+        c["niapy GWO (unit box)"] = niapy_run(lambda s: GreyWolfOptimizer(population_size=N_POP, seed=s))
+    return c
+
+
+# ----------------------------------------------------------------------------- overhead
+
+
+class Timed:
+    """Wraps an objective and accumulates the wall time spent inside it."""
+
+    def __init__(self, f):
+        self.f, self.inside = f, 0.0
+
+    def __call__(self, X):
+        t0 = time.perf_counter()
+        y = self.f(X)
+        self.inside += time.perf_counter() - t0
+        return y
+
+
+# ----------------------------------------------------------------------------- report
+
+
+def machine() -> dict[str, str]:
+    cpu = platform.processor()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = f"{cpu} / {line.split(':', 1)[1].strip()}" if cpu else line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    try:
+        nproc = subprocess.run(["nproc"], capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        nproc = str(os.cpu_count())
+    load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
+    return {
+        "date": _dt.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z"),
+        "processor": cpu or "unknown",
+        "nproc": nproc,
+        "load average at start (1 min)": f"{load[0]:.2f}" if load[0] != "?" else "?",
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "niapy": getattr(niapy, "__version__", "not installed") if niapy else "not installed",
+        "platform": platform.platform(),
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", type=int, default=20, help="runs per cell (default 20)")
+    ap.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "results" / "optim.md")
+    args = ap.parse_args(argv)
+
+    info = machine()
+    rows = []
+    for name, run in contenders().items():
+        cells, overheads = [], []
+        for prob, (f, bounds) in PROBLEMS.items():
+            funs, walls = [], []
+            for s in range(args.seeds):
+                timed = Timed(f)
+                t0 = time.perf_counter()
+                funs.append(run(timed, bounds, s, N_ITER))
+                walls.append(time.perf_counter() - t0)
+                overheads.append((walls[-1] - timed.inside) / N_ITER * 1e6)
+            cells.append((float(np.median(funs)), float(np.median(walls)), float(np.mean(funs))))
+            med_f, med_t, _ = cells[-1]
+            print(f"{name:55s} {prob:10s} median f {med_f:.3g}  {med_t * 1e3:.1f} ms/run", flush=True)
+        rows.append((name, cells, float(np.median(overheads))))
+
+    lines = [
+        "# emaphm.optim benchmark",
+        "",
+        "Generated by `python benchmarks/bench_optim.py` (do not edit by hand).",
+        "",
+        "| machine | |",
+        "| --- | --- |",
+        *[f"| {k} | {v} |" for k, v in info.items()],
+        "",
+        f"Budget: {BUDGET:,} evaluations per run ({N_POP} members x {N_ITER} iterations, the "
+        f"initial population included), 8 variables, {args.seeds} seeds per cell. "
+        "Quality is the median best f (f* = 0; for Rastrigin also the mean); time is the "
+        "median wall time per run; "
+        "overhead is the optimizer's own time per iteration (run time minus time inside the "
+        "objective, population of 50), to compare with ~10 ms per iteration for the EMA "
+        "fitness (50 simulations).",
+        "",
+        "| optimizer | sphere f | Rastrigin f | Rastrigin mean f | Rosenbrock f | sphere ms/run "
+        "| Rastrigin ms/run | Rosenbrock ms/run | overhead us/iter |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
+    for name, cells, ovh in rows:
+        q = f"{cells[0][0]:.3g} | {cells[1][0]:.3g} | {cells[1][2]:.3g} | {cells[2][0]:.3g}"
+        t = " | ".join(f"{c[1] * 1e3:.1f}" for c in cells)
+        lines.append(f"| {name} | {q} | {t} | {ovh:.0f} |")
+    lines += [
+        "",
+        "Notes:",
+        "",
+        "- GWO here runs with `max_iter=200` so that `a` reaches 0 at this budget (its paper "
+        "budget is 150 iterations). Its update is not translation invariant: it is precise near "
+        "the lower corner of the box and much less so at mid-box, where these optima lie "
+        "(see `tests/test_optim_conformance.py::test_gwo_is_biased_towards_lower_corner`).",
+        "- scipy's own defaults (best/1/bin with dither) converge faster than rand/1/bin on these "
+        "functions; rand/1/bin is used because it is the paper's algorithm (Fig. 3). `DE(F=(0.5, 1.0))` "
+        "gives dithering with our DE.",
+        "- Rastrigin runs end in one of two groups (a good basin, f ~ 3-8, or a poor one, "
+        "f ~ 20-30), so its median over a few seeds jumps between them; the mean is the steadier "
+        "figure. Over 100 seeds at 7,500 evaluations our GWO and niapy's are indistinguishable "
+        "there (medians 20.1 and 17.8, quartiles 8-25 for both, Mann-Whitney p = 0.31; "
+        "tests/test_optim_crosscheck.py).",
+        "- niapy calls the objective once per point in Python, so its times and overhead include "
+        "per-point call costs our batch interface avoids.",
+        "- The machine may be shared: timings are indicative, qualities are exact for these seeds.",
+        "",
+    ]
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text("\n".join(lines))
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

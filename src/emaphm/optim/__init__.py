@@ -1,0 +1,87 @@
+"""Box-constrained metaheuristics with an ask/tell interface: DE, PSO and GWO.
+
+The optimizers know nothing about actuators: they minimise a batch objective
+``f(X) -> y`` (X: (n_pop, n_var) in problem units, y: (n_pop,); NaN/inf count as worst)
+over a box ``(lo, hi)``.
+
+>>> import numpy as np
+>>> from emaphm.optim import minimize, get_optimizer, MaxIterations
+>>> sphere = lambda X: np.sum(X**2, axis=1)
+>>> res = minimize(sphere, ([-5] * 4, [5] * 4), get_optimizer("pso"), seed=1,
+...                termination=MaxIterations(100))
+>>> res.fun < 1e-6, res.nit, res.reason
+(True, 100, 'max_iterations')
+
+See :mod:`emaphm.optim.base` for the conventions (unit-box coordinates, clipping,
+iteration counting) and each algorithm's class docstring for its defaults and sources.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .base import (
+    AnyOf,
+    Bounds,
+    MaxEvaluations,
+    MaxIterations,
+    Optimizer,
+    OptimizeResult,
+    StallTolerance,
+    Termination,
+    WallClock,
+    as_bounds,
+    minimize,
+    resume,
+)
+from .de import DE
+from .gwo import GWO
+from .pso import PSO
+
+__all__ = [
+    "ALGORITHMS",
+    "DE",
+    "GWO",
+    "PSO",
+    "AnyOf",
+    "Bounds",
+    "MaxEvaluations",
+    "MaxIterations",
+    "OptimizeResult",
+    "Optimizer",
+    "StallTolerance",
+    "Termination",
+    "WallClock",
+    "as_bounds",
+    "get_optimizer",
+    "minimize",
+    "resume",
+]
+
+#: Registry of the available optimizers by short name.
+ALGORITHMS: dict[str, type] = {"de": DE, "pso": PSO, "gwo": GWO}
+
+
+def get_optimizer(name: str, **kw: Any) -> Optimizer:
+    """Build the optimizer registered under ``name`` with options ``kw``.
+
+    Parameters
+    ----------
+    name : str
+        One of ``ALGORITHMS`` ("de", "gwo", "pso").
+    **kw
+        Passed to the optimizer's constructor (e.g. ``pop_size=30``).
+
+    Raises
+    ------
+    ValueError
+        ``unknown algorithm 'x'; choose one of de, gwo, pso`` for an unknown name, or
+        the optimizer's own message for an invalid option.
+    """
+    try:
+        cls = ALGORITHMS[name]
+    except (KeyError, TypeError):
+        raise ValueError(
+            f"unknown algorithm {name!r}; choose one of {', '.join(sorted(ALGORITHMS))}"
+        ) from None
+    return cls(**kw)
