@@ -1,0 +1,449 @@
+"""Well-kept baselines behind the ask/tell protocol of :mod:`emaphm.optim`: scipy's
+vectorised differential evolution and CMA-ES from the ``cma`` package.
+
+They let a campaign show how the paper's three algorithms (our own DE, PSO and GWO)
+compare with mature, widely used implementations, with the same problem, the same
+budget rules and the same bookkeeping (``nfev``, ``nit``, ``history``).
+
+==========  ================================================================================
+name        what runs
+==========  ================================================================================
+scipy-de    :class:`ScipyDE`: ``scipy.optimize.differential_evolution`` with
+            ``vectorized=True, updating='deferred', polish=False`` (one batch per
+            generation), driven one generation at a time
+cmaes       :class:`CMAES`: ``cma.CMAEvolutionStrategy`` (Hansen) in the unit box with
+            ``bounds=[0, 1]``, its own ask/tell
+==========  ================================================================================
+
+Both are full ask/tell optimizers (not "minimize-only"), so :func:`emaphm.identify.identify`,
+:func:`emaphm.optim.minimize`, checkpoints and campaigns reach them like any other.
+:func:`register` adds them to :data:`emaphm.optim.ALGORITHMS`; nothing registers them
+at import time.
+
+How the scipy adapter works
+---------------------------
+scipy's solver calls the objective itself, from inside ``next(solver)`` (one
+generation). The adapter inverts that control without threads: the state holds a
+snapshot of the solver taken at the start of a generation plus the fitness batches
+already told in that generation. ``ask`` replays the generation on a deep copy with an
+objective that serves the told batches and *raises* at the first batch it does not
+know, capturing the points scipy wants evaluated; ``tell`` replays with one more batch
+and, when the generation completes, keeps the copy as the new snapshot. The solver's
+random stream lives in the copied solver, so replaying is exact and ``tell`` never
+modifies its input state. The run is bit-for-bit the one
+``differential_evolution(..., init=<the same initial population>, rng=<the same
+Generator>, vectorized=True, updating='deferred', polish=False)`` makes (tested), apart
+from the stopping rule, which is emaphm's.
+
+Boundary handling is each library's own, not emaphm's clipping: scipy re-draws a
+component that leaves the box uniformly inside it, and cma maps its samples into the
+box by a smooth transformation. Neither lands exactly on a face, so a component whose
+true value is the bound (``k_i = 0``) is approached, not hit (the polish of
+:func:`~emaphm.identify.identify` closes that gap).
+
+Dependencies
+------------
+The module imports neither scipy's solver nor cma at import time; ``init`` does. It
+touches two private details of scipy (written against scipy 1.17; the ``seed=`` keyword
+of scipy < 1.15 is handled): the solver class
+``scipy.optimize._differentialevolution.DifferentialEvolutionSolver``, whose
+``next(solver)`` runs one generation, and its ``_mapwrapper`` attribute, replaced by a
+picklable equivalent so that states pickle. Should a scipy release change them, the
+replay check fails loudly (``RuntimeError``) rather than running a different algorithm.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import inspect
+import threading
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from emaphm.optim.base import (
+    Bounds,
+    MaxIterations,
+    StallTolerance,
+    Termination,
+    advance,
+    as_bounds,
+    check_int,
+    check_real,
+    check_told,
+    child_rng,
+    frozen,
+)
+
+__all__ = ["BASELINES", "CMAES", "CMAESState", "ScipyDE", "ScipyDEState", "register"]
+
+
+# --------------------------------------------------------------------------- scipy DE
+
+
+class _Ask(Exception):
+    """Raised by the feeding objective at the first batch it has no values for."""
+
+    def __init__(self, X: np.ndarray) -> None:
+        super().__init__("ask")
+        self.X = X
+
+
+_FEED = threading.local()
+
+
+def _feed_objective(x: np.ndarray) -> np.ndarray:
+    """The objective scipy's solver sees: serves told batches, raises at the next one.
+
+    ``x`` has scipy's vectorised shape (n_var, S); it is checked against what was
+    asked, so a replay that drifted from the original run fails loudly.
+    """
+    feed = _FEED.current
+    X = np.array(x.T, dtype=np.float64)
+    if feed.index < len(feed.batches):
+        X_told, y = feed.batches[feed.index]
+        if X_told.shape != X.shape or not np.array_equal(X_told, X):
+            raise RuntimeError("ScipyDE: scipy asked for different points on replay; "
+                               "the adapter does not support this scipy version")
+        feed.index += 1
+        return np.array(y, dtype=np.float64)
+    raise _Ask(X)
+
+
+def _vectorized_map(func: Any, x: np.ndarray) -> np.ndarray:
+    """scipy's own map for ``vectorized=True`` (a module-level function, so picklable)."""
+    return np.atleast_1d(func(x.T))
+
+
+def _rng_keyword(cls: Any, rng: np.random.Generator) -> dict[str, Any]:
+    """scipy >= 1.15 takes ``rng=``; older versions ``seed=`` (a Generator works for both)."""
+    params = inspect.signature(cls).parameters
+    return {"rng": rng} if "rng" in params else {"seed": rng}
+
+
+@dataclass
+class _Feed:
+    batches: list
+    index: int = 0
+
+
+def _replay(solver: Any, batches: list) -> tuple[Any, np.ndarray | None]:
+    """Run one generation of a copy of ``solver`` on the told ``batches``.
+
+    Returns ``(solver_after, None)`` when the generation completed, or
+    ``(None, X)`` with the points of the first batch the generation still needs.
+    """
+    work = copy.deepcopy(solver)
+    previous = getattr(_FEED, "current", None)
+    _FEED.current = _Feed(batches)
+    try:
+        next(work)
+    except _Ask as ask:
+        return None, ask.X
+    finally:
+        _FEED.current = previous
+    return work, None
+
+
+@dataclass(frozen=True, eq=False)
+class ScipyDEState:
+    """State of a :class:`ScipyDE` run (a value: ``tell`` returns a new one).
+
+    ==========  =================  ===================================================
+    Field       Shape / type       Meaning
+    ==========  =================  ===================================================
+    bounds      Bounds             search box
+    rng         Generator          the stream the run was seeded from (scipy draws
+                                   from its own copy inside ``solver``)
+    solver      scipy solver       snapshot at the start of the current generation
+    told        tuple              ``(X, y)`` batches told in the current generation
+    pending     (pop_size, n_var)  the points scipy asks for next, problem units, as
+                                   scipy made them (``ask`` clips off round-off)
+    best_x      (n_var,)           best point so far, problem units
+    best_f      float              its fitness
+    nfev        int                evaluations so far
+    nit         int                iterations (``tell`` calls) so far
+    history     (nit,)             best fitness after each iteration
+    ==========  =================  ===================================================
+    """
+
+    bounds: Bounds
+    rng: np.random.Generator
+    solver: Any
+    told: tuple
+    pending: np.ndarray
+    best_x: np.ndarray
+    best_f: float
+    nfev: int
+    nit: int
+    history: np.ndarray
+
+
+@dataclass(frozen=True)
+class ScipyDE:
+    """scipy's differential evolution (``best1bin`` by default), vectorised, deferred updating.
+
+    =============  ==================  ==============  ==========================================
+    Parameter      Type                Default         Meaning
+    =============  ==================  ==============  ==========================================
+    pop_size       int >= 5            48              population size (scipy's ``popsize`` is a
+                                                       multiplier of ``n_var``; here the total,
+                                                       as for the other algorithms: 48 = 6 x 8,
+                                                       close to the paper's 50, where scipy's own
+                                                       default, 15 x 8 = 120, would cost 2.4 times
+                                                       as much per generation)
+    strategy       str                 "best1bin"      scipy's ``strategy``
+    mutation       float or pair       (0.5, 1.0)      scipy's ``mutation`` (a pair dithers)
+    recombination  float in [0, 1]     0.7             scipy's ``recombination``
+    max_iter       int >= 1            200             iteration budget of the default
+                                                       termination (as emaphm's DE)
+    patience       int >= 1            50              iterations of the default stall rule (as
+                                                       emaphm's DE: a generational DE's best
+                                                       moves in rare steps)
+    =============  ==================  ==============  ==========================================
+
+    The initial population is a Latin hypercube sample (scipy's default ``init``),
+    drawn by :class:`scipy.stats.qmc.LatinHypercube` from the run's stream and passed
+    to scipy as ``init``, so that ``pop_size`` is exact. The default termination is
+    emaphm's: ``MaxIterations(max_iter) | StallTolerance(1e-9, patience)`` (scipy's own
+    ``tol`` test is not used).
+    """
+
+    pop_size: int = 48
+    strategy: str = "best1bin"
+    mutation: float | tuple[float, float] = (0.5, 1.0)
+    recombination: float = 0.7
+    max_iter: int = 200
+    patience: int = 50
+
+    name: ClassVar[str] = "scipy-de"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pop_size", check_int(
+            "ScipyDE", "pop_size", self.pop_size, 5, " (scipy needs at least 5 members)"))
+        if not isinstance(self.strategy, str):
+            raise ValueError(f"ScipyDE: strategy must be a scipy strategy name such as "
+                             f"'best1bin', got {self.strategy!r}")
+        m = self.mutation
+        if isinstance(m, (tuple, list, np.ndarray)):
+            if len(m) != 2:
+                raise ValueError(f"ScipyDE: mutation must be a number in [0, 2) or a pair, got {m!r}")
+            lo = check_real("ScipyDE", "mutation[0]", m[0], 0.0, 2.0, hi_open=True)
+            hi = check_real("ScipyDE", "mutation[1]", m[1], 0.0, 2.0, hi_open=True)
+            if lo > hi:
+                raise ValueError(f"ScipyDE: mutation pair must be (low, high) with low <= high, got {m!r}")
+            object.__setattr__(self, "mutation", (lo, hi))
+        else:
+            object.__setattr__(self, "mutation",
+                               check_real("ScipyDE", "mutation", m, 0.0, 2.0, hi_open=True))
+        object.__setattr__(self, "recombination",
+                           check_real("ScipyDE", "recombination", self.recombination, 0.0, 1.0))
+        object.__setattr__(self, "max_iter", check_int("ScipyDE", "max_iter", self.max_iter, 1))
+        object.__setattr__(self, "patience", check_int("ScipyDE", "patience", self.patience, 1))
+        from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
+
+        known = {*getattr(DifferentialEvolutionSolver, "_binomial", ()),
+                 *getattr(DifferentialEvolutionSolver, "_exponential", ())}
+        if known and self.strategy not in known:
+            raise ValueError(f"ScipyDE: unknown strategy {self.strategy!r}; choose one of "
+                             f"{', '.join(sorted(known))}")
+
+    def default_termination(self) -> Termination:
+        """``MaxIterations(max_iter) | StallTolerance(1e-9, patience)``."""
+        return MaxIterations(self.max_iter) | StallTolerance(1e-9, self.patience)
+
+    def initial_population(self, bounds: Bounds, rng: np.random.Generator) -> np.ndarray:
+        """The Latin hypercube initial population, problem units, (pop_size, n_var)."""
+        from scipy.stats import qmc
+
+        U = qmc.LatinHypercube(d=bounds.n_var, **_rng_keyword(qmc.LatinHypercube, rng)).random(self.pop_size)
+        return bounds.from_unit(U)
+
+    def solver(self, bounds: Bounds, init: np.ndarray, rng: np.random.Generator) -> Any:
+        """The scipy solver this configuration drives (no objective calls yet)."""
+        from scipy._lib._util import MapWrapper
+        from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
+
+        solver = DifferentialEvolutionSolver(
+            _feed_objective, list(zip(bounds.lo.tolist(), bounds.hi.tolist())),
+            strategy=self.strategy, maxiter=1_000_000, mutation=self.mutation,
+            recombination=self.recombination, polish=False, init=init,
+            **_rng_keyword(DifferentialEvolutionSolver, rng),
+            tol=0.0, atol=0.0, updating="deferred", vectorized=True)
+        solver._mapwrapper = MapWrapper(_vectorized_map)  # picklable (scipy's is a closure)
+        return solver
+
+    def init(self, bounds: Any, rng: np.random.Generator) -> ScipyDEState:
+        """Draw the initial population; it is what the first ``ask`` returns."""
+        bounds = as_bounds(bounds)
+        rng = child_rng(rng)
+        init = self.initial_population(bounds, rng)
+        solver = self.solver(bounds, init, rng)
+        _, pending = _replay(solver, [])
+        return ScipyDEState(
+            bounds=bounds, rng=rng, solver=solver, told=(), pending=frozen(pending),
+            best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))), best_f=np.inf,
+            nfev=0, nit=0, history=frozen(np.empty(0)))
+
+    def ask(self, state: ScipyDEState) -> np.ndarray:
+        """The points scipy asks for next (problem units; clipping only removes the
+        round-off of scipy's scaling, at most one ulp)."""
+        return np.clip(state.pending, state.bounds.lo, state.bounds.hi)
+
+    def tell(self, state: ScipyDEState, X: np.ndarray, y: np.ndarray) -> ScipyDEState:
+        """Feed one batch to scipy; advance the snapshot when its generation completes."""
+        X, _, y = check_told(state, X, y, len(state.pending))
+        if not np.array_equal(X, self.ask(state)):
+            raise ValueError("ScipyDE.tell: X must be the array returned by ask(state)")
+        batches = [*state.told, (state.pending, y)]
+        done, pending = _replay(state.solver, batches)
+        if done is not None:          # the generation is complete: new snapshot
+            solver, told = done, ()
+            _, pending = _replay(solver, [])
+        else:                         # scipy needs another batch in this generation
+            solver, told = state.solver, tuple(batches)
+        return dataclasses.replace(state, solver=solver, told=told, pending=frozen(pending),
+                                   **advance(state, X, y))
+
+
+# --------------------------------------------------------------------------- CMA-ES
+
+
+class _Randn:
+    """cma's ``randn`` option over a private Generator (cma otherwise uses ``np.random``)."""
+
+    def __init__(self, rng: np.random.Generator) -> None:
+        self.rng = rng
+
+    def __call__(self, *shape: int) -> np.ndarray:
+        return self.rng.standard_normal(shape)
+
+
+@dataclass(frozen=True, eq=False)
+class CMAESState:
+    """State of a :class:`CMAES` run (a value: ``tell`` returns a new one).
+
+    ==========  =================  ===================================================
+    Field       Shape / type       Meaning
+    ==========  =================  ===================================================
+    bounds      Bounds             search box
+    rng         Generator          the stream the run was seeded from (cma draws from
+                                   its own copy inside ``es``)
+    es          CMAEvolutionStrategy  the strategy, already asked for ``pending``
+    pending     list of arrays     cma's solutions (unit box) awaiting their fitness
+    best_x      (n_var,)           best point so far, problem units
+    best_f      float              its fitness
+    nfev, nit, history             as for every optimizer
+    ==========  =================  ===================================================
+    """
+
+    bounds: Bounds
+    rng: np.random.Generator
+    es: Any
+    pending: tuple
+    best_x: np.ndarray
+    best_f: float
+    nfev: int
+    nit: int
+    history: np.ndarray
+
+
+@dataclass(frozen=True)
+class CMAES:
+    """CMA-ES (Hansen), ``cma.CMAEvolutionStrategy``, searching the unit box ``[0, 1]^n_var``.
+
+    ===========  ==============  =======  ===================================================
+    Parameter    Type            Default  Meaning
+    ===========  ==============  =======  ===================================================
+    pop_size     int >= 2        10       lambda, samples per iteration: cma's default for
+                 or None                  the 8-D fault vector, 4 + floor(3 ln 8); None: cma's
+                                          default for the box at hand, 4 + floor(3 ln n_var)
+    sigma0       float in (0,1]  0.3      initial step size, fraction of each range (cma's
+                                          advice: about a quarter to a third of the range)
+    x0           "center" or     "center" initial mean: the box centre or a uniform
+                 "random"                 random point drawn from the run's stream
+    max_iter     int >= 1        400      iteration budget of the default termination
+    patience     int >= 1        40       iterations of the default stall rule (CMA-ES
+                                          improves in smaller steps than the swarms)
+    ===========  ==============  =======  ===================================================
+
+    The default termination is ``MaxIterations(max_iter) | StallTolerance(1e-9,
+    patience)``; cma's own stopping tests are not used. Randomness: cma's sampler
+    is given a private Generator (option ``randn``), so the global ``np.random`` state
+    is neither read nor changed. Non-finite fitness values reach cma as a huge finite
+    number (cma ranks its samples, so only the order matters).
+    """
+
+    pop_size: int | None = 10
+    sigma0: float = 0.3
+    x0: str = "center"
+    max_iter: int = 400
+    patience: int = 40
+
+    name: ClassVar[str] = "cmaes"
+
+    def __post_init__(self) -> None:
+        if self.pop_size is not None:
+            object.__setattr__(self, "pop_size", check_int("CMAES", "pop_size", self.pop_size, 2))
+        object.__setattr__(self, "sigma0", check_real("CMAES", "sigma0", self.sigma0, 0.0, 1.0, lo_open=True))
+        if self.x0 not in ("center", "random"):
+            raise ValueError(f"CMAES: x0 must be 'center' or 'random', got {self.x0!r}")
+        object.__setattr__(self, "max_iter", check_int("CMAES", "max_iter", self.max_iter, 1))
+        object.__setattr__(self, "patience", check_int("CMAES", "patience", self.patience, 1))
+
+    def default_termination(self) -> Termination:
+        """``MaxIterations(max_iter) | StallTolerance(1e-9, patience)``."""
+        return MaxIterations(self.max_iter) | StallTolerance(1e-9, self.patience)
+
+    def init(self, bounds: Any, rng: np.random.Generator) -> CMAESState:
+        """Start the strategy and ask it for the first generation."""
+        import cma
+
+        bounds = as_bounds(bounds)
+        if bounds.n_var == 1:
+            raise ValueError("CMAES: cma needs at least 2 variables, got 1")
+        rng = child_rng(rng)
+        x0 = np.full(bounds.n_var, 0.5) if self.x0 == "center" else rng.random(bounds.n_var)
+        opts = {"bounds": [0.0, 1.0], "randn": _Randn(rng), "verbose": -9, "verb_log": 0,
+                "verb_disp": 0}
+        if self.pop_size is not None:
+            opts["popsize"] = self.pop_size
+        es = cma.CMAEvolutionStrategy(x0, self.sigma0, opts)
+        pending = tuple(np.array(s, dtype=np.float64) for s in es.ask())
+        return CMAESState(bounds=bounds, rng=rng, es=es, pending=pending,
+                          best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))), best_f=np.inf,
+                          nfev=0, nit=0, history=frozen(np.empty(0)))
+
+    def ask(self, state: CMAESState) -> np.ndarray:
+        """cma's pending solutions in problem units, shape (lambda, n_var)."""
+        return state.bounds.from_unit(np.clip(np.array(state.pending), 0.0, 1.0))
+
+    def tell(self, state: CMAESState, X: np.ndarray, y: np.ndarray) -> CMAESState:
+        """Tell cma the fitness of the pending solutions and ask for the next ones."""
+        X, _, y = check_told(state, X, y, len(state.pending))
+        es = copy.deepcopy(state.es)
+        big = np.finfo(np.float64).max / 1e3
+        es.tell([s.copy() for s in state.pending], np.where(np.isfinite(y), y, big).tolist())
+        pending = tuple(np.array(s, dtype=np.float64) for s in es.ask())
+        return dataclasses.replace(state, es=es, pending=pending, **advance(state, X, y))
+
+
+# --------------------------------------------------------------------------- registry
+
+#: The baselines by registry name.
+BASELINES: dict[str, type] = {"scipy-de": ScipyDE, "cmaes": CMAES}
+
+
+def register(registry: dict[str, type] | None = None) -> dict[str, type]:
+    """Add the baselines to ``registry`` (default :data:`emaphm.optim.ALGORITHMS`).
+
+    Idempotent; returns the registry. After it, ``identify(trace, "cmaes", ...)``,
+    ``get_optimizer("scipy-de")`` and campaign specs naming them work.
+    """
+    if registry is None:
+        from emaphm.optim import ALGORITHMS as registry
+    for name, cls in BASELINES.items():
+        registry.setdefault(name, cls)
+    return registry

@@ -1,0 +1,220 @@
+"""Where the runs of a campaign execute: in-process, a local process pool, or Dask.
+
+An executor has one method::
+
+    map_unordered(fn, items) -> iterator of (item, fn(item))     as each one finishes
+
+An exception raised for one item (a worker that died, say) is yielded in place of its
+value and the others go on. Closing the iterator early (``close()``, or an exception such
+as ``KeyboardInterrupt`` in the consumer) cancels the work not yet started. The runner
+commits each result as it arrives, so whatever executor runs them, runs are stored one
+by one.
+
+=================  ===========================================================================
+executor           what it does
+=================  ===========================================================================
+SerialExecutor     runs in this process, one after the other (debugging, ``--workers 0``)
+LocalExecutor      a ``concurrent.futures.ProcessPoolExecutor`` over all cores by default
+                   (spawned workers; no service to start)
+DaskExecutor       an existing ``dask.distributed`` cluster (scheduler address or Client);
+                   Dask is imported only here, and only when this executor is used
+=================  ===========================================================================
+
+Every worker process is warmed once (:func:`warm_up`: the Numba kernels of both models
+are loaded from their on-disk cache, or compiled if there is none, by a tiny
+identification) before it takes its first run, so no run pays for compilation and no
+run's timing includes it. ``execute_run`` warms as well, idempotently, so a Dask worker
+that joins later is warmed by its first run, outside that run's timing.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from typing import Any, Callable, Iterable, Iterator, Protocol
+
+__all__ = ["DaskExecutor", "Executor", "LocalExecutor", "SerialExecutor", "make_executor", "warm_up"]
+
+_WARM = False
+
+
+def warm_up() -> float:
+    """Load (or compile) the model kernels in this process once; returns the seconds spent
+    (0 when already warm)."""
+    global _WARM
+    if _WARM:
+        return 0.0
+    import time
+
+    from emaphm.identify import identify
+    from emaphm.simulate import simulate
+
+    t0 = time.perf_counter()
+    trace = simulate(scenario="nominal")
+    identify(trace, "pso", seed=0, budget=1, polish=True, options={"pop_size": 4})
+    _WARM = True
+    return time.perf_counter() - t0
+
+
+def _init_worker() -> None:
+    """Process-pool initializer: leave Ctrl-C to the parent, then warm up."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    warm_up()
+
+
+class Executor(Protocol):
+    """Runs ``fn`` over ``items``, yielding ``(item, result or exception)`` as they finish."""
+
+    def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Any]]: ...
+
+
+class SerialExecutor:
+    """Run every item in this process, in order."""
+
+    workers = 0
+
+    def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
+        for item in items:
+            try:
+                value = fn(item)
+            except Exception as exc:          # noqa: BLE001 - yielded as a value
+                value = exc
+            yield item, value
+
+    def describe(self) -> str:
+        return "in-process (serial)"
+
+
+class LocalExecutor:
+    """A pool of worker processes on this machine.
+
+    ===========  =======================================================================
+    Parameter    Meaning
+    ===========  =======================================================================
+    workers      number of processes (default ``os.cpu_count()``); each runs one
+                 identification at a time on one core
+    mp_context   multiprocessing start method (default ``"spawn"``: workers start clean,
+                 safe whatever threads the parent runs; each imports emaphm once)
+    ===========  =======================================================================
+
+    Workers ignore SIGINT: Ctrl-C reaches the parent, which stops submitting and cancels
+    the pending runs; runs already executing finish in the background and are discarded.
+    """
+
+    def __init__(self, workers: int | None = None, *, mp_context: str = "spawn") -> None:
+        if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+            raise ValueError(f"workers must be a positive integer, got {workers!r}")
+        self.workers = workers or os.cpu_count() or 1
+        self.mp_context = mp_context
+
+    def describe(self) -> str:
+        return f"local pool of {self.workers} process{'es' if self.workers != 1 else ''}"
+
+    def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
+        items = list(items)
+        if not items:
+            return
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
+                                   mp_context=multiprocessing.get_context(self.mp_context),
+                                   initializer=_init_worker)
+        # Keep at most two runs per worker queued: pending work stays in the parent,
+        # where cancelling it is free and certain.
+        todo = list(reversed(items))
+        running: dict[Future, Any] = {}
+        clean = False
+        try:
+            while todo or running:
+                while todo and len(running) < 2 * self.workers:
+                    item = todo.pop()
+                    running[pool.submit(fn, item)] = item
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    item = running.pop(fut)
+                    try:
+                        value = fut.result()
+                    except Exception as exc:      # noqa: BLE001 - a broken pool, a pickling error...
+                        value = exc
+                    yield item, value
+            clean = True
+        finally:
+            pool.shutdown(wait=clean, cancel_futures=True)
+
+
+class DaskExecutor:
+    """Runs on an existing Dask distributed cluster.
+
+    ``scheduler`` is a scheduler address (``"tcp://host:8786"``), then a Client is
+    opened for the campaign and closed after it, or a ``distributed.Client`` (left
+    open). Workers need emaphm installed (same version) and are warmed once each, by a
+    :func:`warm_up` task pinned to every worker present at the start (a worker that joins
+    later warms itself before its first run). Results come back as they finish.
+    """
+
+    def __init__(self, scheduler: Any, *, warm: bool = True) -> None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            raise ValueError("a Dask scheduler needs dask.distributed; install it with "
+                             "pip install 'emaphm[dask]'") from None
+        self.scheduler = scheduler
+        self.warm = warm
+        self.workers = None
+
+    def describe(self) -> str:
+        addr = self.scheduler if isinstance(self.scheduler, str) else getattr(self.scheduler, "scheduler", None)
+        addr = getattr(addr, "address", addr)
+        return f"Dask cluster at {addr}"
+
+    def _client(self) -> tuple[Any, bool]:
+        from distributed import Client
+
+        if isinstance(self.scheduler, str):
+            try:
+                return Client(self.scheduler, timeout="20s"), True
+            except OSError as exc:
+                raise ValueError(f"cannot reach the Dask scheduler at {self.scheduler} ({exc}); "
+                                 "check the address (tcp://HOST:PORT) and that it is running") from None
+        return self.scheduler, False
+
+    def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
+        from distributed import as_completed
+
+        items = list(items)
+        if not items:
+            return
+        client, own = self._client()
+        futures: list[Any] = []
+        try:
+            if self.warm:
+                # one warm-up task per worker, in its task thread (client.run would block
+                # the worker's event loop while the kernels load)
+                workers = list(client.scheduler_info()["workers"])
+                client.gather([client.submit(warm_up, workers=[w], allow_other_workers=False,
+                                             pure=False) for w in workers])
+            futures = client.map(fn, items, pure=False)
+            item_of = {f.key: it for f, it in zip(futures, items)}
+            for fut in as_completed(futures):
+                try:
+                    value = fut.result()
+                except Exception as exc:          # noqa: BLE001 - KilledWorker, lost data...
+                    value = exc
+                yield item_of[fut.key], value
+                fut.release()
+        finally:
+            pending = [f for f in futures if not f.done()]
+            if pending:
+                client.cancel(pending)
+            if own:
+                client.close()
+
+
+def make_executor(workers: int | None = None, scheduler: Any = None) -> Any:
+    """The executor for CLI-style options: a scheduler -> Dask; ``workers=0`` ->
+    in-process; otherwise a local pool of ``workers`` (default all cores)."""
+    if scheduler is not None:
+        return DaskExecutor(scheduler)
+    if workers == 0:
+        return SerialExecutor()
+    return LocalExecutor(workers)

@@ -1,0 +1,268 @@
+"""Run a campaign: every run of a spec not yet in the store, on an executor, committed
+one by one as they finish.
+
+:func:`run_campaign` is the entry point; :func:`execute_run` is the pure function the
+workers call (one run = simulate the reference model's measured trace with the spec's
+sensor noise and the run's noise seed, then identify it with the run's algorithm and
+seed); :func:`replay` reruns one stored run alone.
+
+Resuming is running again: the runs already stored as successes are skipped, failures
+are retried, and since every run is a function of its :class:`~emaphm.campaign.spec.Run`
+alone, an interrupted-then-resumed campaign holds exactly the results of an
+uninterrupted one, whatever the executor and the number of workers.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+import traceback
+from dataclasses import dataclass
+from typing import Any, TextIO
+
+from .executors import make_executor, warm_up
+from .spec import CampaignSpec, Run
+from .store import CampaignStore, RunResult
+
+__all__ = ["CampaignInterrupted", "CampaignSummary", "ProgressLine", "execute_run",
+           "replay", "run_campaign"]
+
+
+# ----------------------------------------------------------------------------- one run
+
+
+def execute_run(run: Run) -> RunResult:
+    """Execute one run; never raises for a failing run (it returns a failure result).
+
+    Deterministic: the same ``run`` gives the same :meth:`RunResult.outcome` in any
+    process on the same platform and software.
+    """
+    try:
+        warm_up()                               # outside the timing; no-op once warm
+        from emaphm.identify import identify
+        from emaphm.models.reference import Sensors
+        from emaphm.params import ActuatorParams
+        from emaphm.simulate import simulate
+
+        from .baselines import BASELINES, register
+
+        if run.optimizer in BASELINES:
+            register()
+        params = ActuatorParams.from_dict(run.params, source="campaign params") if run.params else None
+        t0 = time.perf_counter()
+        trace = simulate(run.k_true, model="reference", params=params,
+                         sensors=Sensors(current_noise=run.noise, current_lsb=run.adc_lsb),
+                         seed=run.noise_seed).with_meta(scenario=run.scenario)
+        simulate_s = time.perf_counter() - t0
+        ident = identify(trace, run.optimizer, seed=run.seed, budget=run.budget, params=params,
+                         options=dict(run.options), n_sub=run.n_sub, mode=run.fitness_mode,
+                         polish=run.polish, search=run.search)
+        return RunResult.from_identification(run, ident, simulate_s)
+    except Exception as exc:                    # noqa: BLE001 - a failure is a value
+        text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__, limit=-6))
+        return RunResult.failure(run, text.strip())
+
+
+# ----------------------------------------------------------------------------- progress
+
+
+class ProgressLine:
+    """Progress on a stream (stderr): runs done / total, failures, rate and ETA.
+
+    On a terminal one line is rewritten in place (at most ten times a second); otherwise a
+    line is printed at every tenth of the campaign.
+    """
+
+    def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None) -> None:
+        self.stream = stream if stream is not None else sys.stderr
+        self.tty = self.stream.isatty() if tty is None else tty
+        self.total = self.done = self.failed = self.todo = self.new = 0
+        self.t0 = time.perf_counter()
+        self._last = 0.0
+        self._next_tenth = 1
+
+    def start(self, total: int, already: int, todo: int) -> None:
+        self.total, self.done, self.todo = total, already, todo
+        self.t0 = time.perf_counter()
+        self._draw(force=True)
+
+    def update(self, result: RunResult) -> None:
+        self.new += 1
+        if result.ok:
+            self.done += 1
+        else:
+            self.failed += 1
+        self._draw()
+
+    def _line(self) -> str:
+        elapsed = time.perf_counter() - self.t0
+        left = self.todo - self.new
+        eta = "--"
+        if self.new and left > 0:
+            eta = _clock(elapsed / self.new * left)
+        elif left <= 0:
+            eta = "0s"
+        pct = 100.0 * self.done / self.total if self.total else 100.0
+        return (f"runs {self.done}/{self.total} ({pct:.0f}%)  failures {self.failed}  "
+                f"elapsed {_clock(elapsed)}  ETA {eta}")
+
+    def _draw(self, force: bool = False) -> None:
+        now = time.perf_counter()
+        if self.tty:
+            if force or now - self._last >= 0.1 or self.new == self.todo:
+                self._last = now
+                self.stream.write("\r" + self._line() + "\x1b[K")
+                self.stream.flush()
+        elif force or (self.todo and self.new * 10 >= self._next_tenth * self.todo):
+            while self.todo and self.new * 10 >= self._next_tenth * self.todo:
+                self._next_tenth += 1
+            self.stream.write(self._line() + "\n")
+            self.stream.flush()
+
+    def close(self) -> None:
+        if self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _clock(seconds: float) -> str:
+    s = int(round(seconds))
+    if s < 60:
+        return f"{s}s"
+    if s < 3600:
+        return f"{s // 60}m{s % 60:02d}s"
+    return f"{s // 3600}h{s % 3600 // 60:02d}m"
+
+
+# ----------------------------------------------------------------------------- campaign
+
+
+@dataclass(frozen=True)
+class CampaignSummary:
+    """What :func:`run_campaign` did.
+
+    ``total`` runs in the spec; ``skipped`` already stored as successes before this call;
+    ``completed`` and ``failed`` in this call; ``missing`` not stored as successes
+    afterwards (failures, or cancelled by an interruption); ``elapsed_s`` wall time.
+    """
+
+    store: str
+    total: int
+    skipped: int
+    completed: int
+    failed: int
+    missing: int
+    elapsed_s: float
+    interrupted: bool = False
+
+    @property
+    def finished(self) -> bool:
+        """Every run of the spec is stored as a success."""
+        return self.missing == 0
+
+
+class CampaignInterrupted(KeyboardInterrupt):
+    """Ctrl-C stopped a campaign; the runs committed so far are kept. ``summary`` says
+    how far it got."""
+
+    def __init__(self, summary: CampaignSummary) -> None:
+        super().__init__(f"campaign interrupted: {summary.total - summary.missing} of "
+                         f"{summary.total} runs stored in {summary.store}")
+        self.summary = summary
+
+
+def run_campaign(spec: CampaignSpec | None, store: str | os.PathLike[str] | CampaignStore,
+                 executor: Any = None, progress: Any = None, *,
+                 allow_version_mix: bool = False) -> CampaignSummary:
+    """Run every run of ``spec`` that ``store`` does not hold yet; commit each as it finishes.
+
+    Parameters
+    ----------
+    spec
+        The campaign; None resumes the store's own spec.
+    store
+        A store path (created if missing) or an open :class:`CampaignStore`. An existing
+        store must have been created with the same spec (else :class:`SpecMismatchError`,
+        nothing changed).
+    executor
+        Where runs execute (:mod:`emaphm.campaign.executors`); default a local process pool
+        over all cores.
+    progress
+        An object with ``start(total, already, todo)``, ``update(result)`` and ``close()``,
+        e.g. :class:`ProgressLine`; None for silence.
+    allow_version_mix
+        Let this emaphm add runs to a store holding runs of another version.
+
+    Returns
+    -------
+    CampaignSummary
+
+    Raises
+    ------
+    CampaignInterrupted
+        On Ctrl-C (a ``KeyboardInterrupt``): nothing more is submitted, pending runs are
+        cancelled, committed runs are kept; run again to resume.
+    """
+    own = not isinstance(store, CampaignStore)
+    st = CampaignStore.open(store, spec) if own else store
+    try:
+        if spec is not None and not own and spec.hash != st.spec.hash:
+            CampaignStore.open(st.path, spec).close()       # raises the mismatch error
+        spec = st.spec
+        runs = spec.runs_list()
+        done = st.keys("ok")
+        todo = [r for r in runs if r.key not in done]
+        if todo:
+            st.check_version(allow_version_mix)
+        t0 = time.perf_counter()
+        completed = failed = 0
+        if progress is not None:
+            progress.start(len(runs), len(runs) - len(todo), len(todo))
+        executor = executor if executor is not None else make_executor()
+        stream = executor.map_unordered(execute_run, todo) if todo else iter(())
+        interrupted = False
+        try:
+            for run, value in stream:
+                result = value if isinstance(value, RunResult) else RunResult.failure(
+                    run, f"{type(value).__name__}: {value}")
+                st.commit(result)
+                completed += result.ok
+                failed += not result.ok
+                if progress is not None:
+                    progress.update(result)
+        except KeyboardInterrupt:
+            interrupted = True
+        finally:
+            close = getattr(stream, "close", None)
+            if close is not None:
+                close()
+            if progress is not None:
+                progress.close()
+        missing = len(runs) - len(st.keys("ok") & {r.key for r in runs})
+        summary = CampaignSummary(store=str(st.path), total=len(runs), skipped=len(runs) - len(todo),
+                                  completed=completed, failed=failed, missing=missing,
+                                  elapsed_s=time.perf_counter() - t0, interrupted=interrupted)
+        if interrupted:
+            raise CampaignInterrupted(summary)
+        return summary
+    finally:
+        if own:
+            st.close()
+
+
+def replay(store: str | os.PathLike[str] | CampaignStore, key: str) -> tuple[RunResult | None, RunResult]:
+    """Rerun the run ``key`` of a stored campaign alone, in this process.
+
+    Returns ``(stored, fresh)``: the stored result (None if the run is not stored yet)
+    and the new one. ``stored.outcome() == fresh.outcome()`` for a reproducible run.
+    """
+    own = not isinstance(store, CampaignStore)
+    st = CampaignStore.open(store, readonly=True) if own else store
+    try:
+        run = st.spec.run(key)
+        stored = st.result(key)
+    finally:
+        if own:
+            st.close()
+    return stored, execute_run(run)

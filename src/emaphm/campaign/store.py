@@ -1,0 +1,471 @@
+"""The result store of a campaign: one SQLite file (embedded, no service to run).
+
+Layout (schema version :data:`SCHEMA_VERSION`)::
+
+    meta(key PRIMARY KEY, value)   schema_version, emaphm_version (of the creator),
+                                   spec_json, spec_hash, name, created_at
+    runs(run_key UNIQUE, ...)      one row per finished run (see RunResult)
+
+Guarantees
+----------
+* **Atomic, durable runs.** Each finished run is committed in its own transaction
+  (``BEGIN IMMEDIATE`` ... ``COMMIT``, WAL journal, ``synchronous=FULL``): a process
+  killed at any instant, SIGKILL included, leaves every run either fully stored or
+  absent, never half-written.
+* **Exactly once.** ``run_key`` is UNIQUE. A successful run is never overwritten; a
+  failure row is replaced when a later attempt succeeds (reruns retry failures).
+* **Several writers.** Two processes may write the same store: SQLite serialises
+  their transactions (a writer waits up to a minute for the lock), and the UNIQUE key
+  with ``ON CONFLICT`` keeps the first successful result of a run.
+* **Nothing destroyed on bad input.** Opening checks, *before writing anything*, that
+  the file is an emaphm store of a schema this version reads and that the given spec
+  is the stored one; otherwise it raises a :class:`StoreError` that says what differs
+  and how to proceed, and the file is left as it was.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import socket
+import sqlite3
+import urllib.parse
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any, Iterator
+
+from emaphm import __version__
+
+from .spec import CampaignSpec, Run, SpecError
+
+__all__ = [
+    "SCHEMA_VERSION",
+    "CampaignStore",
+    "IncompatibleStoreError",
+    "RunResult",
+    "SpecMismatchError",
+    "StoreError",
+]
+
+#: Version of the table layout; a store of another version is refused, untouched.
+SCHEMA_VERSION = 1
+
+_SQLITE_HEADER = b"SQLite format 3\x00"
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (
+    key   TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS runs (
+    run_key            TEXT NOT NULL UNIQUE,
+    run_index          INTEGER NOT NULL,
+    scenario           TEXT NOT NULL,
+    algorithm          TEXT NOT NULL,
+    optimizer          TEXT NOT NULL,
+    run                INTEGER NOT NULL,
+    seed               INTEGER NOT NULL,
+    noise_seed         INTEGER NOT NULL,
+    spawn_key          TEXT NOT NULL,
+    status             TEXT NOT NULL CHECK (status IN ('ok', 'failed')),
+    error_text         TEXT,
+    k_true             TEXT NOT NULL,
+    k                  TEXT,
+    fitness            REAL,
+    error_pct          REAL,
+    k_raw              TEXT,
+    fitness_raw        REAL,
+    error_pct_raw      REAL,
+    evaluations        INTEGER,
+    iterations         INTEGER,
+    polish_evaluations INTEGER,
+    elapsed_s          REAL,
+    kernel_s           REAL,
+    simulate_s         REAL,
+    reason             TEXT,
+    diverged           INTEGER,
+    history            TEXT,
+    version            TEXT NOT NULL,
+    worker             TEXT,
+    finished_at        TEXT NOT NULL
+);
+"""
+
+
+class StoreError(ValueError):
+    """A store cannot be used as asked; the message says why and what to do."""
+
+
+class IncompatibleStoreError(StoreError):
+    """The file is not an emaphm store, or one of another schema or software version."""
+
+
+class SpecMismatchError(StoreError):
+    """The spec given is not the spec the store was created with."""
+
+    def __init__(self, message: str, differences: list[str]) -> None:
+        super().__init__(message)
+        self.differences = differences
+
+
+# ----------------------------------------------------------------------------- results
+
+
+def _now() -> str:
+    return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """The outcome of one run, as stored (one row of ``runs``).
+
+    ``status`` is ``"ok"`` or ``"failed"`` (then ``error_text`` holds the exception and
+    the numeric fields are None). ``elapsed_s`` is the identification's wall time
+    (metaheuristic plus polish, the paper's "time"); ``simulate_s`` the reference-model
+    simulation of the measured trace; ``history`` the best fitness after each iteration,
+    then after each polish poll. ``k``/``fitness``/``error_pct`` are after the polish,
+    the ``*_raw`` ones the metaheuristic's own (equal without polish).
+    """
+
+    key: str
+    index: int
+    scenario: str
+    algorithm: str
+    optimizer: str
+    run: int
+    seed: int
+    noise_seed: int
+    spawn_key: tuple[int, ...]
+    status: str
+    k_true: tuple[float, ...]
+    error_text: str | None = None
+    k: tuple[float, ...] | None = None
+    fitness: float | None = None
+    error_pct: float | None = None
+    k_raw: tuple[float, ...] | None = None
+    fitness_raw: float | None = None
+    error_pct_raw: float | None = None
+    evaluations: int | None = None
+    iterations: int | None = None
+    polish_evaluations: int | None = None
+    elapsed_s: float | None = None
+    kernel_s: float | None = None
+    simulate_s: float | None = None
+    reason: str | None = None
+    diverged: int | None = None
+    history: tuple[float, ...] | None = None
+    version: str = __version__
+    worker: str | None = None
+    finished_at: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+    @classmethod
+    def from_identification(cls, run: Run, ident: Any, simulate_s: float) -> "RunResult":
+        """Build from an :class:`emaphm.identify.Identification` of ``run``."""
+        return cls(
+            **_run_fields(run), status="ok",
+            k=tuple(float(x) for x in ident.k), fitness=float(ident.fitness),
+            error_pct=None if ident.error_pct is None else float(ident.error_pct),
+            k_raw=None if ident.k_raw is None else tuple(float(x) for x in ident.k_raw),
+            fitness_raw=None if ident.fitness_raw is None else float(ident.fitness_raw),
+            error_pct_raw=None if ident.error_pct_raw is None else float(ident.error_pct_raw),
+            evaluations=int(ident.evaluations), iterations=int(ident.iterations),
+            polish_evaluations=int(ident.polish_evaluations), elapsed_s=float(ident.elapsed_s),
+            kernel_s=float(ident.kernel_s), simulate_s=float(simulate_s), reason=str(ident.reason),
+            diverged=int(ident.diverged), history=tuple(float(x) for x in ident.history),
+            worker=f"{socket.gethostname()}:{os.getpid()}", finished_at=_now())
+
+    @classmethod
+    def failure(cls, run: Run, error_text: str) -> "RunResult":
+        """A failed run: the error text and no numbers."""
+        return cls(**_run_fields(run), status="failed", error_text=error_text,
+                   worker=f"{socket.gethostname()}:{os.getpid()}", finished_at=_now())
+
+    def outcome(self) -> dict[str, Any]:
+        """The reproducible part: what the same run gives again, bit for bit, on any
+        executor (everything but timings, worker and date)."""
+        d = asdict(self)
+        for name in ("elapsed_s", "kernel_s", "simulate_s", "worker", "finished_at", "version"):
+            d.pop(name)
+        return d
+
+
+def _run_fields(run: Run) -> dict[str, Any]:
+    return {"key": run.key, "index": run.index, "scenario": run.scenario,
+            "algorithm": run.algorithm, "optimizer": run.optimizer, "run": run.run,
+            "seed": run.seed, "noise_seed": run.noise_seed, "spawn_key": tuple(run.spawn_key),
+            "k_true": tuple(run.k_true)}
+
+
+_COLUMNS = ("run_key", "run_index", "scenario", "algorithm", "optimizer", "run", "seed",
+            "noise_seed", "spawn_key", "status", "error_text", "k_true", "k", "fitness",
+            "error_pct", "k_raw", "fitness_raw", "error_pct_raw", "evaluations", "iterations",
+            "polish_evaluations", "elapsed_s", "kernel_s", "simulate_s", "reason", "diverged",
+            "history", "version", "worker", "finished_at")
+_JSON_FIELDS = {"spawn_key", "k_true", "k", "k_raw", "history"}
+_FIELD_OF = {"run_key": "key", "run_index": "index"}
+
+
+def _to_json(value: Any) -> Any:
+    # Python's JSON writes floats by repr (exact round trip) and inf as Infinity
+    return None if value is None else json.dumps(list(value))
+
+
+def _from_json(text: str | None) -> Any:
+    return None if text is None else tuple(json.loads(text))
+
+
+def _to_row(r: RunResult) -> tuple:
+    row = []
+    for col in _COLUMNS:
+        name = _FIELD_OF.get(col, col)
+        v = getattr(r, name)
+        row.append(_to_json(v) if name in _JSON_FIELDS else v)
+    return tuple(row)
+
+
+def _from_row(row: sqlite3.Row) -> RunResult:
+    kw = {}
+    for col in _COLUMNS:
+        name = _FIELD_OF.get(col, col)
+        v = row[col]
+        if name in _JSON_FIELDS:
+            v = _from_json(v)
+            if name == "spawn_key" and v is not None:
+                v = tuple(int(x) for x in v)
+        kw[name] = v
+    return RunResult(**kw)
+
+
+# ----------------------------------------------------------------------------- store
+
+
+class CampaignStore:
+    """An open campaign store. Open it with :meth:`open`; use it as a context manager.
+
+    >>> store = CampaignStore.open("results.sqlite", spec)   # doctest: +SKIP
+    """
+
+    def __init__(self, path: Path, conn: sqlite3.Connection, meta: dict[str, str],
+                 readonly: bool) -> None:
+        self.path = path
+        self._conn = conn
+        self.meta = meta
+        self.readonly = readonly
+        self.spec = CampaignSpec.from_json(meta["spec_json"])
+
+    # ------------------------------------------------------------------ opening
+    @classmethod
+    def open(cls, path: str | os.PathLike[str], spec: CampaignSpec | None = None, *,
+             readonly: bool = False) -> "CampaignStore":
+        """Open the store at ``path``, creating it with ``spec`` if it does not exist.
+
+        An existing store is checked before anything is written: it must be an emaphm
+        store of schema :data:`SCHEMA_VERSION`, and ``spec`` (if given) must equal the
+        stored spec. ``spec=None`` opens an existing store with its own spec (resume,
+        report). ``readonly`` never writes (reports).
+        """
+        p = Path(path)
+        if p.is_dir():
+            raise StoreError(f"{p} is a folder; give the path of a store file, e.g. {p / 'results.sqlite'}")
+        exists = p.exists() and p.stat().st_size > 0
+        if exists:
+            with open(p, "rb") as fh:
+                header = fh.read(len(_SQLITE_HEADER))
+            if header != _SQLITE_HEADER:
+                raise IncompatibleStoreError(
+                    f"{p} is not an emaphm campaign store (not a SQLite database); it was not "
+                    "changed. Give another --store path.")
+        elif readonly or spec is None:
+            raise FileNotFoundError(f"no campaign store at {p}; run `emaphm campaign --store {p}` "
+                                    "to create one")
+        elif not p.parent.exists():
+            raise FileNotFoundError(f"cannot create {p}: folder {p.parent} does not exist; create it first")
+
+        conn = _connect(p, readonly=readonly and exists)
+        try:
+            meta = _read_meta(conn, p)
+            if meta is None:                        # a new (or empty) file: create the store
+                if readonly or spec is None:
+                    raise IncompatibleStoreError(f"{p} is an empty SQLite database, not a campaign store")
+                _create(conn, spec)
+                meta = _read_meta(conn, p)
+                assert meta is not None
+            _check_schema(meta, p)
+            try:
+                stored = CampaignSpec.from_json(meta["spec_json"])
+            except SpecError as exc:
+                raise IncompatibleStoreError(
+                    f"{p}: its stored spec is not valid for this emaphm ({__version__}): {exc}. "
+                    f"It was written by emaphm {meta.get('emaphm_version', '?')}; use that version "
+                    "to resume or report it.") from None
+            if spec is not None and spec.hash != stored.hash:
+                diffs = stored.differences(spec)
+                raise SpecMismatchError(
+                    f"{p} holds a different campaign ({meta.get('name', '?')!r}); the store was not "
+                    "changed. Differences (stored -> given):\n  - " + "\n  - ".join(diffs) +
+                    f"\nTo continue the stored campaign, run `emaphm campaign --store {p}` without "
+                    "spec options (it resumes its own spec); to run the new spec, give another "
+                    "--store path.", diffs)
+        except BaseException:
+            conn.close()
+            raise
+        return cls(p, conn, meta, readonly=readonly)
+
+    def close(self) -> None:
+        self._conn.close()
+
+    def __enter__(self) -> "CampaignStore":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ properties
+    @property
+    def created_by(self) -> str:
+        """emaphm version that created the store."""
+        return self.meta.get("emaphm_version", "?")
+
+    def versions(self) -> set[str]:
+        """emaphm versions of the creator and of every stored row."""
+        rows = self._conn.execute("SELECT DISTINCT version FROM runs").fetchall()
+        return {self.created_by} | {r[0] for r in rows}
+
+    def check_version(self, allow_mix: bool = False) -> None:
+        """Refuse to add runs of this emaphm to a store of another version."""
+        other = sorted(v for v in self.versions() if v != __version__)
+        if other and not allow_mix:
+            raise IncompatibleStoreError(
+                f"{self.path} holds results of emaphm {', '.join(other)}; this is emaphm "
+                f"{__version__}, whose runs may differ, so finishing the campaign would mix two "
+                "versions. Resume it with the version that started it, start a new --store, or "
+                "pass --allow-version-mix to mix them knowingly. The store was not changed.")
+
+    # ------------------------------------------------------------------ writing
+    @contextmanager
+    def _transaction(self) -> Iterator[sqlite3.Connection]:
+        if self.readonly:
+            raise StoreError(f"{self.path} was opened read-only")
+        self._conn.execute("BEGIN IMMEDIATE")
+        try:
+            yield self._conn
+        except BaseException:
+            self._conn.execute("ROLLBACK")
+            raise
+        self._conn.execute("COMMIT")
+
+    def commit(self, result: RunResult) -> bool:
+        """Store one finished run in its own transaction.
+
+        Returns True if the row was written, False if the run was already stored as a
+        success (a success is never overwritten; a failure is replaced).
+        """
+        if result.finished_at is None:
+            result = replace(result, finished_at=_now())
+        cols = ", ".join(_COLUMNS)
+        marks = ", ".join("?" for _ in _COLUMNS)
+        update = ", ".join(f"{c} = excluded.{c}" for c in _COLUMNS if c != "run_key")
+        sql = (f"INSERT INTO runs ({cols}) VALUES ({marks}) ON CONFLICT(run_key) DO UPDATE SET "
+               f"{update} WHERE runs.status != 'ok'")
+        with self._transaction() as conn:
+            cur = conn.execute(sql, _to_row(result))
+        return cur.rowcount > 0
+
+    # ------------------------------------------------------------------ reading
+    def keys(self, status: str | None = "ok") -> set[str]:
+        """Keys of the stored runs with ``status`` (None: all)."""
+        if status is None:
+            rows = self._conn.execute("SELECT run_key FROM runs").fetchall()
+        else:
+            rows = self._conn.execute("SELECT run_key FROM runs WHERE status = ?", (status,)).fetchall()
+        return {r[0] for r in rows}
+
+    def results(self, status: str | None = "ok") -> list[RunResult]:
+        """Stored runs with ``status`` (None: all), in the spec's run order."""
+        q = "SELECT * FROM runs" + ("" if status is None else " WHERE status = ?") + " ORDER BY run_index"
+        rows = self._conn.execute(q, () if status is None else (status,)).fetchall()
+        return [_from_row(r) for r in rows]
+
+    def result(self, key: str) -> RunResult | None:
+        row = self._conn.execute("SELECT * FROM runs WHERE run_key = ?", (key,)).fetchone()
+        return None if row is None else _from_row(row)
+
+    def counts(self) -> dict[str, int]:
+        """``{"ok": n, "failed": m, "total": spec runs}``."""
+        out = {"ok": 0, "failed": 0}
+        for status, n in self._conn.execute("SELECT status, COUNT(*) FROM runs GROUP BY status"):
+            out[status] = n
+        out["total"] = self.spec.n_runs
+        return out
+
+    def integrity_check(self) -> str:
+        """SQLite's own check: ``"ok"`` for a sound file."""
+        return self._conn.execute("PRAGMA integrity_check").fetchone()[0]
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def _connect(p: Path, readonly: bool) -> sqlite3.Connection:
+    if readonly:
+        uri = f"file:{urllib.parse.quote(str(p.resolve()))}?mode=ro"
+        try:
+            conn = sqlite3.connect(uri, uri=True, timeout=60.0, isolation_level=None)
+            conn.execute("SELECT 1 FROM sqlite_master LIMIT 1").fetchall()
+        except sqlite3.OperationalError:      # WAL files not creatable: fall back, still only reading
+            conn = sqlite3.connect(str(p), timeout=60.0, isolation_level=None)
+    else:
+        conn = sqlite3.connect(str(p), timeout=60.0, isolation_level=None)
+    conn.row_factory = sqlite3.Row
+    conn.execute("PRAGMA busy_timeout = 60000")
+    if not readonly:
+        conn.execute("PRAGMA synchronous = FULL")
+    return conn
+
+
+def _read_meta(conn: sqlite3.Connection, p: Path) -> dict[str, str] | None:
+    """The meta table, None for a database without tables; raises for a foreign one."""
+    try:
+        tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+    except sqlite3.DatabaseError as exc:
+        raise IncompatibleStoreError(f"{p} cannot be read as a SQLite database ({exc}); it was not "
+                                     "changed. Give another --store path.") from None
+    if not tables:
+        return None
+    if "meta" not in tables or "runs" not in tables:
+        raise IncompatibleStoreError(
+            f"{p} is a SQLite database but not an emaphm campaign store (tables: "
+            f"{', '.join(sorted(tables))}); it was not changed. Give another --store path.")
+    return {k: v for k, v in conn.execute("SELECT key, value FROM meta")}
+
+
+def _check_schema(meta: dict[str, str], p: Path) -> None:
+    version = meta.get("schema_version")
+    if version != str(SCHEMA_VERSION) or "spec_json" not in meta:
+        raise IncompatibleStoreError(
+            f"{p} is a campaign store of schema version {version} written by emaphm "
+            f"{meta.get('emaphm_version', '?')}; this emaphm ({__version__}) reads schema version "
+            f"{SCHEMA_VERSION}. Open it with the emaphm version that wrote it, or start a new "
+            "store; it was not changed.")
+
+
+def _create(conn: sqlite3.Connection, spec: CampaignSpec) -> None:
+    conn.execute("PRAGMA journal_mode = WAL")
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        for stmt in filter(None, (s.strip() for s in _SCHEMA.split(";"))):
+            conn.execute(stmt)
+        meta = {"schema_version": str(SCHEMA_VERSION), "emaphm_version": __version__,
+                "spec_json": spec.to_json(), "spec_hash": spec.hash, "name": spec.name,
+                "created_at": _now()}
+        conn.executemany("INSERT OR IGNORE INTO meta (key, value) VALUES (?, ?)", meta.items())
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
