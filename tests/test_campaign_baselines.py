@@ -1,7 +1,7 @@
-"""The baselines (:mod:`emaphm.campaign.baselines`): scipy's DE and CMA-ES behind the
+"""The baselines (:mod:`emaphm.optim.baselines`): scipy's DE and CMA-ES behind the
 ask/tell protocol. The scipy adapter makes scipy's own run, bit for bit; both are
 reproducible, pure (``tell`` leaves its input state alone), checkpointable, and reach
-``identify`` once registered.
+``get_optimizer`` and ``identify`` by name.
 """
 
 from __future__ import annotations
@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from scipy.optimize import differential_evolution
 
-from emaphm.campaign.baselines import BASELINES, CMAES, ScipyDE, register
-from emaphm.optim import ALGORITHMS, MaxEvaluations, MaxIterations, as_bounds, minimize, resume
+from emaphm.optim import (ALGORITHMS, ALL_ALGORITHMS, MaxEvaluations, MaxIterations, as_bounds,
+                          get_optimizer, minimize, resume)
+from emaphm.optim.baselines import BASELINES, CMAES, ScipyDE
 from emaphm.optim.base import child_rng
 
 BOX = ([-5.12] * 6, [5.12] * 6)
@@ -23,16 +24,6 @@ NAMES = sorted(BASELINES)
 
 def rastrigin(X):
     return 10.0 * X.shape[1] + np.sum(X**2 - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
-
-
-@pytest.fixture()
-def registry():
-    """Register the baselines for one test, then restore the registry as it was."""
-    before = dict(ALGORITHMS)
-    register()
-    yield ALGORITHMS
-    ALGORITHMS.clear()
-    ALGORITHMS.update(before)
 
 
 def test_scipy_de_adapter_is_scipys_own_run():
@@ -121,12 +112,15 @@ def test_options_are_validated():
         CMAES(sigma0=0)
 
 
-def test_register_is_explicit_and_idempotent(registry):
-    assert registry["scipy-de"] is ScipyDE and registry["cmaes"] is CMAES
-    assert register() is registry and set(BASELINES) <= set(registry)
+def test_baselines_are_registered_beside_the_papers_three():
+    assert ALL_ALGORITHMS["scipy-de"] is ScipyDE and ALL_ALGORITHMS["cmaes"] is CMAES
+    assert set(ALGORITHMS) == {"de", "pso", "gwo"}          # the conformance suite's set
+    assert isinstance(get_optimizer("cmaes", pop_size=12), CMAES)
+    with pytest.raises(ValueError, match="choose one of cmaes, de, gwo, pso, scipy-de"):
+        get_optimizer("nelder-mead")
 
 
-def test_identify_reaches_the_baselines(registry):
+def test_identify_reaches_the_baselines():
     from emaphm.identify import identify
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 

@@ -239,7 +239,7 @@ def test_diagnose_unknown_scenario(workdir, capsys):
 def test_diagnose_unknown_algorithm(workdir, capsys):
     _fails(["diagnose", "--scenario", "nominal", "--algorithm", "nelder",
             "--plot", str(workdir / "p.png")], capsys, workdir,
-           "unknown algorithm 'nelder'; choose one of de, gwo, pso")
+           "unknown algorithm 'nelder'; choose one of cmaes, de, gwo, pso, scipy-de")
 
 
 @pytest.mark.parametrize("budget, match", [("0", "--budget: budget must be a positive"),

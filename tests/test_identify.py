@@ -218,7 +218,7 @@ def test_callback_stops_the_search_with_the_default_polish(mm_gain_low, objectiv
 
 # ----------------------------------------------------------------------------- misuse
 def test_unknown_algorithm_raises(mm_gain_low):
-    with pytest.raises(ValueError, match=r"unknown algorithm 'nelder-mead'; choose one of de, gwo, pso"):
+    with pytest.raises(ValueError, match=r"unknown algorithm 'nelder-mead'; choose one of cmaes, de, gwo, pso, scipy-de"):
         identify(mm_gain_low, "nelder-mead", seed=0)
 
 

@@ -88,7 +88,7 @@ def test_registry_names_match_classes():
 
 
 def test_get_optimizer_unknown_name():
-    with pytest.raises(ValueError, match=r"^unknown algorithm 'x'; choose one of de, gwo, pso$"):
+    with pytest.raises(ValueError, match=r"^unknown algorithm 'x'; choose one of cmaes, de, gwo, pso, scipy-de$"):
         get_optimizer("x")
 
 

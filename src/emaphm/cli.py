@@ -163,15 +163,16 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from .diagnosis import diagnose
     from .faults import scenario
     from .identify import identify, parse_budget
-    from .optim import ALGORITHMS
+    from .optim import ALL_ALGORITHMS
     from .plots import plot_identification
     from .simulate import DEFAULT_SENSORS, simulate
     from .traces import read_trace
 
     if (args.trace is None) == (args.scenario is None):
         raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
-    if args.algorithm not in ALGORITHMS:
-        raise UsageError(f"unknown algorithm {args.algorithm!r}; choose one of {', '.join(sorted(ALGORITHMS))}")
+    if args.algorithm not in ALL_ALGORITHMS:
+        raise UsageError(f"unknown algorithm {args.algorithm!r}; choose one of "
+                         f"{', '.join(sorted(ALL_ALGORITHMS))}")
     budget: Any = args.budget
     if isinstance(budget, str) and budget.strip().isdigit():
         budget = int(budget)
@@ -252,7 +253,8 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("diagnose", help="identify the faults of a trace")
     d.add_argument("trace", nargs="?", help="trace file (.csv or .parquet)")
     d.add_argument("--scenario", help="simulate this scenario on the reference model and diagnose it")
-    d.add_argument("--algorithm", default="pso", help="pso (default), de or gwo")
+    d.add_argument("--algorithm", default="pso",
+                   help="pso (default), de, gwo, or the baselines scipy-de and cmaes")
     d.add_argument("--seed", type=_seed, default=0, help="seed of the optimizer (and of the sensor noise)")
     d.add_argument("--budget", help="evaluations (e.g. 5000) or wall-clock seconds (e.g. 10s); "
                                     "default: the paper's stopping rules")

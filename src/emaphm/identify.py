@@ -17,7 +17,7 @@ import numpy as np
 
 from .faults import K_LOWER, K_NAMES, K_UPPER, as_k, error_pct
 from .fitness import Eq4Objective
-from .optim import (ALGORITHMS, MaxEvaluations, OptimizeResult, Termination, WallClock,
+from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination, WallClock,
                     get_optimizer, minimize)
 from .optim.local import compass_search
 from .params import ActuatorParams
@@ -180,7 +180,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     trace
         Measured (or simulated) trace; validated first.
     algorithm
-        ``"pso"``, ``"de"`` or ``"gwo"`` (:data:`emaphm.optim.ALGORITHMS`).
+        ``"pso"``, ``"de"``, ``"gwo"`` (the paper's) or the baselines ``"scipy-de"``,
+        ``"cmaes"`` (:data:`emaphm.optim.ALL_ALGORITHMS`).
     seed
         Seed of the optimizer (an int; same seed, same result).
     budget
@@ -206,8 +207,9 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     objective
         A prebuilt objective for this trace (reused across runs to skip setup).
     """
-    if algorithm not in ALGORITHMS:
-        raise ValueError(f"unknown algorithm {algorithm!r}; choose one of {', '.join(sorted(ALGORITHMS))}")
+    if algorithm not in ALL_ALGORITHMS:
+        raise ValueError(f"unknown algorithm {algorithm!r}; choose one of "
+                         f"{', '.join(sorted(ALL_ALGORITHMS))}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     to_k(np.zeros((1, 8)), search)       # validates the search space name

@@ -45,10 +45,6 @@ def execute_run(run: Run) -> RunResult:
         from emaphm.params import ActuatorParams
         from emaphm.simulate import simulate
 
-        from .baselines import BASELINES, register
-
-        if run.optimizer in BASELINES:
-            register()
         params = ActuatorParams.from_dict(run.params, source="campaign params") if run.params else None
         t0 = time.perf_counter()
         trace = simulate(run.k_true, model="reference", params=params,

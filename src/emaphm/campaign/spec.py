@@ -89,12 +89,10 @@ class SpecError(ValueError):
 
 
 def available_algorithms() -> dict[str, type]:
-    """Algorithms a spec may name: :data:`emaphm.optim.ALGORITHMS` plus the baselines."""
-    from emaphm.optim import ALGORITHMS
+    """Algorithms a spec may name: the paper's three and the baselines."""
+    from emaphm.optim import ALL_ALGORITHMS
 
-    from .baselines import BASELINES
-
-    return {**BASELINES, **ALGORITHMS}
+    return dict(ALL_ALGORITHMS)
 
 
 def _check_name(what: str, name: Any) -> str:

@@ -34,12 +34,17 @@ from .base import (
     minimize,
     resume,
 )
+from .baselines import BASELINES, CMAES, ScipyDE
 from .de import DE
 from .gwo import GWO
 from .pso import PSO
 
 __all__ = [
     "ALGORITHMS",
+    "ALL_ALGORITHMS",
+    "BASELINES",
+    "CMAES",
+    "ScipyDE",
     "DE",
     "GWO",
     "PSO",
@@ -58,8 +63,12 @@ __all__ = [
     "resume",
 ]
 
-#: Registry of the available optimizers by short name.
+#: The paper's three optimizers by short name (the conformance suite runs on these).
 ALGORITHMS: dict[str, type] = {"de": DE, "pso": PSO, "gwo": GWO}
+
+#: Everything :func:`get_optimizer` knows: the paper's three and the library baselines
+#: ("scipy-de", "cmaes", :mod:`emaphm.optim.baselines`).
+ALL_ALGORITHMS: dict[str, type] = {**ALGORITHMS, **BASELINES}
 
 
 def get_optimizer(name: str, **kw: Any) -> Optimizer:
@@ -68,20 +77,20 @@ def get_optimizer(name: str, **kw: Any) -> Optimizer:
     Parameters
     ----------
     name : str
-        One of ``ALGORITHMS`` ("de", "gwo", "pso").
+        One of ``ALL_ALGORITHMS`` ("de", "gwo", "pso", "scipy-de", "cmaes").
     **kw
         Passed to the optimizer's constructor (e.g. ``pop_size=30``).
 
     Raises
     ------
     ValueError
-        ``unknown algorithm 'x'; choose one of de, gwo, pso`` for an unknown name, or
+        ``unknown algorithm 'x'; choose one of cmaes, de, gwo, pso, scipy-de`` for an unknown name, or
         the optimizer's own message for an invalid option.
     """
     try:
-        cls = ALGORITHMS[name]
+        cls = ALL_ALGORITHMS[name]
     except (KeyError, TypeError):
         raise ValueError(
-            f"unknown algorithm {name!r}; choose one of {', '.join(sorted(ALGORITHMS))}"
+            f"unknown algorithm {name!r}; choose one of {', '.join(sorted(ALL_ALGORITHMS))}"
         ) from None
     return cls(**kw)

@@ -16,9 +16,9 @@ cmaes       :class:`CMAES`: ``cma.CMAEvolutionStrategy`` (Hansen) in the unit bo
 ==========  ================================================================================
 
 Both are full ask/tell optimizers (not "minimize-only"), so :func:`emaphm.identify.identify`,
-:func:`emaphm.optim.minimize`, checkpoints and campaigns reach them like any other.
-:func:`register` adds them to :data:`emaphm.optim.ALGORITHMS`; nothing registers them
-at import time.
+:func:`emaphm.optim.minimize`, checkpoints and campaigns reach them like any other, by
+name through :func:`emaphm.optim.get_optimizer` (registry :data:`emaphm.optim.BASELINES`,
+beside the paper's three in :data:`emaphm.optim.ALGORITHMS`).
 
 How the scipy adapter works
 ---------------------------
@@ -63,7 +63,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from emaphm.optim.base import (
+from .base import (
     Bounds,
     MaxIterations,
     StallTolerance,
@@ -77,7 +77,7 @@ from emaphm.optim.base import (
     frozen,
 )
 
-__all__ = ["BASELINES", "CMAES", "CMAESState", "ScipyDE", "ScipyDEState", "register"]
+__all__ = ["BASELINES", "CMAES", "CMAESState", "ScipyDE", "ScipyDEState"]
 
 
 # --------------------------------------------------------------------------- scipy DE
@@ -434,16 +434,3 @@ class CMAES:
 
 #: The baselines by registry name.
 BASELINES: dict[str, type] = {"scipy-de": ScipyDE, "cmaes": CMAES}
-
-
-def register(registry: dict[str, type] | None = None) -> dict[str, type]:
-    """Add the baselines to ``registry`` (default :data:`emaphm.optim.ALGORITHMS`).
-
-    Idempotent; returns the registry. After it, ``identify(trace, "cmaes", ...)``,
-    ``get_optimizer("scipy-de")`` and campaign specs naming them work.
-    """
-    if registry is None:
-        from emaphm.optim import ALGORITHMS as registry
-    for name, cls in BASELINES.items():
-        registry.setdefault(name, cls)
-    return registry
