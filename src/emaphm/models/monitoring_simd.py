@@ -1,0 +1,479 @@
+"""The monitoring model's kernel laid out for SIMD: the population runs in vector lanes.
+
+:func:`_kernel` here has the signature and the semantics of
+:func:`emaphm.models.monitoring._kernel` (same physics, same operations in the
+same order, same divergence rule) but is written so that LLVM's loop
+vectoriser turns the loop over candidates into packed AVX2/AVX-512 code:
+
+* **one contiguous scratch array** ``B (n_blk, N_ROWS, LANES)`` holds, per
+  block of ``LANES`` candidates, every per-candidate parameter and state
+  variable as a row of ``LANES`` doubles (array-of-structures-of-arrays). The
+  vectorised loops touch this array only, at row offsets that are compile-time
+  constants, so the vectoriser needs no runtime alias checks; the inputs
+  ``theta_ref, T_load, i_target, weights`` are read into scalars before the
+  loops and the outputs are written by short copy loops after them;
+* **no branches that stay branches**: the scalar physics functions
+  (:func:`~emaphm.models.controller.control_step` with its PI steps,
+  :func:`~emaphm.models.inverter.modulate`,
+  :func:`~emaphm.models.pmsm.phase_step`, :func:`~emaphm.models.pmsm.torque`,
+  :func:`~emaphm.models.mechanics.transmission_step` with Borello's
+  :func:`~emaphm.models.mechanics.friction_step`) are reused as they are, their
+  own code recompiled for Numba-IR inlining (``inline="always"``) with IEEE
+  division; LLVM if-converts their ``if``s (anti-windup, saturations, voltage
+  limit, stick/slip, backlash contact) to selects, evaluating both sides and
+  picking one, which computes the same value. The kernel's own choices
+  (overcurrent trip, eccentricity, divergence freeze, sine quadrant) use
+  :func:`select`, an LLVM ``select``; the divergence check freezes a candidate
+  with a mask instead of ``continue``;
+* **only scalars cross into the inlined functions**: the lane loops load from
+  and store to ``B`` themselves (an array handed to an inlined function leaves
+  an NRT incref/decref pair, two calls, in the loop body);
+* **sine and cosine without libm**: :func:`sincos` is fdlibm's (Cody-Waite
+  reduction by pi/2 in three rounds, ``__kernel_sin``/``__kernel_cos``
+  polynomials, quadrant by selects): within 1 ulp of the correctly rounded
+  result like libm's, so the two differ by an ulp now and then, which is the
+  only difference from the scalar kernel. Past ``|x| > TRIG_LIMIT`` (where the
+  three-part reduction loses accuracy; only a runaway candidate gets there) a
+  scalar fix-up loop recomputes the value with ``math.sin``/``math.cos``.
+
+Stages per control period, each a loop over blocks and lanes (the lane loop
+vectorised): trig [+ rare scalar fix-up], controller, first sub-step,
+[trig + sub-step]*, traces (scalar copy, only when stored), divergence check
+and commit. The time loop is outermost, so the blocks of a stage are
+independent work for the out-of-order core.
+
+Caveat shared with the scalar kernel: Numba's on-disk cache (``cache=True``)
+does not track the physics modules the kernel inlines; after editing them,
+clear ``__pycache__`` (or bump this file) so that the kernel is recompiled.
+"""
+
+from __future__ import annotations
+
+import math
+import types
+
+import numpy as np
+
+from numba import njit, types as nbtypes
+from numba.extending import intrinsic
+
+from . import controller as _controller
+from . import inverter as _inverter
+from . import mechanics as _mechanics
+from . import pmsm as _pmsm
+from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
+                     C_L_A, C_R_A, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_J_L, P_J_M, P_K_T, P_KD,
+                     P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
+                     P_THETA0, P_V_DC)
+from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED
+from .pmsm import COS_2PI_3, SIN_2PI_3, rl_coeffs
+
+#: Compile a function into its caller at Numba IR level. LLVM's inliner leaves the larger
+#: physics functions as calls, and every call returns Numba's status code, whose check is
+#: an early exit from the lane loop; the vectoriser gives up on both.
+inline = njit(nogil=True, inline="always", error_model="numpy")
+
+#: The kernel: IEEE division (``error_model="numpy"``), as a ZeroDivisionError check on
+#: every ``/`` is an early exit from the lane loop that the vectoriser cannot handle. For a
+#: physical ``P`` no division in the loop has a zero divisor; ``CP[:, C_KP] == 0`` (divides
+#: in the back-calculation) gives inf/nan, so a diverged candidate, where the scalar kernel
+#: raises ZeroDivisionError. The RL coefficients keep the scalar kernel's check.
+kernel_jit = njit(cache=True, nogil=True, error_model="numpy")
+
+
+@intrinsic
+def select(typingctx, cond, a, b):
+    """``a if cond else b`` as one LLVM ``select`` (both sides evaluated, no branch).
+
+    Numba compiles a conditional expression to a branch; InstCombine then sinks the
+    computation of the taken side into it, and the vectoriser may fail to flatten it.
+    """
+    if not (isinstance(cond, nbtypes.Boolean) and isinstance(a, nbtypes.Float)
+            and a == b):
+        return None
+    sig = a(cond, a, b)
+
+    def codegen(context, builder, signature, args):
+        return builder.select(args[0], args[1], args[2])
+
+    return sig, codegen
+
+
+def _inlined(func, **callees):
+    """``func``'s own code (the scalar physics function, unchanged) compiled for inlining,
+    with the named global callees replaced by their inlined versions."""
+    py = func.py_func
+    g = dict(py.__globals__)
+    g.update(callees)
+    return inline(types.FunctionType(py.__code__, g, py.__name__, py.__defaults__,
+                                     py.__closure__))
+
+
+_sat = _inlined(_controller._sat)
+clarke = _inlined(_inverter.clarke)
+park = _inlined(_inverter.park)
+inv_park = _inlined(_inverter.inv_park)
+inv_clarke = _inlined(_inverter.inv_clarke)
+pi_step = _inlined(_controller.pi_step, _sat=_sat)
+control_step = _inlined(_controller.control_step, _sat=_sat, pi_step=pi_step, clarke=clarke,
+                        park=park, inv_park=inv_park, inv_clarke=inv_clarke)
+modulate = _inlined(_inverter.modulate)
+phase_step = _inlined(_pmsm.phase_step)
+torque = _inlined(_pmsm.torque)
+friction_step = _inlined(_mechanics.friction_step)
+transmission_step = _inlined(_mechanics.transmission_step, friction_step=friction_step)
+
+__all__ = ["_kernel", "sincos", "LANES", "TRIG_LIMIT"]
+
+#: Candidates per block: one AVX-512 register of doubles (two AVX2 ones).
+LANES = 8
+
+#: |angle| [rad] up to which :func:`sincos` is within 1 ulp (fdlibm's medium range).
+TRIG_LIMIT = 1.0e6
+
+# ---- sine and cosine (fdlibm, branch-free) ----------------------------------------------
+
+_ROUND = 6755399441055744.0          # 1.5 * 2**52: (x + _ROUND) - _ROUND rounds to an integer
+_INVPIO2 = 6.36619772367581382433e-01
+_PIO2_1 = 1.57079632673412561417e+00     # first 33 bits of pi/2
+_PIO2_1T = 6.07710050650619224932e-11
+_PIO2_2 = 6.07710050630396597660e-11     # second 33 bits
+_PIO2_2T = 2.02226624879595063154e-21
+_PIO2_3 = 2.02226624871116645580e-21     # third 33 bits
+_PIO2_3T = 8.47842766036889956997e-32
+_S1 = -1.66666666666666324348e-01
+_S2 = 8.33333333332248946124e-03
+_S3 = -1.98412698298579493134e-04
+_S4 = 2.75573137070700676789e-06
+_S5 = -2.50507602534068634195e-08
+_S6 = 1.58969099521155010221e-10
+_C1 = 4.16666666666666019037e-02
+_C2 = -1.38888888888741095749e-03
+_C3 = 2.48015872894767294178e-05
+_C4 = -2.75573143513906633035e-07
+_C5 = 2.08757232129817482790e-09
+_C6 = -1.13596475577881948265e-11
+
+
+@inline
+def sincos(x):
+    """``(sin x, cos x)`` within 1 ulp for ``|x| <= TRIG_LIMIT``, NaN for non-finite x.
+
+    fdlibm's algorithm without branches: ``x = n pi/2 + (y0 + y1)`` by a
+    three-round Cody-Waite reduction, the kernel polynomials on
+    ``[-pi/4, pi/4]``, and the quadrant ``n mod 4`` picked by selects.
+    """
+    fn = (x * _INVPIO2 + _ROUND) - _ROUND
+    r = x - fn * _PIO2_1
+    t = r
+    w = fn * _PIO2_2
+    r = t - w
+    w = fn * _PIO2_2T - ((t - r) - w)
+    t = r
+    w = fn * _PIO2_3
+    r = t - w
+    w = fn * _PIO2_3T - ((t - r) - w)
+    y0 = r - w
+    y1 = (r - y0) - w
+    z = y0 * y0
+    v = z * y0
+    rs = _S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))
+    ks = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * _S1)
+    zz = z * z
+    rc = z * (_C1 + z * (_C2 + z * _C3)) + zz * zz * (_C4 + z * (_C5 + z * _C6))
+    hz = 0.5 * z
+    w1 = 1.0 - hz
+    kc = w1 + (((1.0 - w1) - hz) + (z * rc - y0 * y1))
+    # n mod 4 as a float: floor(n/4) = round(n/4 - 3/8) for integer n
+    q = fn - 4.0 * (((fn * 0.25 - 0.375) + _ROUND) - _ROUND)
+    odd = (q == 1.0) | (q == 3.0)
+    a = select(odd, kc, ks)
+    b = select(odd, ks, kc)
+    s = select(q >= 2.0, -a, a)
+    c = select((q == 1.0) | (q == 2.0), -b, b)
+    return s, c
+
+
+# ---- rows of the scratch array B[block, row, lane] -------------------------------------
+
+# per-candidate parameters
+(R_KP, R_FSJ, R_FDJ, R_BACKLASH, R_C0A, R_C0B, R_C0C, R_ECC, R_ECCPH,
+ R_AA, R_AB, R_AC, R_HA, R_HB, R_HC) = range(15)
+# committed state (start of the control period); R_TRIP, R_ALIVE: 1.0 or 0.0
+(R_THM, R_WM, R_THL, R_WL, R_IA, R_IB, R_IC, R_E0, R_E1, R_E2, R_E3, R_TRIP, R_FIT,
+ R_ALIVE) = range(15, 29)
+# working state (during the control period), in the same order as the committed rows
+(W_THM, W_WM, W_THL, W_WL, W_IA, W_IB, W_IC, W_E0, W_E1, W_E2, W_E3, W_TRIP,
+ W_FIT) = range(29, 42)
+# per-period intermediates: leg voltages, sines and cosines, torque at the control instant
+(R_UA, R_UB, R_UC, R_SE, R_CE, R_SG, R_CG, R_TQ) = range(42, 50)
+N_ROWS = 50
+N_STATE = 13      # rows R_THM..R_FIT and W_THM..W_FIT
+
+
+@inline
+def _back_emf(s_e, c_e, sg, cg, c0_a, c0_b, c0_c, ecc):
+    """pmsm.back_emf_coeffs with the eccentricity's ``sin/cos(theta_m + ecc_phase)`` given.
+
+    Same operations; the ``ecc == 0`` branch becomes a select.
+    """
+    s_a = s_e
+    s_b = s_e * COS_2PI_3 - c_e * SIN_2PI_3
+    s_c = s_e * COS_2PI_3 + c_e * SIN_2PI_3
+    m_a = 1.0 + ecc * cg
+    m_b = 1.0 + ecc * (cg * COS_2PI_3 - sg * SIN_2PI_3)
+    m_c = 1.0 + ecc * (cg * COS_2PI_3 + sg * SIN_2PI_3)
+    no = ecc == 0.0
+    return (select(no, c0_a * s_a, c0_a * s_a * m_a),
+            select(no, c0_b * s_b, c0_b * s_b * m_b),
+            select(no, c0_c * s_c, c0_c * s_c * m_c))
+
+
+@inline
+def _overcurrent(i_a, i_b, i_c, I_trip):
+    """inverter.overcurrent without the short-circuit ``or`` (a branch the vectoriser's
+    if-conversion did not take once jump threading had duplicated the trip flag's store)."""
+    return (abs(i_a) > I_trip) | (abs(i_b) > I_trip) | (abs(i_c) > I_trip)
+
+
+@inline
+def _trig(thm, ecc_phase, p):
+    """Sines and cosines of ``p theta_m`` and ``theta_m + ecc_phase``; True if out of range."""
+    x = p * thm
+    g = thm + ecc_phase
+    s_e, c_e = sincos(x)
+    s_g, c_g = sincos(g)
+    return s_e, c_e, s_g, c_g, (abs(x) > TRIG_LIMIT) | (abs(g) > TRIG_LIMIT)
+
+
+@inline
+def _control(thm, wm, ia, ib, ic, s_e, c_e, trip, fit, i0, i1, i2, i3, Kp, period, ctl):
+    """Fitness term, overcurrent trip, controller and modulation of one candidate.
+
+    ``period = (ta, tb, tc, wa, wb, wc, ref)``: target currents, weights and position
+    command of this control period; ``ctl``: the shared controller parameters.
+    Returns ``(fit, trip, e0, e1, e2, e3, u_a, u_b, u_c)`` (leg voltages ``u = d V_dc``).
+    """
+    ta, tb, tc, wa, wb, wc, ref = period
+    Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, I_trip = ctl
+    # unconditional (a conditional store stops the vectoriser): without a target the
+    # weights are 0 and so is the term, but for a non-finite current, which diverges
+    da = ia - ta
+    db = ib - tb
+    dc = ic - tc
+    fit = fit + (wa * da * da + wb * db * db + wc * dc * dc)
+    # overcurrent trip: from then on active short circuit (legs at 0 V), controller stopped
+    tripped = (trip != 0.0) | _overcurrent(ia, ib, ic, I_trip)
+    v_a, v_b, v_c, _, e0, e1, e2, e3 = control_step(
+        ref, thm, wm, ia, ib, ic, s_e, c_e, i0, i1, i2, i3,
+        Kp, Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s)
+    d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
+    return (fit, select(tripped, 1.0, 0.0),
+            select(tripped, i0, e0), select(tripped, i1, e1),
+            select(tripped, i2, e2), select(tripped, i3, e3),
+            select(tripped, 0.0, d_a) * V_dc, select(tripped, 0.0, d_b) * V_dc,
+            select(tripped, 0.0, d_c) * V_dc)
+
+
+@inline
+def _plant(thm, wm, thl, wl, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c,
+           c0_a, c0_b, c0_c, ecc, a_a, a_b, a_c, h_a, h_b, h_c, FSJ, FDJ, backlash, mech):
+    """One sub-step of the plant of one candidate: back-EMF, phase currents, transmission.
+
+    ``mech = (T_l, J_m, C_m, J_l, C_l, dt)``. Returns ``(theta_m, omega_m, theta_l,
+    omega_l, i_a, i_b, i_c, torque at the start)``.
+    """
+    T_l, J_m, C_m, J_l, C_l, dt = mech
+    ca, cb, cc = _back_emf(s_e, c_e, s_g, c_g, c0_a, c0_b, c0_c, ecc)
+    tq = torque(ia, ib, ic, ca, cb, cc)
+    ja, jb, jc, _ = phase_step(ia, ib, ic, u_a, u_b, u_c, ca * wm, cb * wm, cc * wm,
+                               a_a, a_b, a_c, h_a, h_b, h_c)
+    # the mechanics see the step's mean torque (trapezoid), as in the scalar kernel
+    T_m = 0.5 * (tq + torque(ja, jb, jc, ca, cb, cc))
+    thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m, FSJ, FDJ,
+                                         J_l, C_l, backlash, dt)
+    return thm, wm, thl, wl, ja, jb, jc, tq
+
+
+# The stages loop over blocks and lanes; the lane loop is the one that vectorises. Its body
+# loads from and stores to ``B`` itself and calls only the scalar functions above: an array
+# passed into an inlined function leaves an NRT incref/decref pair (calls) in the loop.
+
+@inline
+def _trig_stage(B, p):
+    """Sines and cosines of every lane (vector), libm for a runaway lane (scalar, rare)."""
+    big = False
+    for b in range(B.shape[0]):
+        for l in range(LANES):
+            s_e, c_e, s_g, c_g, out = _trig(B[b, W_THM, l], B[b, R_ECCPH, l], p)
+            B[b, R_SE, l] = s_e
+            B[b, R_CE, l] = c_e
+            B[b, R_SG, l] = s_g
+            B[b, R_CG, l] = c_g
+            big |= out
+    if big:
+        for b in range(B.shape[0]):
+            for l in range(LANES):
+                x = p * B[b, W_THM, l]
+                g = B[b, W_THM, l] + B[b, R_ECCPH, l]
+                if abs(x) > TRIG_LIMIT:
+                    B[b, R_SE, l] = math.sin(x)
+                    B[b, R_CE, l] = math.cos(x)
+                if abs(g) > TRIG_LIMIT:
+                    B[b, R_SG, l] = math.sin(g)
+                    B[b, R_CG, l] = math.cos(g)
+
+
+@inline
+def _plant_stage(B, first, mech):
+    """One sub-step of every lane (vector); the first also keeps the torque for the traces."""
+    for b in range(B.shape[0]):
+        for l in range(LANES):
+            thm, wm, thl, wl, ia, ib, ic, tq = _plant(
+                B[b, W_THM, l], B[b, W_WM, l], B[b, W_THL, l], B[b, W_WL, l],
+                B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
+                B[b, R_SE, l], B[b, R_CE, l], B[b, R_SG, l], B[b, R_CG, l],
+                B[b, R_UA, l], B[b, R_UB, l], B[b, R_UC, l],
+                B[b, R_C0A, l], B[b, R_C0B, l], B[b, R_C0C, l], B[b, R_ECC, l],
+                B[b, R_AA, l], B[b, R_AB, l], B[b, R_AC, l],
+                B[b, R_HA, l], B[b, R_HB, l], B[b, R_HC, l],
+                B[b, R_FSJ, l], B[b, R_FDJ, l], B[b, R_BACKLASH, l], mech)
+            B[b, W_THM, l] = thm
+            B[b, W_WM, l] = wm
+            B[b, W_THL, l] = thl
+            B[b, W_WL, l] = wl
+            B[b, W_IA, l] = ia
+            B[b, W_IB, l] = ib
+            B[b, W_IC, l] = ic
+            if first:
+                B[b, R_TQ, l] = tq
+
+
+@inline
+def _control_stage(B, period, ctl):
+    """Fitness term, trip, controller and modulation of every lane (vector)."""
+    for b in range(B.shape[0]):
+        for l in range(LANES):
+            fit, trip, e0, e1, e2, e3, u_a, u_b, u_c = _control(
+                B[b, W_THM, l], B[b, W_WM, l], B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
+                B[b, R_SE, l], B[b, R_CE, l], B[b, W_TRIP, l], B[b, W_FIT, l],
+                B[b, W_E0, l], B[b, W_E1, l], B[b, W_E2, l], B[b, W_E3, l], B[b, R_KP, l],
+                period, ctl)
+            B[b, W_FIT, l] = fit
+            B[b, W_TRIP, l] = trip
+            B[b, W_E0, l] = e0
+            B[b, W_E1, l] = e1
+            B[b, W_E2, l] = e2
+            B[b, W_E3, l] = e3
+            B[b, R_UA, l] = u_a
+            B[b, R_UB, l] = u_b
+            B[b, R_UC, l] = u_c
+
+
+@inline
+def _commit_stage(B):
+    """Divergence check (vector): keep the period's state, or freeze the lane at its last
+    good state with infinite fitness (the scalar kernel's ``status``/``continue``)."""
+    for b in range(B.shape[0]):
+        for l in range(LANES):
+            ok = ((B[b, R_ALIVE, l] != 0.0)
+                  & (abs(B[b, W_IA, l]) < I_DIVERGED) & (abs(B[b, W_IB, l]) < I_DIVERGED)
+                  & (abs(B[b, W_IC, l]) < I_DIVERGED) & (abs(B[b, W_WM, l]) < OMEGA_DIVERGED)
+                  & (abs(B[b, W_THM, l]) < 1e9))
+            for r in range(N_STATE - 1):
+                x = select(ok, B[b, W_THM + r, l], B[b, R_THM + r, l])
+                B[b, R_THM + r, l] = x
+                B[b, W_THM + r, l] = x
+            f = select(ok, B[b, W_FIT, l], np.inf)
+            B[b, R_FIT, l] = f
+            B[b, W_FIT, l] = f
+            B[b, R_ALIVE, l] = select(ok, 1.0, 0.0)
+
+
+@kernel_jit
+def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
+            out_i, out_theta, out_omega, out_torque, fitness, status):
+    """Drop-in for :func:`emaphm.models.monitoring._kernel` (same arguments, same results).
+
+    Shapes: ``P (N_P,)``, ``CP (n_pop, N_CP)``, ``theta_ref, T_load (n,)``;
+    ``i_target, weights (n, 3)`` or ``(0, 3)`` for no fitness; ``out_i
+    (n_pop, n, 3)``, ``out_theta, out_omega, out_torque (n_pop, n)`` or
+    zero-sized for no traces; ``fitness, status (n_pop,)`` written in place.
+    """
+    n_pop = CP.shape[0]
+    n = theta_ref.shape[0]
+    store = out_i.shape[0] == n_pop and n_pop > 0
+    with_fit = i_target.shape[0] == n
+    for j in range(n_pop):
+        fitness[j] = 0.0
+        status[j] = STATUS_OK
+    if n_pop == 0:
+        return
+    p = P[P_POLES]
+    T_s = P[P_T_S]
+    dt = T_s / n_sub
+    J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
+    V_dc = P[P_V_DC]
+    Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
+    T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
+    I_trip = P[P_I_TRIP]
+    ctl = (Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, I_trip)
+    theta0 = P[P_THETA0]
+    n_blk = (n_pop + LANES - 1) // LANES
+    B = np.zeros((n_blk, N_ROWS, LANES))
+    for b in range(n_blk):
+        for l in range(LANES):
+            # padding lanes repeat the last candidate; their results are not written out
+            j = min(b * LANES + l, n_pop - 1)
+            B[b, R_KP, l] = CP[j, C_KP]
+            B[b, R_FSJ, l] = CP[j, C_FSJ]
+            B[b, R_FDJ, l] = CP[j, C_FDJ]
+            B[b, R_BACKLASH, l] = CP[j, C_BACKLASH]
+            B[b, R_C0A, l] = CP[j, C_C0_A]
+            B[b, R_C0B, l] = CP[j, C_C0_B]
+            B[b, R_C0C, l] = CP[j, C_C0_C]
+            B[b, R_ECC, l] = CP[j, C_ECC]
+            B[b, R_ECCPH, l] = CP[j, C_ECC_PHASE]
+            for ph in range(3):
+                a, h = rl_coeffs(CP[j, C_R_A + ph], CP[j, C_L_A + ph], dt)
+                B[b, R_AA + ph, l] = a
+                B[b, R_HA + ph, l] = h
+            B[b, R_THM, l] = theta0
+            B[b, R_THL, l] = theta0
+            B[b, W_THM, l] = theta0
+            B[b, W_THL, l] = theta0
+            B[b, R_ALIVE, l] = 1.0
+    ta = tb = tc = wa = wb = wc = 0.0
+    for k in range(n):
+        ref = theta_ref[k]
+        T_l = T_load[k]
+        if with_fit:
+            ta, tb, tc = i_target[k, 0], i_target[k, 1], i_target[k, 2]
+            wa, wb, wc = weights[k, 0], weights[k, 1], weights[k, 2]
+        _trig_stage(B, p)
+        _control_stage(B, (ta, tb, tc, wa, wb, wc, ref), ctl)
+        mech = (T_l, J_m, C_m, J_l, C_l, dt)
+        _plant_stage(B, True, mech)
+        for s in range(1, n_sub):
+            _trig_stage(B, p)
+            _plant_stage(B, False, mech)
+        if store:
+            for j in range(n_pop):
+                b = j // LANES
+                l = j - b * LANES
+                if B[b, R_ALIVE, l] != 0.0:
+                    out_i[j, k, 0] = B[b, R_IA, l]
+                    out_i[j, k, 1] = B[b, R_IB, l]
+                    out_i[j, k, 2] = B[b, R_IC, l]
+                    out_theta[j, k] = B[b, R_THM, l]
+                    out_omega[j, k] = B[b, R_WM, l]
+                    out_torque[j, k] = B[b, R_TQ, l]
+        _commit_stage(B)
+    for j in range(n_pop):
+        b = j // LANES
+        l = j - b * LANES
+        fitness[j] = B[b, R_FIT, l]
+        if B[b, R_ALIVE, l] == 0.0:
+            status[j] = STATUS_DIVERGED
+        elif B[b, R_TRIP, l] != 0.0:
+            status[j] = STATUS_TRIPPED

@@ -1,0 +1,210 @@
+"""The SIMD monitoring kernel agrees with the scalar kernel to round-off.
+
+:mod:`emaphm.models.monitoring_simd` evaluates the same operations in the same
+order as :func:`emaphm.models.monitoring._kernel`; the one difference is its
+branch-free sine and cosine (fdlibm's, within 1 ulp) against libm's, which
+differ by an ulp now and then. As in ``test_monitoring_numpy.py``, most
+trajectories carry such differences through unchanged and must agree to 1e-9;
+a few (heavily shorted phases, whose discrete current loop is unstable until
+the drive trips) amplify any ulp, so the scalar kernel does not even agree
+with its own twin (``k`` nudged by 1e-12). For those we check the status and
+the agreement up to the step where the twin departs, less ``MARGIN`` steps.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from emaphm.faults import SCENARIOS
+from emaphm.models.layout import C_KP, C_R_A, P_THETA0, pack_population
+from emaphm.models.monitoring import STATUS_DIVERGED, STATUS_OK, MonitoringModel
+from emaphm.models.monitoring_simd import LANES, TRIG_LIMIT, _kernel, sincos
+
+TOL = 1e-9            # rtol and atol on currents [A], angles [rad], speeds [rad/s], torque [N m]
+NUDGE = 1e-12         # relative nudge of k that makes the scalar kernel's twin
+MARGIN = 10           # steps: growth of a ~1e4 ulp nudge over an ulp one, at a gain of ~3/step
+N_RANDOM = 24
+
+
+def _population():
+    rng = np.random.default_rng(20240611)
+    named = np.array([k for k in SCENARIOS.values()])
+    corners = np.array([np.zeros(8), np.ones(8)])
+    return np.vstack([rng.random((N_RANDOM, 8)), named, corners])
+
+
+K = _population()
+
+
+def _inputs(mm):
+    """Command [rad] and load torque [N m] on the model's grid, as the kernel gets them."""
+    return (np.ascontiguousarray(mm.profile.theta_ref(mm.t)),
+            np.ascontiguousarray(mm.profile.load_torque(mm.t)))
+
+
+def simd_traces(mm, P, CP):
+    """What ``MonitoringModel.simulate_population`` returns, from the SIMD kernel."""
+    n_pop, n = CP.shape[0], mm.t.size
+    out_i = np.zeros((n_pop, n, 3))
+    th, om, tq = (np.zeros((n_pop, n)) for _ in range(3))
+    fitness = np.zeros(n_pop)
+    status = np.zeros(n_pop, dtype=np.int64)
+    empty = np.zeros((0, 3))
+    _kernel(P, CP, *_inputs(mm), mm.n_sub, empty, empty, out_i, th, om, tq, fitness, status)
+    return {"i_abc": out_i, "theta_m": th, "omega_m": om, "torque": tq, "status": status,
+            "fitness": fitness}
+
+
+def simd_sse(mm, P, CP, i_target, weights):
+    """What ``MonitoringModel.weighted_sse`` returns, from the SIMD kernel."""
+    n_pop = CP.shape[0]
+    fitness = np.full(n_pop, np.nan)
+    status = np.full(n_pop, -1, dtype=np.int64)
+    none3, none2 = np.zeros((0, 0, 3)), np.zeros((0, 0))
+    _kernel(P, CP, *_inputs(mm), mm.n_sub, np.ascontiguousarray(i_target),
+            np.ascontiguousarray(weights), none3, none2, none2, none2, fitness, status)
+    return fitness, status
+
+
+def _traces(r):
+    return {"i_abc": r.i_abc, "theta_m": r.theta_m, "omega_m": r.omega_m, "torque": r.torque}
+
+
+@pytest.fixture(scope="module", params=[1, 2], ids=["n_sub=1", "n_sub=2"])
+def case(request):
+    mm = MonitoringModel(n_sub=request.param, kernel="scalar")
+    scalar = mm.simulate_population(K)
+    twin = mm.simulate_population(K + NUDGE * (0.5 - K))     # stays inside [0, 1]
+    dev = np.max(np.abs(scalar.i_abc - twin.i_abc), axis=2)
+    departs = dev > TOL
+    horizon = np.where(departs.any(axis=1), departs.argmax(axis=1), mm.t.size)
+    well = horizon == mm.t.size
+    P, CP = pack_population(mm.params, K, mm.theta0)
+    return mm, scalar, simd_traces(mm, P, CP), well, horizon, (P, CP)
+
+
+def test_named_scenarios_and_most_random_candidates_are_well_conditioned(case):
+    _, _, _, well, _, _ = case
+    assert well[N_RANDOM:N_RANDOM + len(SCENARIOS)].all()
+    assert well[:N_RANDOM].sum() >= N_RANDOM // 2
+
+
+def test_status_agrees(case):
+    _, scalar, simd, _, _, _ = case
+    np.testing.assert_array_equal(simd["status"], scalar.status)
+
+
+def test_traces_agree_to_round_off_on_well_conditioned_candidates(case):
+    _, scalar, simd, well, _, _ = case
+    for name, ref in _traces(scalar).items():
+        np.testing.assert_allclose(simd[name][well], ref[well], rtol=TOL, atol=TOL, err_msg=name)
+
+
+def test_traces_agree_up_to_the_scalar_kernels_own_horizon_elsewhere(case):
+    _, scalar, simd, well, horizon, _ = case
+    for j in np.flatnonzero(~well):
+        h = max(horizon[j] - MARGIN, 0)
+        for name, ref in _traces(scalar).items():
+            np.testing.assert_allclose(simd[name][j, :h], ref[j, :h], rtol=TOL, atol=TOL,
+                                       err_msg=f"{name}, candidate {j}, first {h} steps")
+
+
+def test_weighted_sse_agrees(case):
+    mm, scalar, _, well, _, (P, CP) = case
+    rng = np.random.default_rng(5)
+    i_target = scalar.i_abc[N_RANDOM] + 0.05 * rng.standard_normal(scalar.i_abc.shape[1:])
+    weights = rng.uniform(0.5, 2.0, size=i_target.shape)
+    f_scalar, s_scalar = mm.weighted_sse(K, i_target, weights)
+    f_simd, s_simd = simd_sse(mm, P, CP, i_target, weights)
+    np.testing.assert_array_equal(s_simd, s_scalar)
+    diverged = s_scalar == STATUS_DIVERGED
+    assert np.all(np.isinf(f_simd[diverged])) and np.all(np.isfinite(f_simd[~diverged]))
+    np.testing.assert_allclose(f_simd[well], f_scalar[well], rtol=TOL)
+
+
+def test_without_a_target_the_fitness_is_zero_or_inf(case):
+    _, scalar, simd, _, _, _ = case
+    diverged = scalar.status == STATUS_DIVERGED
+    assert np.all(simd["fitness"][~diverged] == 0.0)
+    assert np.all(np.isinf(simd["fitness"][diverged]))
+
+
+@pytest.mark.parametrize("n_pop", [1, LANES - 1, LANES + 1, 2 * LANES + 3])
+def test_populations_that_do_not_fill_the_last_block(n_pop):
+    mm = MonitoringModel(kernel="scalar")
+    k = np.resize(np.array(list(SCENARIOS.values())), (n_pop, 8))   # well conditioned
+    scalar = mm.simulate_population(k)
+    P, CP = pack_population(mm.params, k, mm.theta0)
+    simd = simd_traces(mm, P, CP)
+    np.testing.assert_array_equal(simd["status"], scalar.status)
+    for name, ref in _traces(scalar).items():
+        np.testing.assert_allclose(simd[name], ref, rtol=TOL, atol=TOL, err_msg=name)
+
+
+def test_empty_population():
+    mm = MonitoringModel(kernel="scalar")
+    P, CP = pack_population(mm.params, np.zeros((0, 8)))
+    r = simd_traces(mm, P, CP)
+    assert r["status"].shape == (0,) and r["fitness"].shape == (0,)
+
+
+@pytest.mark.parametrize("poison", ["negative_R", "nan_Kp"])
+def test_a_diverging_candidate_is_flagged_and_leaves_its_neighbours_alone(poison):
+    mm = MonitoringModel(kernel="scalar")
+    k = np.resize(K[N_RANDOM:N_RANDOM + 4], (LANES + 2, 8))         # two blocks
+    P, CP = pack_population(mm.params, k, mm.theta0)
+    bad = CP.copy()
+    j = 2
+    if poison == "negative_R":
+        bad[j, C_R_A:C_R_A + 3] *= -100.0          # unstable RL branches: currents blow up
+    else:
+        bad[j, C_KP] = np.nan
+    rng = np.random.default_rng(1)
+    i_target = rng.standard_normal((mm.t.size, 3))
+    weights = np.ones((mm.t.size, 3))
+    f_good, s_good = simd_sse(mm, P, CP, i_target, weights)
+    f_bad, s_bad = simd_sse(mm, P, bad, i_target, weights)
+    assert s_bad[j] == STATUS_DIVERGED and np.isinf(f_bad[j])
+    others = np.arange(len(k)) != j
+    np.testing.assert_array_equal(f_bad[others], f_good[others])
+    np.testing.assert_array_equal(s_bad[others], s_good[others])
+    assert np.all(s_good == STATUS_OK)
+    # the scalar kernel says the same
+    tr_bad = simd_traces(mm, P, bad)
+    i_scalar = np.zeros((len(k), mm.t.size, 3))
+    outs = [np.zeros((len(k), mm.t.size)) for _ in range(3)]
+    f_scalar, s_scalar = np.zeros(len(k)), np.zeros(len(k), dtype=np.int64)
+    from emaphm.models.monitoring import _kernel as scalar_kernel
+    scalar_kernel(P, bad, *_inputs(mm), mm.n_sub, np.zeros((0, 3)), np.zeros((0, 3)),
+                  i_scalar, *outs, f_scalar, s_scalar)
+    np.testing.assert_array_equal(tr_bad["status"], s_scalar)
+    np.testing.assert_allclose(tr_bad["i_abc"][others], i_scalar[others], rtol=TOL, atol=TOL)
+
+
+def test_runaway_angle_falls_back_to_libm():
+    """Past TRIG_LIMIT the kernel uses libm like the scalar kernel: same traces."""
+    mm = MonitoringModel(theta0=1.5 * TRIG_LIMIT / 4, kernel="scalar")     # p*theta beyond the limit for p >= 3
+    assert mm.params.motor.p * mm.theta0 > TRIG_LIMIT
+    k = K[N_RANDOM:N_RANDOM + 3]
+    scalar = mm.simulate_population(k)
+    P, CP = pack_population(mm.params, k, mm.theta0)
+    assert P[P_THETA0] == mm.theta0
+    simd = simd_traces(mm, P, CP)
+    np.testing.assert_array_equal(simd["status"], scalar.status)
+    for name, ref in _traces(scalar).items():
+        np.testing.assert_allclose(simd[name], ref, rtol=TOL, atol=TOL, err_msg=name)
+
+
+def test_sincos_within_one_ulp_of_libm():
+    rng = np.random.default_rng(3)
+    x = np.concatenate([rng.uniform(-50.0, 50.0, 20000), rng.uniform(-TRIG_LIMIT, TRIG_LIMIT, 5000),
+                        [0.0, -0.0, 1e-300, math.pi / 4, math.pi / 2, math.pi, -3 * math.pi / 2]])
+    for v in x:
+        s, c = sincos(v)
+        s0, c0 = math.sin(v), math.cos(v)
+        assert abs(s - s0) <= np.spacing(abs(s0)) and abs(c - c0) <= 2 * np.spacing(abs(c0)), v
+    s, c = sincos(np.nan)
+    assert math.isnan(s) and math.isnan(c)
+    s, c = sincos(np.inf)
+    assert math.isnan(s) and math.isnan(c)
