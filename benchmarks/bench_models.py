@@ -196,7 +196,9 @@ def run(quick: bool) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
     n_steps = mm.t.size
     target = mm.simulate_population(K_NOMINAL[None]).i_abc[0]     # nominal MM currents
     weights = np.ones_like(target)
-    n_diverged = int(np.count_nonzero(mm.simulate_population(K).status))
+    status = mm.simulate_population(K).status
+    n_diverged = int(np.count_nonzero(status == 1))
+    n_tripped = int(np.count_nonzero(status == 2))
 
     def ns_per(t, n_pop, n_sub):
         return t / (n_pop * n_steps * n_sub) * 1e9
@@ -224,6 +226,15 @@ def run(quick: bool) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
             rows.append((f"{head}: ns per candidate-step", f"{ns:.1f} (CPU {ns_cpu:.1f})",
                          f"<= {TARGET_NS:.0f} ns ({met(ns_cpu <= TARGET_NS)} on CPU time)"
                          if n_sub == 1 else ""))
+
+    # 1b. the scalar kernel (one candidate after another) on the same population
+    scalar = MonitoringModel(profile=profile, n_sub=1, kernel="scalar")
+    med, _, cpu = _median_time(lambda: scalar.weighted_sse(K, target, weights), reps(31, 7))
+    rows.append((f"Scalar kernel (`kernel='scalar'`), N = {N_MAIN}, n_sub = 1, fitness only: "
+                 "ns per candidate-step",
+                 f"{ns_per(med, N_MAIN, 1):.1f} (CPU {ns_per(cpu, N_MAIN, 1):.1f}; "
+                 f"{med * 1e3:.2f} ms; scalar / SIMD {cpu / main[(1, 'fitness')]:.1f} x on CPU time)",
+                 ""))
 
     # 2. scaling with N (n_sub = 1)
     for n_pop in (1, 10, 50, 200):
@@ -294,7 +305,8 @@ def run(quick: bool) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
 
     cpu, wall = (sum(x) for x in zip(*_CPU))
     note = (f"Population: N random k in [0, 1]^8 (seed {SEED}); {n_diverged} of the {N_MAIN} "
-            "leave the physical range and stop early. Target currents: the nominal MM trace, "
+            f"leave the physical range and stop early, {n_tripped} trip on overcurrent. "
+            "MM rows use the default SIMD kernel unless they say otherwise. Target currents: the nominal MM trace, "
             "unit weights. Over all timed in-process calls the process got "
             f"{100 * cpu / wall:.0f} % of its core (CPU time / wall time): where the wall time "
             "of a row is well above its CPU time, the core was shared with other work during "
