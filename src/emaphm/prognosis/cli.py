@@ -1,0 +1,456 @@
+"""Subcommands of the prognosis layer (registered by :func:`emaphm.cli.build_parser`).
+
+    emaphm history register ID [--unit h|cycles] [--description TEXT]
+    emaphm history add ID TRACE --at TIME          diagnose a trace and record it
+    emaphm history show ID [--plot FILE.png]       the inspections as a table (and figure)
+    emaphm history list                            the registered actuators
+    emaphm prognose ID [--threshold MODE=VALUE ...] [--plot FILE.png]
+    emaphm demo-degradation [--scenario NAME] [--synthetic]
+
+The store is ``--db PATH``, else ``$EMAPHM_HISTORY``, else ``emaphm-history.sqlite``
+in the working folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["register"]
+
+
+def _usage(msg: str) -> Exception:
+    from ..cli import UsageError
+
+    return UsageError(msg)
+
+
+def _db(args: argparse.Namespace) -> Path:
+    from .history import DEFAULT_DB
+
+    return Path(args.db or os.environ.get("EMAPHM_HISTORY") or DEFAULT_DB)
+
+
+def _plot_path(value: str | None) -> Path | None:
+    if not value:
+        return None
+    p = Path(value)
+    if p.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise _usage(f"--plot {value!r} must end in .png, .svg or .pdf")
+    if not p.parent.exists():
+        raise _usage(f"--plot {value!r}: folder {p.parent} does not exist; create it first")
+    return p
+
+
+def _fmt_time(x: float, unit: str) -> str:
+    if not math.isfinite(x):
+        return "not reached"
+    return f"{x:.0f} {unit}" if abs(x) >= 10 else f"{x:.2g} {unit}"
+
+
+# ----------------------------------------------------------------------------- history
+def cmd_register(args: argparse.Namespace) -> int:
+    from .history import HealthHistory
+
+    with HealthHistory(_db(args)) as h:
+        a = h.register(args.actuator, description=args.description, time_unit=args.unit)
+    print(f"registered {a.id} (time in {a.time_unit}) in {_db(args)}", file=sys.stderr)
+    return 0
+
+
+def cmd_list(args: argparse.Namespace) -> int:
+    from .history import HealthHistory
+
+    with HealthHistory(_db(args), create=False) as h:
+        acts = h.actuators()
+    if args.json:
+        print(json.dumps([a.to_dict() for a in acts]))
+        return 0
+    print(f"{'actuator':20s} {'unit':6s} {'inspections':>11s} {'last':>10s}  description")
+    for a in acts:
+        last = "-" if a.last_time is None else f"{a.last_time:g}"
+        print(f"{a.id:20s} {a.time_unit:6s} {a.n_inspections:11d} {last:>10s}  {a.description}")
+    return 0
+
+
+def cmd_add(args: argparse.Namespace) -> int:
+    from ..identify import parse_budget
+    from ..traces import read_trace
+    from .history import HealthHistory, inspect
+
+    budget: Any = args.budget
+    if isinstance(budget, str) and budget.strip().isdigit():
+        budget = int(budget)
+    try:
+        parse_budget(budget)
+    except ValueError as exc:
+        raise _usage(f"--budget: {exc}") from None
+    params = None
+    if args.params:
+        from ..params import load_params
+
+        params = load_params(args.params, partial=True)
+    trace_path = Path(args.trace)
+    with HealthHistory(_db(args), create=False) as h:
+        h.check_next(args.actuator, args.at)          # cheap checks before reading the trace
+        if not trace_path.exists():
+            raise _usage(f"trace file {trace_path} does not exist")
+        trace = read_trace(trace_path)
+        if not args.quiet:
+            print(f"diagnosing {trace_path} for {args.actuator} at {args.at:g} "
+                  f"({args.algorithm.upper()}, seed {args.seed}, spread: {args.spread})",
+                  file=sys.stderr)
+        ins, a = inspect(h, args.actuator, trace, args.at, seed=args.seed, method=args.spread,
+                         source=str(trace_path), params=params, algorithm=args.algorithm,
+                         budget=budget, n_runs=args.runs)
+        unit = h.actuator(args.actuator).time_unit
+    if args.json:
+        print(json.dumps(ins.to_dict()))
+        return 0
+    print(a.interval.table())
+    verdict = "HEALTHY" if ins.healthy else "FAULTY"
+    print(f"\nrecorded inspection of {args.actuator} at {ins.time:g} {unit}: {verdict}"
+          f" ({a.evaluations} evaluations, {a.elapsed_s:.1f} s)")
+    for f in (ins.diagnosis or {}).get("faults", []):
+        print(f"  - {f['mode']}: {f['reading']}")
+    return 0
+
+
+def _history_table(data: Any) -> str:
+    from ..faults import K_NAMES
+
+    unit = data.actuator.time_unit
+    head = f"{'time [' + unit + ']':>12s}  " + " ".join(f"{n[:9]:>9s}" for n in K_NAMES) + "  verdict"
+    lines = [head]
+    for ins in data.inspections:
+        row = f"{ins.time:12g}  " + " ".join(f"{x:9.4f}" for x in ins.k)
+        verdict = "-" if ins.healthy is None else ("healthy" if ins.healthy else "FAULTY: " + ", ".join(
+            sorted({f["mode"] for f in (ins.diagnosis or {}).get("faults", [])})))
+        lines.append(row + "  " + verdict)
+        lines.append(f"{'':12s}  " + " ".join(f"{'+-' + format(0.5 * (h - l), '.4f'):>9s}"
+                                               for l, h in zip(ins.k_lo, ins.k_hi)))
+    return "\n".join(lines)
+
+
+def cmd_show(args: argparse.Namespace) -> int:
+    from .history import HealthHistory
+    from .plots import plot_history
+
+    plot = _plot_path(args.plot)
+    with HealthHistory(_db(args), create=False) as h:
+        data = h.data(args.actuator)
+    if args.json:
+        print(json.dumps({"actuator": data.actuator.to_dict(),
+                          "inspections": [i.to_dict() for i in data.inspections]}))
+    else:
+        a = data.actuator
+        print(f"{a.id}{' (' + a.description + ')' if a.description else ''}: "
+              f"{data.n} inspections, time in {a.time_unit}")
+        if data.n:
+            print(_history_table(data))
+    if plot:
+        plot_history(data, path=plot)
+        print(f"wrote {plot}", file=sys.stderr)
+    return 0
+
+
+# ----------------------------------------------------------------------------- prognose
+def _thresholds(items: list[str] | None):
+    from .thresholds import DEFAULT_FAILURE_THRESHOLDS, parse_threshold
+
+    if not items:
+        return DEFAULT_FAILURE_THRESHOLDS
+    try:
+        return DEFAULT_FAILURE_THRESHOLDS.with_updates(dict(parse_threshold(x) for x in items))
+    except ValueError as exc:
+        raise _usage(f"--threshold: {exc}") from None
+
+
+def _prognosis_table(prog: Any) -> str:
+    unit = prog.time_unit
+    lines = [f"prognosis of {prog.actuator} at {prog.t_now:g} {unit} from {prog.times.size} "
+             f"inspections (seed {next(iter(prog.predictions.values())).seed})",
+             f"{'indicator':13s} {'now':>7s} {'threshold':>9s}  {'trend (Akaike weight)':24s} "
+             f"{'RUL median':>12s}  {'interval':>22s}"]
+    for name, p in prog.predictions.items():
+        top = max(p.weights, key=p.weights.get)
+        model = f"{top} ({p.weights[top]:.2f})"
+        far = 10.0 * max(float(prog.times[-1] - prog.times[0]), 1e-9)
+        if (not math.isfinite(p.median) and p.p_reach < 0.5) or p.median > far:
+            rul, iv = "no growth", f"P(within {far:.0f} {unit}) {p.p_fail_within(far):.2f}"
+        else:
+            rul = _fmt_time(p.median, unit)
+            iv = f"[{_fmt_time(p.lo, unit)}, {_fmt_time(p.hi, unit) if math.isfinite(p.hi) else 'inf'}]"
+        lines.append(f"{name:13s} {p.current:7.3f} {p.threshold:9.3f}  {model:24s} {rul:>12s}  {iv:>22s}")
+    first = prog.first
+    if math.isfinite(first.median):
+        lines.append(f"\nfirst to fail: {first.indicator}, median RUL {_fmt_time(first.median, unit)} "
+                     f"({first.level:.0%} interval {_fmt_time(first.lo, unit)} to "
+                     f"{_fmt_time(first.hi, unit)}; {first.p_failed:.0%} of the draws already past "
+                     "the threshold)")
+    else:
+        lines.append("\nno fault is predicted to reach its failure threshold")
+    return "\n".join(lines)
+
+
+def cmd_prognose(args: argparse.Namespace) -> int:
+    from .history import HealthHistory
+    from .plots import plot_prognosis
+    from .thresholds import INDICATORS
+    from .trends import MIN_INSPECTIONS, prognose
+
+    plot = _plot_path(args.plot)
+    thresholds = _thresholds(args.threshold)
+    if not 0 < args.level < 1:
+        raise _usage(f"--level must be in (0, 1), e.g. 0.9, got {args.level}")
+    with HealthHistory(_db(args), create=False) as h:
+        data = h.data(args.actuator)
+    if data.n < MIN_INSPECTIONS:
+        raise _usage(f"{args.actuator} has {data.n} inspection(s); a trend needs at least "
+                     f"{MIN_INSPECTIONS}: record more with emaphm history add")
+    indicators = args.indicator or INDICATORS
+    prog = prognose(data.times, data.K, seed=args.seed, thresholds=thresholds,
+                    indicators=indicators, t_now=args.at, actuator=data.actuator.id,
+                    time_unit=data.actuator.time_unit, level=args.level, selection=args.selection)
+    if args.json:
+        print(json.dumps(prog.to_dict()))
+    else:
+        print(_prognosis_table(prog))
+    if plot:
+        plot_prognosis(prog, path=plot, indicators=args.indicator)
+        print(f"wrote {plot}", file=sys.stderr)
+    return 0
+
+
+# ----------------------------------------------------------------------------- demo
+def cmd_demo(args: argparse.Namespace) -> int:
+    from .simulator import DEGRADATION_SCENARIOS
+
+    names = list(DEGRADATION_SCENARIOS) if args.scenario == "all" else [args.scenario]
+    for n in names:
+        if n not in DEGRADATION_SCENARIOS:
+            raise _usage(f"unknown degradation scenario {n!r}; choose one of "
+                         f"{', '.join(DEGRADATION_SCENARIOS)} or all")
+    if args.inspections < 3:
+        raise _usage("--inspections must be at least 3 (a trend needs three points)")
+    plot_dir = Path(args.plot_dir) if args.plot_dir else None
+    if plot_dir is not None and not plot_dir.is_dir():
+        raise _usage(f"--plot-dir {plot_dir} is not a folder; create it first")
+    results = []
+    with tempfile.TemporaryDirectory() as tmp:
+        db = Path(args.db) if args.db else Path(tmp) / "demo.sqlite"
+        for i, name in enumerate(names):
+            results.append(run_demo(name, db=db, n_inspections=args.inspections,
+                                    seed=args.seed + i, synthetic=args.synthetic,
+                                    budget=args.budget, plot_dir=plot_dir,
+                                    quiet=args.quiet or args.json))
+    if args.json:
+        print(json.dumps(results))
+    return 0
+
+
+def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
+             synthetic: bool = False, budget: Any = None, plot_dir: Path | None = None,
+             quiet: bool = False) -> dict:
+    """The whole loop on one degradation scenario: simulate, diagnose, record, predict.
+
+    Returns a JSON-able summary (per inspection: time, true and identified
+    indicator, RUL median and interval, true RUL; and the metrics).
+    """
+    from . import metrics
+    from .history import HealthHistory, inspect
+    from .plots import plot_alpha_lambda, plot_prognosis
+    from .simulator import (degradation_scenario, inspection_times, simulate_degradation,
+                            synthetic_k_history)
+    from .trends import MIN_INSPECTIONS, RULTrack, indicator_series, prognose
+
+    sc = degradation_scenario(name)
+    times = inspection_times(sc.eol, n_inspections)
+    out = print if not quiet else (lambda *a, **k: None)
+    out(f"\n== {name}: {sc.indicator} grows along a {sc.law.kind} law to {sc.threshold:g} at "
+        f"{sc.eol:g} h; {n_inspections} inspections, "
+        f"{'synthetic k (true + noise)' if synthetic else 'reference-model traces, identified'}")
+    actuator = f"demo-{name}-{seed}"
+    rows, preds = [], []
+    with HealthHistory(db) as h:
+        h.register(actuator, description=f"degradation demo {name}", time_unit="h")
+        if synthetic:
+            K = synthetic_k_history(sc, times, seed=seed)
+            for t, k in zip(times, K):
+                h.add(actuator, float(t), k, spread_method="synthetic")
+        else:
+            run = simulate_degradation(sc, times, seed=seed)
+            for t, tr in zip(times, run.traces):
+                inspect(h, actuator, tr, float(t), seed=seed, budget=budget,
+                        **({"options": {"pop_size": 30}} if isinstance(budget, int) and budget < 3000
+                           else {}))
+        data = h.data(actuator)
+    y = indicator_series(data.K)[sc.indicator]
+    k_true = sc.k_at(times)
+    y_true = indicator_series(k_true)[sc.indicator]
+    out(f"{'time h':>8s} {'true':>7s} {'ident':>7s} {'RUL median':>10s} {'90% interval':>16s} "
+        f"{'true RUL':>9s}")
+    last = None
+    for i in range(1, data.n + 1):
+        row = {"time": float(times[i - 1]), "true": float(y_true[i - 1]), "identified": float(y[i - 1]),
+               "rul_true": float(sc.eol - times[i - 1])}
+        if i >= MIN_INSPECTIONS:
+            prog = prognose(data.times[:i], data.K[:i], seed=seed, indicators=(sc.indicator,),
+                            actuator=actuator)
+            p = prog.predictions[sc.indicator]
+            preds.append(p)
+            last = prog
+            row.update(rul_median=p.median if math.isfinite(p.median) else None,
+                       rul_lo=p.lo if math.isfinite(p.lo) else None,
+                       rul_hi=p.hi if math.isfinite(p.hi) else None)
+            iv = f"[{p.lo:.0f}, {p.hi:.0f}]"
+            out(f"{row['time']:8.0f} {row['true']:7.4f} {row['identified']:7.4f} {p.median:10.0f} "
+                f"{iv:>16s} {row['rul_true']:9.0f}")
+        else:
+            out(f"{row['time']:8.0f} {row['true']:7.4f} {row['identified']:7.4f}")
+        rows.append(row)
+    track = RULTrack(indicator=sc.indicator, threshold=sc.threshold, level=preds[0].level,
+                     times=times[MIN_INSPECTIONS - 1:], n_used=np.arange(MIN_INSPECTIONS, data.n + 1),
+                     median=np.array([p.median for p in preds]), lo=np.array([p.lo for p in preds]),
+                     hi=np.array([p.hi for p in preds]),
+                     samples=np.stack([p.samples for p in preds]),
+                     models=tuple(p.model for p in preds))
+    rul_true = sc.eol - track.times
+    late = track.times >= 0.5 * sc.eol
+    al = metrics.alpha_lambda(track.times, track.samples, sc.eol, alpha=0.2)
+    summary = {
+        "scenario": sc.to_dict(), "synthetic": synthetic, "seed": seed, "rows": rows,
+        "coverage_from_midlife": metrics.coverage(rul_true[late], track.lo[late], track.hi[late])
+        if late.any() else None,
+        "relative_accuracy_last": float(metrics.relative_accuracy(rul_true[-1], track.median[-1])),
+        "alpha_lambda": al.to_dict(),
+        "prognostic_horizon": metrics.prognostic_horizon(track.times, track.samples, sc.eol,
+                                                         alpha=0.1),
+    }
+    out(f"coverage of the true RUL from mid-life: {summary['coverage_from_midlife']}, "
+        f"alpha-lambda (alpha 0.2, beta 0.5) passed at lambda "
+        f"{[float(x) for x in al.lambdas[al.passed]]}, prognostic horizon (alpha 0.1) "
+        f"{summary['prognostic_horizon']:.0f} h")
+    if plot_dir is not None and last is not None:
+        p1 = plot_dir / f"{name}-prognosis.png"
+        plot_prognosis(last, indicators=(sc.indicator,), eol_true={sc.indicator: sc.eol}, path=p1)
+        p2 = plot_dir / f"{name}-alpha-lambda.png"
+        plot_alpha_lambda([track], sc.eol, title=f"{name}: alpha-lambda", path=p2)
+        out(f"wrote {p1} and {p2}")
+    return summary
+
+
+# ----------------------------------------------------------------------------- wiring
+def _seed(value: str) -> int:
+    try:
+        s = int(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}") from None
+    if s < 0:
+        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}")
+    return s
+
+
+def _time(value: str) -> float:
+    try:
+        t = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"time must be a number (flight hours or cycles), got {value!r}") from None
+    if not math.isfinite(t) or t < 0:
+        raise argparse.ArgumentTypeError(f"time must be a finite number >= 0, got {value!r}")
+    return t
+
+
+def _db_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--db", help="health history database (default $EMAPHM_HISTORY or "
+                                "emaphm-history.sqlite)")
+
+
+def register(subparsers: Any) -> None:
+    """Add ``history``, ``prognose`` and ``demo-degradation`` to the ``emaphm`` parser."""
+    from .simulator import DEGRADATION_SCENARIOS
+    from .thresholds import INDICATORS
+    from .trends import SELECTION_RULES
+    from .uncertainty import SPREAD_METHODS
+
+    hp = subparsers.add_parser("history", help="health history of actuators: register, add, show")
+    hs = hp.add_subparsers(dest="history_command", required=True)
+
+    r = hs.add_parser("register", help="register an actuator before its first inspection")
+    r.add_argument("actuator", help="actuator id, e.g. EMA-0042")
+    r.add_argument("--description", default="", help="free text, e.g. 'left aileron, A320 MSN 1234'")
+    r.add_argument("--unit", choices=("h", "cycles"), default="h",
+                   help="time unit of its inspections: flight hours (default) or cycles")
+    _db_arg(r)
+    r.set_defaults(func=cmd_register)
+
+    a = hs.add_parser("add", help="diagnose a trace and record it as an inspection")
+    a.add_argument("actuator")
+    a.add_argument("trace", help="trace file (.csv or .parquet)")
+    a.add_argument("--at", type=_time, required=True,
+                   help="time of the inspection (flight hours or cycles), after the last one")
+    a.add_argument("--algorithm", default="pso", choices=("pso", "de", "gwo"))
+    a.add_argument("--seed", type=_seed, default=0, help="seed of the optimizer (default 0)")
+    a.add_argument("--budget", help="evaluations (e.g. 5000) or seconds (e.g. 10s); default: "
+                                    "the paper's stopping rules")
+    a.add_argument("--spread", choices=SPREAD_METHODS, default="population",
+                   help="interval of k: population (free, default), seeds or bootstrap")
+    a.add_argument("--runs", type=int, default=5, help="identifications for seeds/bootstrap (default 5)")
+    a.add_argument("--params", help="actuator parameters TOML")
+    a.add_argument("--json", action="store_true")
+    a.add_argument("--quiet", action="store_true")
+    _db_arg(a)
+    a.set_defaults(func=cmd_add)
+
+    s = hs.add_parser("show", help="the inspections of an actuator (table, optional figure)")
+    s.add_argument("actuator")
+    s.add_argument("--plot", help="write each k component over time (.png/.svg/.pdf)")
+    s.add_argument("--json", action="store_true")
+    _db_arg(s)
+    s.set_defaults(func=cmd_show)
+
+    ls = hs.add_parser("list", help="the registered actuators")
+    ls.add_argument("--json", action="store_true")
+    _db_arg(ls)
+    ls.set_defaults(func=cmd_list)
+
+    p = subparsers.add_parser("prognose", help="fault trends and remaining useful life of an actuator")
+    p.add_argument("actuator")
+    p.add_argument("--threshold", action="append", metavar="MODE=VALUE",
+                   help="failure threshold of a fault mode (repeatable), e.g. friction=0.4; "
+                        "defaults friction 0.5, backlash 0.5, short_circuit 0.3, "
+                        "eccentricity 0.5, gain_drift 0.25")
+    p.add_argument("--indicator", action="append", choices=INDICATORS,
+                   help="predict only these health indicators (repeatable)")
+    p.add_argument("--plot", help="write trend, threshold and prediction cone (.png/.svg/.pdf)")
+    p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo draws (default 0)")
+    p.add_argument("--level", type=float, default=0.9, help="probability of the RUL interval (default 0.9)")
+    p.add_argument("--selection", choices=SELECTION_RULES, default="average",
+                   help="mix the trend models by Akaike weight (average, default) or keep the best (aicc)")
+    p.add_argument("--at", type=_time, help="count the RUL from this time (default: the last inspection)")
+    p.add_argument("--json", action="store_true")
+    _db_arg(p)
+    p.set_defaults(func=cmd_prognose)
+
+    d = subparsers.add_parser("demo-degradation",
+                              help="simulate a growing fault, diagnose, record and predict, end to end")
+    d.add_argument("--scenario", default="friction-growth",
+                   help=f"one of {', '.join(DEGRADATION_SCENARIOS)}, or all")
+    d.add_argument("--inspections", type=int, default=8, help="inspections over the life (default 8)")
+    d.add_argument("--seed", type=_seed, default=0)
+    d.add_argument("--synthetic", action="store_true",
+                   help="skip the identifications: true k plus identification-level noise")
+    d.add_argument("--budget", type=int, help="evaluations per identification (default: the paper's rules)")
+    d.add_argument("--db", help="keep the demo's history in this database (default: a temporary one)")
+    d.add_argument("--plot-dir", help="write the prognosis and alpha-lambda figures here")
+    d.add_argument("--json", action="store_true")
+    d.add_argument("--quiet", action="store_true")
+    d.set_defaults(func=cmd_demo)

@@ -1,0 +1,293 @@
+"""The health-history store (:mod:`emaphm.prognosis.history`).
+
+What a maintenance engineer relies on: every committed inspection survives a crash
+(SIGKILL of the writer between or during inspections, an exception inside the
+transaction); an inspection of an unknown actuator, a time that does not move
+forward, a trace already recorded or a trace that fails validation is refused with
+a message that says what to do, and leaves the history exactly as it was. Files go
+to ``tmp_path`` only.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+
+import numpy as np
+import pytest
+
+from emaphm.cli import EXIT_USAGE, main
+from emaphm.faults import K_NOMINAL
+from emaphm.prognosis import history as hist
+from emaphm.prognosis.history import (DuplicateInspectionError, HealthHistory, HistoryError,
+                                      TimeOrderError, UnknownActuatorError, inspect,
+                                      trace_fingerprint)
+from emaphm.simulate import simulate
+from emaphm.traces import Trace, TraceError, write_trace
+
+K1 = np.array([0.1, 0, 0, 0, 0, 0, 0.5, 0.5])
+
+
+def _snapshot(h: HealthHistory):
+    """Everything a user can read from the store."""
+    return ([a.to_dict() for a in h.actuators()],
+            {a.id: [i.to_dict() for i in h.inspections(a.id)] for a in h.actuators()})
+
+
+@pytest.fixture()
+def store(tmp_path):
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-1", description="left aileron")
+        h.add("EMA-1", 10.0, K1, fingerprint="f10")
+        h.add("EMA-1", 20.0, K1 + [0.01, 0, 0, 0, 0, 0, 0, 0], fingerprint="f20")
+        yield h
+
+
+def test_round_trip_and_arrays(store):
+    a = store.actuator("EMA-1")
+    assert (a.n_inspections, a.last_time, a.time_unit, a.description) == (2, 20.0, "h", "left aileron")
+    data = store.data("EMA-1")
+    assert data.times.tolist() == [10.0, 20.0]
+    assert data.K.shape == (2, 8) and data.K[1, 0] == pytest.approx(0.11)
+    np.testing.assert_array_equal(data.K_lo, data.K)          # no interval given: k itself
+    assert store.journal_mode == "wal"
+    assert store.integrity_check() == "ok"
+
+
+def test_interval_and_diagnosis_are_stored(store):
+    lo, hi = K1 - 0.005, K1 + 0.005
+    ins = store.add("EMA-1", 30.0, K1, k_lo=np.clip(lo, 0, 1), k_hi=hi, spread_method="population",
+                    level=0.9, diagnosis={"healthy": False, "faults": [{"mode": "friction"}]},
+                    algorithm="pso", seed=3, fitness=1e-4, evaluations=100, source="x.csv",
+                    extra={"note": "gate check"})
+    back = store.inspections("EMA-1")[-1]
+    assert back.to_dict() == ins.to_dict()
+    assert back.healthy is False and back.extra == {"note": "gate check"}
+    np.testing.assert_allclose(back.k_hi, hi)
+
+
+@pytest.mark.parametrize("bad, error, match", [
+    (lambda h: h.add("EMA-9", 30.0, K1), UnknownActuatorError, "emaphm history register EMA-9"),
+    (lambda h: h.add("EMA-1", 20.0, K1), TimeOrderError, "is not after its last inspection at 20"),
+    (lambda h: h.add("EMA-1", 15.0, K1), TimeOrderError, "times must increase"),
+    (lambda h: h.add("EMA-1", -1.0, K1), HistoryError, "finite number >= 0"),
+    (lambda h: h.add("EMA-1", float("nan"), K1), HistoryError, "finite number >= 0"),
+    (lambda h: h.add("EMA-1", 30.0, K1, fingerprint="f10"), DuplicateInspectionError,
+     "already recorded for 'EMA-1' at 10"),
+    (lambda h: h.add("EMA-1", 30.0, [1.5, 0, 0, 0, 0, 0, 0.5, 0.5]), HistoryError, "outside [0, 1]"),
+    (lambda h: h.add("EMA-1", 30.0, K1, k_lo=K1 + 0.1), HistoryError, "must contain k"),
+    (lambda h: h.add("EMA-1", 30.0, K1, extra={"x": object()}), HistoryError, "not JSON"),
+    (lambda h: h.register("EMA-1"), HistoryError, "already registered"),
+    (lambda h: h.register("bad id!"), HistoryError, "letters, digits"),
+    (lambda h: h.register("EMA-2", time_unit="days"), HistoryError, "flight hours or cycles"),
+])
+def test_refused_operations_leave_the_store_unchanged(store, bad, error, match):
+    before = _snapshot(store)
+    with pytest.raises(error, match=match.replace("[", r"\[").replace("]", r"\]")):
+        bad(store)
+    assert _snapshot(store) == before
+    assert issubclass(error, ValueError)      # the CLI turns it into exit status 2
+    store.add("EMA-1", 30.0, K1)              # and the store still takes a good inspection
+    assert store.actuator("EMA-1").n_inspections == 3
+
+
+def test_schema_refuses_time_going_backwards_even_bypassing_python(store):
+    import sqlite3
+
+    with pytest.raises(sqlite3.IntegrityError, match="after the last inspection"):
+        store._con.execute("INSERT INTO inspections (actuator, time, k, k_lo, k_hi, recorded_utc) "
+                           "VALUES ('EMA-1', 5, '[]', '[]', '[]', 'now')")
+    with pytest.raises(sqlite3.IntegrityError):
+        store._con.execute("INSERT INTO inspections (actuator, time, k, k_lo, k_hi, recorded_utc) "
+                           "VALUES ('nobody', 50, '[]', '[]', '[]', 'now')")
+    assert store.actuator("EMA-1").n_inspections == 2
+
+
+def test_exception_inside_the_transaction_rolls_back(store, monkeypatch):
+    before = _snapshot(store)
+
+    def boom(self, con, actuator_id):
+        raise RuntimeError("power cut between the two statements")
+
+    monkeypatch.setattr(HealthHistory, "_touch", boom)
+    with pytest.raises(RuntimeError, match="power cut"):
+        store.add("EMA-1", 30.0, K1)
+    assert _snapshot(store) == before
+    monkeypatch.undo()
+    store.add("EMA-1", 30.0, K1)
+    assert store.data("EMA-1").times.tolist() == [10.0, 20.0, 30.0]
+
+
+_WRITER = textwrap.dedent("""
+    import sys
+    import numpy as np
+    from emaphm.prognosis.history import HealthHistory
+    h = HealthHistory(sys.argv[1])
+    h.register("EMA-K")
+    k = np.array([0.0, 0, 0, 0, 0, 0, 0.5, 0.5])
+    i = 0
+    while True:
+        i += 1
+        k[0] = min(0.001 * i, 1.0)
+        h.add("EMA-K", float(i), k, extra={"pad": "x" * 2000})
+        print(i, flush=True)
+""")
+
+
+def test_sigkill_between_inspections_loses_nothing_committed(tmp_path):
+    db = tmp_path / "crash.sqlite"
+    script = tmp_path / "writer.py"
+    script.write_text(_WRITER)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.Popen([sys.executable, str(script), str(db)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env)
+    committed = 0
+    deadline = time.monotonic() + 60
+    try:
+        while committed < 40 and time.monotonic() < deadline:
+            line = proc.stdout.readline()
+            if not line:
+                break
+            committed = int(line)
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)        # mid-stream: between or during an inspection
+        proc.wait()
+    assert committed >= 40, proc.stderr.read()
+    with HealthHistory(db, create=False) as h:
+        assert h.integrity_check() == "ok"
+        times = h.data("EMA-K").times
+        # every inspection reported as committed is there, at most one more got through
+        assert committed <= times.size <= committed + 1
+        assert times.tolist() == [float(i) for i in range(1, times.size + 1)]
+        h.add("EMA-K", float(times.size + 1), K1)   # and the store goes on
+
+
+def test_opening(tmp_path):
+    with pytest.raises(HistoryError, match="no health history .* register an actuator first"):
+        HealthHistory(tmp_path / "missing.sqlite", create=False)
+    assert not (tmp_path / "missing.sqlite").exists()
+    with pytest.raises(HistoryError, match="does not exist; create it first"):
+        HealthHistory(tmp_path / "nope" / "h.sqlite")
+    import sqlite3
+
+    other = tmp_path / "other.sqlite"
+    con = sqlite3.connect(other)
+    con.execute("CREATE TABLE t (x)")
+    con.commit()
+    con.close()
+    with pytest.raises(HistoryError, match="not an emaphm health history"):
+        HealthHistory(other)
+    (tmp_path / "junk.sqlite").write_bytes(b"not a database at all" * 100)
+    with pytest.raises(HistoryError, match="not an emaphm health history"):
+        HealthHistory(tmp_path / "junk.sqlite")
+    # two handles on one file see each other's commits
+    with HealthHistory(tmp_path / "a.sqlite") as h1, HealthHistory(tmp_path / "a.sqlite") as h2:
+        h1.register("EMA-1")
+        h2.add("EMA-1", 1.0, K1)
+        assert h1.actuator("EMA-1").n_inspections == 1
+
+
+# ----------------------------------------------------------------------------- inspect()
+@pytest.fixture(scope="module")
+def mm_trace():
+    """A fast monitoring-model trace (the checks below never reach an identification)."""
+    return simulate(K1, model="monitoring")
+
+
+def _no_identification(monkeypatch):
+    import emaphm.prognosis.uncertainty as unc
+
+    def fail(*a, **k):
+        raise AssertionError("identification must not run for a refused inspection")
+
+    monkeypatch.setattr(unc, "identify_with_spread", fail)
+
+
+def test_inspect_refuses_before_identifying(store, mm_trace, monkeypatch):
+    _no_identification(monkeypatch)
+    before = _snapshot(store)
+    with pytest.raises(UnknownActuatorError, match="register it first"):
+        inspect(store, "EMA-7", mm_trace, 30.0, seed=0)
+    with pytest.raises(TimeOrderError):
+        inspect(store, "EMA-1", mm_trace, 20.0, seed=0)
+    t = mm_trace.t
+    bad = Trace(t=t, theta_ref=mm_trace.theta_ref, theta_m=mm_trace.theta_m, omega_m=mm_trace.omega_m,
+                i_abc=np.where(t[:, None] > 0.2, np.nan, mm_trace.i_abc))
+    with pytest.raises(TraceError, match="non-finite"):
+        inspect(store, "EMA-1", bad, 30.0, seed=0)
+    assert _snapshot(store) == before
+
+
+def test_fingerprint_is_content_based(mm_trace, tmp_path):
+    from emaphm.traces import read_trace
+
+    fp = trace_fingerprint(mm_trace)
+    p = write_trace(mm_trace, tmp_path / "x.parquet")
+    assert trace_fingerprint(read_trace(p, validate=False)) == fp
+    assert trace_fingerprint(mm_trace.with_meta(note="other meta")) == fp
+    other = simulate(K_NOMINAL, model="monitoring")
+    assert trace_fingerprint(other) != fp
+
+
+# ----------------------------------------------------------------------------- CLI
+def _run(argv, capsys):
+    rc = main(argv)
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def test_cli_errors_leave_history_unchanged(tmp_path, capsys, mm_trace, monkeypatch):
+    _no_identification(monkeypatch)
+    db = str(tmp_path / "h.sqlite")
+    good = write_trace(mm_trace, tmp_path / "good.csv")
+    short = write_trace(Trace(t=mm_trace.t[:20], theta_ref=mm_trace.theta_ref[:20],
+                              theta_m=mm_trace.theta_m[:20], omega_m=mm_trace.omega_m[:20],
+                              i_abc=mm_trace.i_abc[:20]), tmp_path / "short.csv")
+    rc, _, err = _run(["history", "add", "EMA-1", str(good), "--at", "5", "--db", db], capsys)
+    assert rc == EXIT_USAGE and "no health history" in err
+    assert _run(["history", "register", "EMA-1", "--db", db, "--unit", "cycles"], capsys)[0] == 0
+    with HealthHistory(db) as h:
+        h.add("EMA-1", 100.0, K1, fingerprint="x")
+        before = _snapshot(h)
+    cases = [
+        (["history", "add", "EMA-2", str(good), "--at", "200"], "register it first"),
+        (["history", "add", "EMA-1", str(good), "--at", "50"], "not after its last inspection"),
+        (["history", "add", "EMA-1", str(short), "--at", "200"], "too short"),
+        (["history", "add", "EMA-1", str(tmp_path / "nope.csv"), "--at", "200"], "does not exist"),
+        (["history", "register", "EMA-1"], "already registered"),
+        (["history", "show", "EMA-3"], "not registered"),
+        (["prognose", "EMA-1"], "a trend needs at least 3"),
+        (["prognose", "EMA-1", "--threshold", "friction"], "MODE=VALUE"),
+        (["prognose", "EMA-1", "--threshold", "wear=0.3"], "unknown fault mode"),
+    ]
+    for argv, match in cases:
+        rc, _, err = _run(argv + ["--db", db], capsys)
+        assert rc == EXIT_USAGE, (argv, err)
+        assert match in err, (argv, err)
+        assert err.startswith("emaphm ") and "error:" in err
+    with HealthHistory(db) as h:
+        assert _snapshot(h) == before
+
+
+def test_cli_show_and_list(store, capsys, tmp_path):
+    db = str(store.path)
+    rc, out, _ = _run(["history", "show", "EMA-1", "--db", db, "--plot", str(tmp_path / "h.png")], capsys)
+    assert rc == 0 and "2 inspections" in out and "friction" in out
+    assert (tmp_path / "h.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    rc, out, _ = _run(["history", "list", "--db", db], capsys)
+    assert rc == 0 and "EMA-1" in out and "left aileron" in out
+    rc, out, _ = _run(["history", "show", "EMA-1", "--db", db, "--json"], capsys)
+    import json
+
+    assert len(json.loads(out)["inspections"]) == 2
+
+
+def test_default_db_from_environment(tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("EMAPHM_HISTORY", str(tmp_path / "env.sqlite"))
+    assert _run(["history", "register", "EMA-E"], capsys)[0] == 0
+    assert (tmp_path / "env.sqlite").exists()
+    assert hist.DEFAULT_DB == "emaphm-history.sqlite"
