@@ -104,9 +104,7 @@ def test_spread_methods(run):
     np.testing.assert_allclose(res["seeds"].k, np.median(ks, axis=0))
     assert np.all(res["seeds"].interval.lo <= ks.min(axis=0) + 1e-12)
     # an identification far above the trace's noise level is run again with a new seed
-    from emaphm.prognosis.uncertainty import noise_fitness
-
-    assert 0.3 < res["population"].identification.fitness / noise_fitness(obj) < 3.0
+    assert 0.3 < res["population"].identification.fitness / obj.noise_floor() < 3.0
     weak = identify_with_spread(trace, seed=1, budget=20, options={"pop_size": 10}, polish=False,
                                 objective=obj, retries=1)
     assert weak.interval.details["retries"] == 1 and len(weak.runs) == 1

@@ -69,7 +69,10 @@ class Identification:
     ``error_pct`` (Eq. 9) where the trace carries its true fault vector (a
     simulation). ``k_raw``, ``fitness_raw``, ``error_pct_raw``: the
     metaheuristic's own result before the polish (equal to the final ones
-    without polish).
+    without polish). ``restarts``: runs repeated because the fit was far above
+    ``noise_floor`` (the Eq. 4 value of a perfect model on this trace);
+    ``suspect``: still so after them (a wrong basin, or a model that does not
+    describe this actuator). ``evaluations`` and ``polish_s`` count every run.
     """
 
     algorithm: str
@@ -92,6 +95,9 @@ class Identification:
     error_pct_raw: float | None = None
     polish_evaluations: int = 0
     polish_s: float = 0.0
+    restarts: int = 0
+    noise_floor: float = 0.0
+    suspect: bool = False
 
     @property
     def evals_per_s(self) -> float:
@@ -116,6 +122,9 @@ class Identification:
             "history": [float(x) for x in self.history],
             "polish_evaluations": int(self.polish_evaluations),
             "polish_s": float(self.polish_s),
+            "restarts": int(self.restarts),
+            "noise_floor": float(self.noise_floor),
+            "suspect": bool(self.suspect),
             "k_raw": None if self.k_raw is None else [float(x) for x in self.k_raw],
             "fitness_raw": self.fitness_raw,
         }
@@ -125,6 +134,9 @@ class Identification:
             d["error_pct_raw"] = self.error_pct_raw
         return d
 
+
+#: Restarts after a fit far above the noise floor, when no budget is given.
+DEFAULT_RESTARTS = 2
 
 #: Largest number of evaluations the polish may spend (it usually needs 150-500).
 POLISH_MAX_EVALUATIONS = 2000
@@ -157,6 +169,40 @@ def _jsonable(value: Any) -> Any:
     return json.loads(json.dumps(value, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o)))
 
 
+@dataclass(frozen=True)
+class _Run:
+    """One metaheuristic run and its polish, in search-space coordinates."""
+
+    res: OptimizeResult
+    z: np.ndarray
+    fun: float
+    history: np.ndarray
+    polish_evaluations: int
+    polish_s: float
+
+
+def _search(fitness: Callable[[np.ndarray], np.ndarray], optimizer: Any, seed: int,
+            termination: Any, callback: Any, polish: bool, t0: float) -> _Run:
+    box = (K_LOWER, K_UPPER)
+    res: OptimizeResult = minimize(fitness, box, optimizer, seed=seed, termination=termination,
+                                   callback=callback)
+    z, fun, history = res.x, float(res.fun), np.asarray(res.history, dtype=float)
+    # the polish is charged to the budget and skipped when a callback stopped the run
+    evals = _remaining_evaluations(termination, res.nfev, POLISH_MAX_EVALUATIONS)
+    seconds = _remaining_seconds(termination, time.perf_counter() - t0)
+    if polish and np.isfinite(fun) and res.reason != "callback" and evals >= 2 * z.size \
+            and seconds > 0:
+        pol = compass_search(fitness, z, box, f0=fun, max_evals=evals, max_seconds=seconds)
+        return _Run(res, pol.x, float(pol.fun), np.concatenate([history, pol.history[1:]]),
+                    pol.nfev, pol.elapsed_s)
+    return _Run(res, z, fun, history, 0, 0.0)
+
+
+def _restart_seeds(seed: int, n: int) -> list[int]:
+    """Seeds of the restarts, spawned from the identification's seed."""
+    return [int(s.generate_state(1)[0] % 2**31) for s in np.random.SeedSequence([seed, 1]).spawn(n)]
+
+
 def _k_true(trace: Trace) -> np.ndarray | None:
     k = trace.meta.get("k") if isinstance(trace.meta, dict) else None
     if k is None:
@@ -170,7 +216,8 @@ def _k_true(trace: Trace) -> np.ndarray | None:
 def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
              budget: Any = None, params: ActuatorParams | None = None,
              options: dict[str, Any] | None = None, n_sub: int = 1, mode: str = "phases",
-             polish: bool = True, search: str = "ecc-xy",
+             polish: bool = True, search: str = "ecc-xy", restarts: int | None = None,
+             suspect_ratio: float = 5.0,
              callback: Callable[[Any], bool | None] | None = None,
              objective: Eq4Objective | None = None) -> Identification:
     """Identify the fault vector of ``trace``.
@@ -202,6 +249,14 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     search
         Search space (:mod:`emaphm.search`): ``"ecc-xy"`` (default, Cartesian
         eccentricity) or ``"k"`` (the paper's, k itself).
+    restarts, suspect_ratio
+        A fit whose Eq. 4 value exceeds ``suspect_ratio`` times the trace's noise
+        floor (:meth:`Eq4Objective.noise_floor`, the value a perfect model would
+        reach) ended in a wrong basin; it is run again, up to ``restarts`` times,
+        with seeds spawned from ``seed``, and the best run is kept. ``None``: 2
+        restarts without an explicit ``budget``, none with one (a budget caps the
+        evaluations); an explicit number applies in any case, each run with the
+        budget. A result still above the limit is flagged ``suspect``.
     callback
         Called with the optimizer state after every iteration; True stops.
     objective
@@ -212,6 +267,13 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
                          f"{', '.join(sorted(ALL_ALGORITHMS))}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    if restarts is None:
+        restarts = DEFAULT_RESTARTS if budget is None else 0
+    if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) or restarts < 0:
+        raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
+    if isinstance(suspect_ratio, bool) or not isinstance(suspect_ratio, (int, float)) \
+            or not suspect_ratio > 1:
+        raise ValueError(f"suspect_ratio must be a number > 1, got {suspect_ratio!r}")
     to_k(np.zeros((1, 8)), search)       # validates the search space name
     termination = parse_budget(budget)
     optimizer = get_optimizer(algorithm, **(options or {}))
@@ -221,24 +283,27 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     k0 = objective.stats.kernel_s
     e0 = objective.stats.diverged
     t0 = time.perf_counter()
+
     def fitness(Z: np.ndarray) -> np.ndarray:
         return objective(to_k(Z, search))
 
-    box = (K_LOWER, K_UPPER)
-    res: OptimizeResult = minimize(fitness, box, optimizer, seed=int(seed),
-                                   termination=termination, callback=callback)
-    z, fit, n_polish, history = res.x, float(res.fun), 0, np.asarray(res.history, dtype=float)
-    k_raw = np.clip(to_k(z, search)[0], 0.0, 1.0)
-    polish_s = 0.0
-    # the polish is charged to the budget and skipped when a callback stopped the run
-    polish_evals = _remaining_evaluations(termination, res.nfev, POLISH_MAX_EVALUATIONS)
-    polish_time = _remaining_seconds(termination, time.perf_counter() - t0)
-    if (polish and np.isfinite(res.fun) and res.reason != "callback"
-            and polish_evals >= 2 * z.size and polish_time > 0):
-        pol = compass_search(fitness, z, box, f0=float(res.fun), max_evals=polish_evals,
-                             max_seconds=polish_time)
-        z, fit, n_polish, polish_s = pol.x, float(pol.fun), pol.nfev, pol.elapsed_s
-        history = np.concatenate([history, pol.history[1:]])
+    def run(run_seed: int) -> _Run:
+        return _search(fitness, optimizer, run_seed, termination, callback, polish, t0)
+
+    best = run(int(seed))
+    runs = [best]
+    # a fit far above the trace's noise floor ended in a wrong basin: run again with
+    # seeds spawned from ``seed`` (unless a callback asked to stop)
+    floor = objective.noise_floor()
+    limit = suspect_ratio * floor if floor > 0 else np.inf
+    for run_seed in _restart_seeds(int(seed), int(restarts)):
+        if best.fun <= limit or runs[-1].res.reason == "callback":
+            break
+        runs.append(run(run_seed))
+        if runs[-1].fun < best.fun:
+            best = runs[-1]
+    z, fit, history, res = best.z, best.fun, best.history, best.res
+    k_raw = np.clip(to_k(res.x, search)[0], 0.0, 1.0)
     k = np.clip(to_k(z, search)[0], 0.0, 1.0)
     elapsed = time.perf_counter() - t0
     pop = objective.model.simulate(k)
@@ -248,7 +313,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
                               trace.meta.get("scenario") or trace.meta.get("source")})
     k_true = _k_true(trace)
     return Identification(
-        algorithm=algorithm, seed=int(seed), k=k, fitness=fit, evaluations=int(res.nfev) + n_polish,
+        algorithm=algorithm, seed=int(seed), k=k, fitness=fit,
+        evaluations=sum(r.res.nfev + r.polish_evaluations for r in runs),
         iterations=int(res.nit), elapsed_s=elapsed, kernel_s=objective.stats.kernel_s - k0,
         history=history, reason=res.reason, model_trace=model_trace,
         k_true=k_true, error_pct=None if k_true is None else float(error_pct(k, k_true)),
@@ -258,6 +324,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
                  "budget": None if budget is None else str(budget)},
         k_raw=k_raw, fitness_raw=float(res.fun),
         error_pct_raw=None if k_true is None else float(error_pct(k_raw, k_true)),
-        polish_evaluations=n_polish, polish_s=polish_s,
+        polish_evaluations=best.polish_evaluations, polish_s=sum(r.polish_s for r in runs),
+        restarts=len(runs) - 1, noise_floor=floor, suspect=bool(fit > limit),
     )
 

@@ -37,6 +37,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from emaphm import __version__
+from emaphm._sqlite import enable_wal
 
 from .spec import CampaignSpec, Run, SpecError
 
@@ -456,7 +457,7 @@ def _check_schema(meta: dict[str, str], p: Path) -> None:
 
 
 def _create(conn: sqlite3.Connection, spec: CampaignSpec) -> None:
-    conn.execute("PRAGMA journal_mode = WAL")
+    enable_wal(conn)
     conn.execute("BEGIN IMMEDIATE")
     try:
         for stmt in filter(None, (s.strip() for s in _SCHEMA.split(";"))):

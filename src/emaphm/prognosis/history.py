@@ -48,6 +48,7 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
+from .._sqlite import enable_wal
 from ..faults import as_k
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError",
@@ -251,7 +252,7 @@ class HealthHistory:
         try:
             self._con = sqlite3.connect(str(self.path), timeout=timeout_s, isolation_level=None)
             self._con.execute("PRAGMA foreign_keys = ON")
-            mode = self._con.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            mode = enable_wal(self._con, timeout_s)
             self._con.execute("PRAGMA synchronous = FULL")
             version = self._con.execute("PRAGMA user_version").fetchone()[0]
         except sqlite3.DatabaseError as exc:

@@ -62,7 +62,7 @@ from ..faults import K_NAMES
 from ..fitness import Eq4Objective, eq4_weights
 
 __all__ = ["SPREAD_METHODS", "KInterval", "Assessment", "identify_with_spread",
-           "population_interval", "effective_samples", "noise_fitness",
+           "population_interval", "effective_samples",
            "IDENTIFICATION_ERROR_P90"]
 
 SPREAD_METHODS = ("population", "seeds", "bootstrap")
@@ -182,17 +182,6 @@ def effective_samples(residual: np.ndarray, max_lag: int | None = None) -> tuple
     return float(n * c / tau), float(tau)
 
 
-def noise_fitness(objective: Any) -> float:
-    """The Eq. 4 value a perfect model would reach on this trace: the measured currents'
-    white-noise variance (robust, from second differences: ``1.4826 MAD(d2) / sqrt(6)``
-    per phase) times the sum of the Eq. 4 weights. An identification whose fitness is
-    many times this value has not found the actuator's k (a wrong basin)."""
-    i = np.asarray(objective.target, dtype=float)
-    d2 = i[2:] - 2.0 * i[1:-1] + i[:-2]
-    sigma = 1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / math.sqrt(6.0)
-    return float(np.sum(np.asarray(objective.weights) * sigma ** 2))
-
-
 def _residual(objective: Any, k: np.ndarray) -> np.ndarray:
     """Weighted residual sqrt(w) (model - measured) at ``k`` on the model grid (n, c)."""
     pop = objective.model.simulate(k)
@@ -237,14 +226,6 @@ def _check(method: str, level: float, n_runs: int, seed: Any) -> None:
                          f"explicit seed), got {seed!r}")
 
 
-def _check_retry(suspect_ratio: Any, retries: Any) -> None:
-    if isinstance(suspect_ratio, bool) or not isinstance(suspect_ratio, (int, float)) \
-            or not suspect_ratio > 1:
-        raise ValueError(f"suspect_ratio must be a number > 1, got {suspect_ratio!r}")
-    if isinstance(retries, bool) or not isinstance(retries, (int, np.integer)) or retries < 0:
-        raise ValueError(f"retries must be an integer >= 0, got {retries!r}")
-
-
 def identify_with_spread(trace: Any, *, seed: int, method: str = "population", level: float = 0.9,
                          n_runs: int = 5, algorithm: str = "pso", budget: Any = None,
                          options: dict | None = None, params: Any = None,
@@ -258,11 +239,12 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     nominal probability of the interval; ``error_floor`` (scalar or 8 values,
     default :data:`IDENTIFICATION_ERROR_P90`) the least half-width of each
     component's interval. An identification whose fitness exceeds
-    ``suspect_ratio`` times :func:`noise_fitness` is *suspect* (the optimizer
+    ``suspect_ratio`` times the trace's noise floor
+    (:meth:`emaphm.fitness.Eq4Objective.noise_floor`) is *suspect* (the optimizer
     ended in a wrong basin: with the default budget this happened to 2 of 90
     inspections of the benchmark, at Eq. 9 errors above 70 %, fitness 700 times
-    the noise level); it is run again with up to ``retries`` more seeds
-    (spawned from ``seed``), and the best run is kept. ``details`` records
+    the noise level); :func:`emaphm.identify.identify` runs it again with up to
+    ``retries`` more seeds (spawned from ``seed``) and keeps the best run. ``details`` records
     ``fitness_ratio``, ``retries`` and ``suspect`` (still suspect after the
     retries). ``algorithm``, ``budget``,
     ``options``, ``params`` and other keyword arguments go to
@@ -271,7 +253,6 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     from ..identify import identify
 
     _check(method, level, n_runs, seed)
-    _check_retry(suspect_ratio, retries)
     floor = np.broadcast_to(np.asarray(IDENTIFICATION_ERROR_P90 if error_floor is None
                                        else error_floor, dtype=float), (8,))
     if np.any(~np.isfinite(floor)) or np.any(floor < 0):
@@ -282,23 +263,14 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     run_seeds = [int(s.generate_state(1)[0] % (2 ** 31))
                  for s in np.random.SeedSequence(int(seed)).spawn(n_runs + 1)]
 
-    def run(s: int, obj: Any) -> Any:
+    def run(s: int, obj: Any, restarts: int = 0) -> Any:
         return identify(trace, algorithm, seed=s, budget=budget, params=params, options=options,
-                        objective=obj, **kwargs)
+                        objective=obj, restarts=restarts, suspect_ratio=suspect_ratio, **kwargs)
 
-    f_noise = noise_fitness(base)
+    first = run(int(seed), rec, retries)          # identify retries a wrong basin itself
+    f_noise = first.noise_floor
     limit = suspect_ratio * f_noise if f_noise > 0 else math.inf
-    retry_seeds = [int(s.generate_state(1)[0] % (2 ** 31))
-                   for s in np.random.SeedSequence([int(seed), 1]).spawn(retries)]
-    first = run(int(seed), rec)
-    n_retries = 0
-    for s in retry_seeds:
-        if first.fitness <= limit:
-            break
-        again = run(s, rec)
-        n_retries += 1
-        if again.fitness < first.fitness:
-            first = again
+    n_retries = first.restarts
     runs = [first]
     if method == "seeds":
         runs += [run(s, rec) for s in run_seeds[1:n_runs]]
