@@ -149,7 +149,15 @@ def _table(ident, diag) -> str:
                  f"{ident.iterations} iterations in {ident.elapsed_s:.2f} s "
                  f"({ident.evals_per_s:.0f} evals/s, {100 * ident.kernel_s / max(ident.elapsed_s, 1e-12):.0f}% "
                  f"in the model kernel), stop: {ident.reason}")
-    lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}")
+    ratio = ident.fitness / ident.noise_floor if ident.noise_floor > 0 else float("nan")
+    lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}"
+                 + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
+                 + (f" ({ident.restarts} restart{'s' if ident.restarts > 1 else ''})"
+                    if ident.restarts else ""))
+    if ident.suspect:
+        lines.append("WARNING: the best fit stays far above the trace's noise floor: the search may "
+                     "have missed the actuator's k, or the model parameters (--params) do not "
+                     "describe this actuator; treat the verdict with care")
     if ident.error_pct is not None:
         lines.append(f"identification error (Eq. 9) {ident.error_pct:.2f}%")
     lines.append("")
