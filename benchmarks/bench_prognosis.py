@@ -283,16 +283,16 @@ def main() -> None:
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / "prognosis.json").write_text(json.dumps({"meta": meta, "stats": stats, "real": real},
                                                        indent=1))
-    md = [f"# Prognosis: RUL statistics ({meta['date']}, {meta['cpus']} CPUs, "
+    md = [f"## Prognosis: RUL statistics ({meta['date']}, {meta['cpus']} CPUs, "
           f"{meta['elapsed_s']:.0f} s)", "",
           f"{N_INSPECTIONS} inspections from 0 to 950 h, true end of life 1000 h; a prediction at "
           "every inspection from the 3rd on. 90 % intervals (trend models linear, exponential, "
           "quadratic mixed by Akaike weight; Monte Carlo over the fit).", "",
-          "## Synthetic k histories (true k + N(0, 0.007) per component, no identification)", ""]
+          "### Synthetic k histories (true k + N(0, 0.007) per component, no identification)", ""]
     md += _table(stats["synthetic"], "synthetic")
-    md += ["", "## Real identifications (reference model with sensor noise, PSO default budget)", ""]
+    md += ["", "### Real identifications (reference model with sensor noise, PSO default budget)", ""]
     md += _table(stats["real"], "real")
-    md += ["", "## From mid-life on", "",
+    md += ["", "### From mid-life on", "",
            "| scenario | kind | coverage | alpha-lambda pass at 0.5 / 0.7 / 0.9 | PH (alpha 0.1) median h, share found |",
            "|---|---|---|---|---|"]
     for kind in ("synthetic", "real"):
@@ -304,7 +304,7 @@ def main() -> None:
                       f"{'-' if ph is None else f'{ph:.0f}'}, {s['prognostic_horizon_found']:.2f} |")
     if calib is not None:
         c = stats["calibration"]
-        md += ["", f"## Identification error per component ({c['n']} traces, PSO default budget)", "",
+        md += ["", f"### Identification error per component ({c['n']} traces, PSO default budget)", "",
                "| | " + " | ".join(f"k{i + 1}" for i in range(8)) + " |",
                "|---|" + "---|" * 8]
         for q in ("p50", "p90", "max"):

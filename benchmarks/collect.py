@@ -11,7 +11,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).parent
 ORDER = ["models.md", "model_report.md", "identification.md", "false_alarms.md", "optim.md",
-         "campaign.md", "prognosis.md"]
+         "prognosis.md"]
+#: written by benchmarks/run_paper_campaign.py beside the campaign report
+CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
 HEADER = """# Benchmarks
 
 Measured numbers only: each section below is written by the script named in it, on the
@@ -27,7 +29,7 @@ the machines are shared, so compare ratios measured side by side in one run.
 | false alarms and fault naming | `benchmarks/bench_false_alarms.py` |
 | optimizers vs scipy and library baselines | `benchmarks/bench_optim.py` |
 | the paper's full campaign | `benchmarks/run_paper_campaign.py` |
-| prognosis | see `docs/prognosis.md` |
+| prognosis: RUL coverage and error | `benchmarks/bench_prognosis.py` (figures in `docs/prognosis.md`) |
 
 """
 
@@ -39,6 +41,9 @@ def main() -> None:
     names += sorted(p.name for p in results.glob("*.md") if p.name not in ORDER)
     for name in names:
         parts.append((results / name).read_text().strip() + "\n")
+        if name == "false_alarms.md" and CAMPAIGN.exists():
+            parts.append(CAMPAIGN.read_text().strip() + "\n\nTables and figures: "
+                         "[docs/results/report.md](docs/results/report.md).\n")
     (ROOT.parent / "BENCHMARKS.md").write_text("\n".join(parts))
 
 

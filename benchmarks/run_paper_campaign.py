@@ -73,8 +73,9 @@ def main(argv: list[str] | None = None) -> int:
 
     complete = summary.skipped == 0
     lines = [
-        f"### Paper campaign: {spec.n_runs} runs ({len(spec.scenarios)} scenarios x "
-        f"{len(spec.algorithms)} algorithms x {spec.runs})",
+        f"## Paper campaign: {spec.n_runs} runs ({len(spec.scenarios)} scenarios x "
+        f"{len(spec.algorithms)} algorithms x {spec.runs}) "
+        f"({time.strftime('%Y-%m-%d %H:%M', time.gmtime())} UTC, `benchmarks/run_paper_campaign.py`)",
         "",
         f"- wall time: **{wall / 60:.1f} min** ({wall:.0f} s) on {executor.workers} worker processes"
         + ("" if complete else f" (resumed: {summary.skipped} runs were already stored; this is the "
