@@ -223,7 +223,7 @@ def figures(syn_tracks: dict, real: list[dict], stats: dict) -> list[str]:
 
 
 def _table(stats: dict, kind: str) -> list[str]:
-    lines = [f"| scenario | histories | inspections used | 3 | 4 | 5 | 6 | 7 | 8 | 9 | 10 |",
+    lines = ["| scenario | histories | inspections used | 3 | 4 | 5 | 6 | 7 | 8 | 9 | 10 |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for name, s in stats.items():
         cov = " | ".join(f"{c:.2f}" for c in s["coverage"])

@@ -17,7 +17,7 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -45,14 +45,23 @@ def _check_out_path(path: str, suffixes: tuple[str, ...], what: str) -> Path:
     return p
 
 
-def _seed(value: str) -> int:
-    try:
-        s = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}") from None
-    if s < 0:
-        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}")
-    return s
+def arg_type(convert: Callable[[str], Any], valid: Callable[[Any], bool],
+             expected: str) -> Callable[[str], Any]:
+    """An argparse ``type=``: ``convert`` the text, keep it if ``valid``, else an error
+    "``expected``, got 'text'" (exit status 2). Shared by every subcommand."""
+    def parse(value: str) -> Any:
+        try:
+            x = convert(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{expected}, got {value!r}") from None
+        if not valid(x):
+            raise argparse.ArgumentTypeError(f"{expected}, got {value!r}")
+        return x
+    parse.__name__ = convert.__name__          # argparse names the type in its messages
+    return parse
+
+
+_seed = arg_type(int, lambda s: s >= 0, "seed must be a non-negative integer")
 
 
 # ----------------------------------------------------------------------------- scenarios

@@ -20,39 +20,16 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from emaphm.cli import arg_type
+
 __all__ = ["register", "cmd_campaign", "cmd_report"]
 
 _SPEC_OPTIONS = ("spec", "scenarios", "algorithms", "runs", "seed", "noise", "budget", "polish")
 
 
-def _positive_int(value: str) -> int:
-    try:
-        n = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value!r}") from None
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value!r}")
-    return n
-
-
-def _non_negative_int(value: str) -> int:
-    try:
-        n = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value!r}") from None
-    if n < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value!r}")
-    return n
-
-
-def _non_negative_float(value: str) -> float:
-    try:
-        x = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {value!r}") from None
-    if not x >= 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {value!r}")
-    return x
+_positive_int = arg_type(int, lambda n: n >= 1, "expected a positive integer")
+_non_negative_int = arg_type(int, lambda n: n >= 0, "expected an integer >= 0")
+_non_negative_float = arg_type(float, lambda x: x >= 0, "expected a number >= 0")
 
 
 def build_spec(args: argparse.Namespace) -> Any:

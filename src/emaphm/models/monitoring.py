@@ -38,7 +38,7 @@ from ._jit import jit
 from .controller import control_step
 from .inverter import modulate, overcurrent
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
-                     C_L_A, C_L_B, C_L_C, C_R_A, C_R_B, C_R_C, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M,
+                     C_L_A, C_R_A, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
                      P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack, pack_population)
 from .mechanics import transmission_step

@@ -277,6 +277,22 @@ def update_best(
     return best_x, best_f
 
 
+def start(bounds: Bounds) -> dict[str, Any]:
+    """The bookkeeping fields shared by every state before the first ``tell``.
+
+    Returns ``best_x`` (the box centre, a placeholder until something is evaluated),
+    ``best_f = inf``, ``nfev = nit = 0`` and an empty ``history``; the counterpart of
+    :func:`advance`.
+    """
+    return {
+        "best_x": frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))),
+        "best_f": np.inf,
+        "nfev": 0,
+        "nit": 0,
+        "history": frozen(np.empty(0)),
+    }
+
+
 def advance(state: State, X: np.ndarray, y: np.ndarray) -> dict[str, Any]:
     """The bookkeeping fields shared by every state after one ``tell``.
 

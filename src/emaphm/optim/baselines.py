@@ -75,6 +75,7 @@ from .base import (
     check_told,
     child_rng,
     frozen,
+    start,
 )
 
 __all__ = ["BASELINES", "CMAES", "CMAESState", "ScipyDE", "ScipyDEState"]
@@ -284,8 +285,7 @@ class ScipyDE:
         _, pending = _replay(solver, [])
         return ScipyDEState(
             bounds=bounds, rng=rng, solver=solver, told=(), pending=frozen(pending),
-            best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))), best_f=np.inf,
-            nfev=0, nit=0, history=frozen(np.empty(0)))
+            **start(bounds))
 
     def ask(self, state: ScipyDEState) -> np.ndarray:
         """The points scipy asks for next (problem units; clipping only removes the
@@ -412,9 +412,7 @@ class CMAES:
             opts["popsize"] = self.pop_size
         es = cma.CMAEvolutionStrategy(x0, self.sigma0, opts)
         pending = tuple(np.array(s, dtype=np.float64) for s in es.ask())
-        return CMAESState(bounds=bounds, rng=rng, es=es, pending=pending,
-                          best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))), best_f=np.inf,
-                          nfev=0, nit=0, history=frozen(np.empty(0)))
+        return CMAESState(bounds=bounds, rng=rng, es=es, pending=pending, **start(bounds))
 
     def ask(self, state: CMAESState) -> np.ndarray:
         """cma's pending solutions in problem units, shape (lambda, n_var)."""

@@ -37,6 +37,7 @@ from .base import (
     child_rng,
     fork_rng,
     frozen,
+    start,
 )
 
 __all__ = [
@@ -253,11 +254,7 @@ class DE:
             population=frozen(pop),
             fitness=frozen(np.full(self.pop_size, np.inf)),
             trial=frozen(pop.copy()),
-            best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))),
-            best_f=np.inf,
-            nfev=0,
-            nit=0,
-            history=frozen(np.empty(0)),
+            **start(bounds),
         )
 
     def ask(self, state: DEState) -> np.ndarray:

@@ -63,6 +63,7 @@ from .base import (
     child_rng,
     fork_rng,
     frozen,
+    start,
 )
 
 __all__ = ["GWO", "GWOState", "gwo_a", "gwo_position_update", "rank_leaders", "update_leaders"]
@@ -252,11 +253,7 @@ class GWO:
             position=frozen(x),
             leaders=frozen(x[:3].copy()),
             leaders_f=frozen(np.full(3, np.inf)),
-            best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))),
-            best_f=np.inf,
-            nfev=0,
-            nit=0,
-            history=frozen(np.empty(0)),
+            **start(bounds),
         )
 
     def ask(self, state: GWOState) -> np.ndarray:

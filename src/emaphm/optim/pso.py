@@ -39,6 +39,7 @@ from .base import (
     child_rng,
     fork_rng,
     frozen,
+    start,
 )
 
 __all__ = ["PSO", "PSOState", "pso_position_update", "pso_velocity_update", "update_personal_best"]
@@ -223,11 +224,7 @@ class PSO:
             velocity=frozen(v),
             pbest=frozen(x.copy()),
             pbest_f=frozen(np.full(self.pop_size, np.inf)),
-            best_x=frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))),
-            best_f=np.inf,
-            nfev=0,
-            nit=0,
-            history=frozen(np.empty(0)),
+            **start(bounds),
         )
 
     def ask(self, state: PSOState) -> np.ndarray:

@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from emaphm.cli import _seed, arg_type
+
 __all__ = ["register"]
 
 
@@ -349,24 +351,8 @@ def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
 
 
 # ----------------------------------------------------------------------------- wiring
-def _seed(value: str) -> int:
-    try:
-        s = int(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}") from None
-    if s < 0:
-        raise argparse.ArgumentTypeError(f"seed must be a non-negative integer, got {value!r}")
-    return s
-
-
-def _time(value: str) -> float:
-    try:
-        t = float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"time must be a number (flight hours or cycles), got {value!r}") from None
-    if not math.isfinite(t) or t < 0:
-        raise argparse.ArgumentTypeError(f"time must be a finite number >= 0, got {value!r}")
-    return t
+_time = arg_type(float, lambda t: math.isfinite(t) and t >= 0,
+                 "time must be a finite number >= 0 (flight hours or cycles)")
 
 
 def _db_arg(p: argparse.ArgumentParser) -> None:
