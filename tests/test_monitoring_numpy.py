@@ -1,43 +1,20 @@
 """The NumPy-vectorised monitoring model agrees with the Numba kernel to round-off.
 
-Both evaluate the same operations in the same order; they differ only in
-NumPy's ``sin``/``cos`` against libm (an ulp, now and then). Most trajectories
-carry such differences through unchanged, and there the two must agree to
-1e-9. Some candidates with a heavily shorted phase (k3..k5 above about 0.7)
-drive the discrete current loop unstable: the currents alternate in sign from
-one control period to the next, grow by a factor of 3 to 15 per period and
-settle in a limit cycle of up to +-1000 A bounded by the voltage limit. Such a
-trajectory amplifies any ulp, so the kernel does not even agree with its own
-"twin", the same run with ``k`` nudged by 1e-12 (relative). For those we check
-what is well defined: the same status, and agreement up to the step where the
-twin departs (the horizon of predictability), less ``MARGIN`` steps since the
-nudge is larger than an ulp. The kernel decides which candidates are
-ill-conditioned, so a wrong branch in either implementation cannot hide behind
-that label on a well-conditioned candidate.
+Both evaluate the same operations in the same order; they differ only in NumPy's
+``sin``/``cos`` against libm (an ulp, now and then). How ill-conditioned candidates
+are told apart and compared: ``tests/agreement.py``.
 """
 
 import numpy as np
 import pytest
+from agreement import N_RANDOM, TOL, assert_traces_agree, conditioning, population
 
 from emaphm.faults import SCENARIOS
 from emaphm.models.layout import pack_population
 from emaphm.models.monitoring import STATUS_DIVERGED, STATUS_TRIPPED, MonitoringModel
 from emaphm.models.monitoring_numpy import simulate_population_numpy, weighted_sse_numpy
 
-TOL = 1e-9            # rtol and atol on currents [A], angles [rad], speeds [rad/s], torque [N m]
-NUDGE = 1e-12         # relative nudge of k that makes the kernel's twin
-MARGIN = 10           # steps: growth of a ~1e4 ulp nudge over an ulp one, at a gain of ~3/step
-N_RANDOM = 24
-
-
-def _population():
-    rng = np.random.default_rng(20240611)
-    named = np.array([k for k in SCENARIOS.values()])
-    corners = np.array([np.zeros(8), np.ones(8)])
-    return np.vstack([rng.random((N_RANDOM, 8)), named, corners])
-
-
-K = _population()
+K = population()
 N_NAMED = len(SCENARIOS) + 2          # scenarios and corners, last in K
 
 
@@ -46,20 +23,10 @@ def _inputs(mm):
     return mm.profile.theta_ref(mm.t), mm.profile.load_torque(mm.t)
 
 
-def _traces(r):
-    return {"i_abc": r.i_abc, "theta_m": r.theta_m, "omega_m": r.omega_m, "torque": r.torque}
-
-
 @pytest.fixture(scope="module", params=[1, 2], ids=["n_sub=1", "n_sub=2"])
 def case(request):
     mm = MonitoringModel(n_sub=request.param)
-    kernel = mm.simulate_population(K)
-    twin = mm.simulate_population(K + NUDGE * (0.5 - K))     # stays inside [0, 1]
-    # per candidate: first step where the kernel departs from its nudged twin by > TOL
-    dev = np.max(np.abs(kernel.i_abc - twin.i_abc), axis=2)
-    departs = dev > TOL
-    horizon = np.where(departs.any(axis=1), departs.argmax(axis=1), mm.t.size)
-    well = horizon == mm.t.size
+    kernel, well, horizon = conditioning(mm, K)
     P, CP = pack_population(mm.params, K)
     vec = simulate_population_numpy(P, CP, *_inputs(mm), mm.n_sub)
     return mm, kernel, vec, well, horizon, (P, CP)
@@ -77,19 +44,9 @@ def test_status_agrees(case):
     assert kernel.status[-1] == STATUS_TRIPPED        # the all-ones corner trips on overcurrent
 
 
-def test_traces_agree_to_round_off_on_well_conditioned_candidates(case):
-    _, kernel, vec, well, _, _ = case
-    for name, ref in _traces(kernel).items():
-        np.testing.assert_allclose(vec[name][well], ref[well], rtol=TOL, atol=TOL, err_msg=name)
-
-
-def test_traces_agree_up_to_the_kernels_own_horizon_elsewhere(case):
+def test_traces_agree_to_round_off(case):
     _, kernel, vec, well, horizon, _ = case
-    for j in np.flatnonzero(~well):
-        h = max(horizon[j] - MARGIN, 0)
-        for name, ref in _traces(kernel).items():
-            np.testing.assert_allclose(vec[name][j, :h], ref[j, :h], rtol=TOL, atol=TOL,
-                                       err_msg=f"{name}, candidate {j}, first {h} steps")
+    assert_traces_agree(vec, kernel, well, horizon)
 
 
 def test_weighted_sse_agrees(case):
@@ -108,14 +65,14 @@ def test_weighted_sse_agrees(case):
     assert np.all(np.isfinite(f_vec[s_vec == 0]))
 
 
-def test_diverged_candidate_traces_stop_and_stay_zero(case):
+def test_tripped_corner_currents_die_out_in_both(case):
     _, kernel, vec, _, _, _ = case
-    j = len(K) - 1                                      # all-ones corner
-    for traces in (kernel.i_abc[j], vec["i_abc"][j]):
-        last = np.flatnonzero(np.any(traces != 0.0, axis=1)).max()
-        assert last < traces.shape[0] - 1
-        assert np.all(np.isfinite(traces[:last + 1]))
-        assert np.all(traces[last + 1:] == 0.0)
+    j = len(K) - 1                                      # all-ones corner: trips, then ASC
+    for i_j in (kernel.i_abc[j], vec["i_abc"][j]):
+        last = np.flatnonzero(np.any(i_j != 0.0, axis=1)).max()
+        assert last < i_j.shape[0] - 1
+        assert np.all(np.isfinite(i_j[:last + 1]))
+        assert np.all(i_j[last + 1:] == 0.0)
 
 
 def test_rejects_bad_input():

@@ -3,38 +3,23 @@
 :mod:`emaphm.models.monitoring_simd` evaluates the same operations in the same
 order as :func:`emaphm.models.monitoring._kernel`; the one difference is its
 branch-free sine and cosine (fdlibm's, within 1 ulp) against libm's, which
-differ by an ulp now and then. As in ``test_monitoring_numpy.py``, most
-trajectories carry such differences through unchanged and must agree to 1e-9;
-a few (heavily shorted phases, whose discrete current loop is unstable until
-the drive trips) amplify any ulp, so the scalar kernel does not even agree
-with its own twin (``k`` nudged by 1e-12). For those we check the status and
-the agreement up to the step where the twin departs, less ``MARGIN`` steps.
+differ by an ulp now and then. How ill-conditioned candidates (heavily shorted
+phases, whose discrete current loop is unstable until the drive trips) are told
+apart and compared: ``tests/agreement.py``.
 """
 
 import math
 
 import numpy as np
 import pytest
+from agreement import N_RANDOM, TOL, assert_traces_agree, conditioning, population, traces
 
 from emaphm.faults import SCENARIOS
 from emaphm.models.layout import C_KP, C_R_A, P_THETA0, pack_population
 from emaphm.models.monitoring import STATUS_DIVERGED, STATUS_OK, MonitoringModel
 from emaphm.models.monitoring_simd import LANES, TRIG_LIMIT, _kernel, sincos
 
-TOL = 1e-9            # rtol and atol on currents [A], angles [rad], speeds [rad/s], torque [N m]
-NUDGE = 1e-12         # relative nudge of k that makes the scalar kernel's twin
-MARGIN = 10           # steps: growth of a ~1e4 ulp nudge over an ulp one, at a gain of ~3/step
-N_RANDOM = 24
-
-
-def _population():
-    rng = np.random.default_rng(20240611)
-    named = np.array([k for k in SCENARIOS.values()])
-    corners = np.array([np.zeros(8), np.ones(8)])
-    return np.vstack([rng.random((N_RANDOM, 8)), named, corners])
-
-
-K = _population()
+K = population()
 
 
 def _inputs(mm):
@@ -67,19 +52,10 @@ def simd_sse(mm, P, CP, i_target, weights):
     return fitness, status
 
 
-def _traces(r):
-    return {"i_abc": r.i_abc, "theta_m": r.theta_m, "omega_m": r.omega_m, "torque": r.torque}
-
-
 @pytest.fixture(scope="module", params=[1, 2], ids=["n_sub=1", "n_sub=2"])
 def case(request):
     mm = MonitoringModel(n_sub=request.param, kernel="scalar")
-    scalar = mm.simulate_population(K)
-    twin = mm.simulate_population(K + NUDGE * (0.5 - K))     # stays inside [0, 1]
-    dev = np.max(np.abs(scalar.i_abc - twin.i_abc), axis=2)
-    departs = dev > TOL
-    horizon = np.where(departs.any(axis=1), departs.argmax(axis=1), mm.t.size)
-    well = horizon == mm.t.size
+    scalar, well, horizon = conditioning(mm, K)
     P, CP = pack_population(mm.params, K, mm.theta0)
     return mm, scalar, simd_traces(mm, P, CP), well, horizon, (P, CP)
 
@@ -95,19 +71,9 @@ def test_status_agrees(case):
     np.testing.assert_array_equal(simd["status"], scalar.status)
 
 
-def test_traces_agree_to_round_off_on_well_conditioned_candidates(case):
-    _, scalar, simd, well, _, _ = case
-    for name, ref in _traces(scalar).items():
-        np.testing.assert_allclose(simd[name][well], ref[well], rtol=TOL, atol=TOL, err_msg=name)
-
-
-def test_traces_agree_up_to_the_scalar_kernels_own_horizon_elsewhere(case):
+def test_traces_agree_to_round_off(case):
     _, scalar, simd, well, horizon, _ = case
-    for j in np.flatnonzero(~well):
-        h = max(horizon[j] - MARGIN, 0)
-        for name, ref in _traces(scalar).items():
-            np.testing.assert_allclose(simd[name][j, :h], ref[j, :h], rtol=TOL, atol=TOL,
-                                       err_msg=f"{name}, candidate {j}, first {h} steps")
+    assert_traces_agree(simd, scalar, well, horizon)
 
 
 def test_weighted_sse_agrees(case):
@@ -138,7 +104,7 @@ def test_populations_that_do_not_fill_the_last_block(n_pop):
     P, CP = pack_population(mm.params, k, mm.theta0)
     simd = simd_traces(mm, P, CP)
     np.testing.assert_array_equal(simd["status"], scalar.status)
-    for name, ref in _traces(scalar).items():
+    for name, ref in traces(scalar).items():
         np.testing.assert_allclose(simd[name], ref, rtol=TOL, atol=TOL, err_msg=name)
 
 
@@ -192,7 +158,7 @@ def test_runaway_angle_falls_back_to_libm():
     assert P[P_THETA0] == mm.theta0
     simd = simd_traces(mm, P, CP)
     np.testing.assert_array_equal(simd["status"], scalar.status)
-    for name, ref in _traces(scalar).items():
+    for name, ref in traces(scalar).items():
         np.testing.assert_allclose(simd[name], ref, rtol=TOL, atol=TOL, err_msg=name)
 
 

@@ -1,0 +1,59 @@
+"""Shared by the tests that hold one monitoring-model implementation equal to another
+(``test_monitoring_numpy.py``, ``test_monitoring_simd.py``).
+
+Two implementations of the same operations differ only by an ulp of a sine now and
+then. Most trajectories carry that through unchanged and must agree to ``TOL``. Some
+candidates with a heavily shorted phase drive the discrete current loop unstable
+until the drive trips: they amplify any ulp, so the reference does not even agree
+with its own "twin", the same run with ``k`` nudged by ``NUDGE`` (relative). For
+those the tests check what is well defined: the same status, and agreement up to the
+step where the twin departs (the horizon of predictability), less ``MARGIN`` steps
+since the nudge is larger than an ulp. The reference decides which candidates are
+ill-conditioned, so a wrong branch cannot hide behind that label on a
+well-conditioned candidate.
+"""
+
+import numpy as np
+
+from emaphm.faults import SCENARIOS
+
+TOL = 1e-9            # rtol and atol on currents [A], angles [rad], speeds [rad/s], torque [N m]
+NUDGE = 1e-12         # relative nudge of k that makes the reference's twin
+MARGIN = 10           # steps: growth of a ~1e4 ulp nudge over an ulp one, at a gain of ~3/step
+N_RANDOM = 24
+
+
+def population() -> np.ndarray:
+    """24 seeded random candidates, the named scenarios, then the corners 0 and 1."""
+    rng = np.random.default_rng(20240611)
+    named = np.array([k for k in SCENARIOS.values()])
+    corners = np.array([np.zeros(8), np.ones(8)])
+    return np.vstack([rng.random((N_RANDOM, 8)), named, corners])
+
+
+def traces(r) -> dict:
+    """The trace arrays of a ``PopulationResult`` by name."""
+    return {"i_abc": r.i_abc, "theta_m": r.theta_m, "omega_m": r.omega_m, "torque": r.torque}
+
+
+def conditioning(mm, K: np.ndarray):
+    """``(reference, well, horizon)``: the population run by ``mm``, which candidates
+    agree with their nudged twin over the whole trace, and the first step where each
+    one departs from it (``mm.t.size`` when it never does)."""
+    reference = mm.simulate_population(K)
+    twin = mm.simulate_population(K + NUDGE * (0.5 - K))     # stays inside [0, 1]
+    departs = np.max(np.abs(reference.i_abc - twin.i_abc), axis=2) > TOL
+    horizon = np.where(departs.any(axis=1), departs.argmax(axis=1), mm.t.size)
+    return reference, horizon == mm.t.size, horizon
+
+
+def assert_traces_agree(candidate: dict, reference, well, horizon) -> None:
+    """To ``TOL`` on well-conditioned candidates, up to their horizon on the others."""
+    for name, ref in traces(reference).items():
+        np.testing.assert_allclose(candidate[name][well], ref[well], rtol=TOL, atol=TOL,
+                                   err_msg=name)
+    for j in np.flatnonzero(~well):
+        h = max(horizon[j] - MARGIN, 0)
+        for name, ref in traces(reference).items():
+            np.testing.assert_allclose(candidate[name][j, :h], ref[j, :h], rtol=TOL, atol=TOL,
+                                       err_msg=f"{name}, candidate {j}, first {h} steps")
