@@ -278,3 +278,11 @@ def test_pack_layout_known_values():
 def test_pack_population_shape_error():
     with pytest.raises(ValueError, match=r"shape \(n_pop, 8\)"):
         pack_population(NOMINAL, np.zeros((3, 7)))
+
+
+def test_error_pct_takes_the_eccentricity_phase_the_short_way_round():
+    """k7 = 0 and k7 = 1 are the same angle (+-180 deg): no error between them."""
+    k_true = np.array([0, 0, 0, 0, 0, 0.5, 0.0, 0.5])
+    assert error_pct(np.array([0, 0, 0, 0, 0, 0.5, 1.0, 0.5]), k_true) == pytest.approx(0.0, abs=1e-12)
+    near = np.array([0, 0, 0, 0, 0, 0.5, 0.98, 0.5])          # 0.02 of a turn away
+    assert error_pct(near, k_true) == pytest.approx(100 / np.sqrt(6.5) * np.sqrt(0.5 * 0.02**2))

@@ -10,13 +10,11 @@ angle 0 or time 0, the load torque from the metadata); the bookkeeping (stats) a
 from __future__ import annotations
 
 import numpy as np
-
-from emaphm.models.monitoring import STATUS_DIVERGED
 import pytest
 
 from emaphm.faults import SCENARIOS
 from emaphm.fitness import FITNESS_MODES, Eq4Objective, eq4_weights, equivalent_current
-from emaphm.models.monitoring import MonitoringModel
+from emaphm.models.monitoring import STATUS_DIVERGED, MonitoringModel
 from emaphm.profiles import Constant, Profile, diagnostic
 from emaphm.simulate import simulate
 from emaphm.traces import Trace, TraceError, resample
@@ -334,3 +332,18 @@ def test_invalid_trace_raises(mm_gain_low):
     i[10, 1] = np.nan
     with pytest.raises(TraceError, match="non-finite"):
         Eq4Objective.from_trace(_rebuild(mm_gain_low, i_abc=i))
+
+
+def test_noise_floor_is_measured_on_the_recorded_samples():
+    """A trace sampled 4x slower than the model grid has the same noise floor (to the
+    resampling's effect on the weights), not the near-zero second differences of its
+    linear interpolation."""
+    from emaphm.simulate import DEFAULT_SENSORS
+
+    full = simulate(scenario="friction-high", sensors=DEFAULT_SENSORS, seed=1)
+    cols = {k: v[::4] for k, v in full.columns().items()}
+    slow = Trace.from_columns(cols, meta=full.meta)
+    f_full = Eq4Objective.from_trace(full).noise_floor()
+    f_slow = Eq4Objective.from_trace(slow).noise_floor()
+    assert f_slow == pytest.approx(f_full, rel=0.5)
+    assert f_full > 0

@@ -190,10 +190,13 @@ def error_pct(k, k_true) -> float:
 
     ``100/sqrt(6.5) * sqrt(sum_{i=1..6} (k_i - k_i,true)^2
     + k6_true (k7 - k7_true)^2 + (k8 - k8_true)^2)``: the eccentricity phase
-    counts only as much as there is eccentricity to see.
+    counts only as much as there is eccentricity to see. The phase is an angle
+    (k7 = 0 and 1 are both 180 deg), so its difference is taken the short way
+    round, within [-0.5, 0.5).
     """
     k = np.asarray(k, dtype=float)
     kt = np.asarray(k_true, dtype=float)
     d = k - kt
-    s = np.sum(d[..., :6] ** 2, axis=-1) + kt[..., 5] * d[..., 6] ** 2 + d[..., 7] ** 2
+    d7 = (d[..., 6] + 0.5) % 1.0 - 0.5
+    s = np.sum(d[..., :6] ** 2, axis=-1) + kt[..., 5] * d7 ** 2 + d[..., 7] ** 2
     return 100.0 / np.sqrt(6.5) * np.sqrt(s)

@@ -28,7 +28,8 @@ from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
 
-__all__ = ["eq4_weights", "equivalent_current", "Eq4Objective", "FITNESS_MODES"]
+__all__ = ["eq4_weights", "equivalent_current", "white_noise_sigma", "Eq4Objective",
+           "FITNESS_MODES"]
 
 FITNESS_MODES = ("phases", "equivalent")
 
@@ -38,6 +39,17 @@ def eq4_weights(i_meas: np.ndarray, dT: float) -> np.ndarray:
     i_meas = np.asarray(i_meas, dtype=float)
     dIdT = np.gradient(i_meas, axis=0) / dT
     return dT / (dIdT * dIdT + 1.0)
+
+
+def white_noise_sigma(x: np.ndarray) -> np.ndarray:
+    """Standard deviation of the white noise on each column of ``x`` (n, c).
+
+    Robust, from second differences, which cancel a smooth signal:
+    ``1.4826 MAD(d2) / sqrt(6)`` (``d2`` of white noise has variance ``6 sigma^2``).
+    """
+    x = np.asarray(x, dtype=float)
+    d2 = x[2:] - 2.0 * x[1:-1] + x[:-2]
+    return 1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / np.sqrt(6.0)
 
 
 def equivalent_current(i_abc: np.ndarray) -> np.ndarray:
@@ -70,6 +82,7 @@ class Eq4Objective:
     weights: np.ndarray           # same shape
     mode: Literal["phases", "equivalent"] = "phases"
     stats: _Stats = field(default_factory=_Stats, compare=False)
+    noise_sigma: np.ndarray | None = None   # (3,) or (1,) A, white noise of the measured currents
 
     @classmethod
     def from_trace(cls, trace: Trace, params: ActuatorParams | None = None, *, n_sub: int = 1,
@@ -107,8 +120,12 @@ class Eq4Objective:
         model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]))
         i = np.asarray(on_grid.i_abc)
         target = equivalent_current(i)[:, None] if mode == "equivalent" else i
+        # the noise is measured on the samples as recorded: resampling a slower trace
+        # onto the model grid interpolates between them and would hide it
+        raw = np.asarray(trace.i_abc)
+        raw = equivalent_current(raw)[:, None] if mode == "equivalent" else raw
         return cls(model, np.ascontiguousarray(target), np.ascontiguousarray(eq4_weights(target, T_s)),
-                   mode)
+                   mode, noise_sigma=white_noise_sigma(raw))
 
     @property
     def n_samples(self) -> int:
@@ -117,14 +134,12 @@ class Eq4Objective:
     def noise_floor(self) -> float:
         """The Eq. 4 value a perfect model would reach on this trace.
 
-        The white-noise variance of each measured phase current, estimated robustly
-        from second differences (``1.4826 MAD(d2) / sqrt(6)``, insensitive to the
-        smooth signal), times the sum of that phase's weights. A fit many times
+        The white-noise variance of each measured current (:func:`white_noise_sigma`
+        of the samples as recorded) times the sum of its weights. A fit many times
         above it has not found the actuator's k. Zero for a noise-free trace.
         """
-        d2 = self.target[2:] - 2.0 * self.target[1:-1] + self.target[:-2]
-        sigma = 1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / np.sqrt(6.0)
-        return float(np.sum(self.weights * sigma ** 2))
+        sigma = white_noise_sigma(self.target) if self.noise_sigma is None else self.noise_sigma
+        return float(np.sum(self.weights * np.asarray(sigma) ** 2))
 
     def __call__(self, K: np.ndarray) -> np.ndarray:
         K = np.atleast_2d(np.asarray(K, dtype=float))

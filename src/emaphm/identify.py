@@ -254,8 +254,9 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         floor (:meth:`Eq4Objective.noise_floor`, the value a perfect model would
         reach) ended in a wrong basin; it is run again, up to ``restarts`` times,
         with seeds spawned from ``seed``, and the best run is kept. ``None``: 2
-        restarts without an explicit ``budget``, none with one (a budget caps the
-        evaluations); an explicit number applies in any case, each run with the
+        restarts without an explicit ``budget`` and with the polish, none with a
+        budget (it caps the evaluations) or with ``polish=False`` (the bare
+        algorithm); an explicit number applies in any case, each run with the
         budget. A result still above the limit is flagged ``suspect``.
     callback
         Called with the optimizer state after every iteration; True stops.
@@ -267,8 +268,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
                          f"{', '.join(sorted(ALL_ALGORITHMS))}")
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    if restarts is None:
-        restarts = DEFAULT_RESTARTS if budget is None else 0
+    if restarts is None:          # none under a budget (a cap) or for the bare algorithm
+        restarts = DEFAULT_RESTARTS if budget is None and polish else 0
     if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) or restarts < 0:
         raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
     if isinstance(suspect_ratio, bool) or not isinstance(suspect_ratio, (int, float)) \
