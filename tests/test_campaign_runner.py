@@ -311,3 +311,37 @@ def test_cli_dry_run_lists_runs_and_seeds(tmp_path, capsys):
     assert [line.split("\t")[0] for line in out] == ["gain-low/pso/0", "gain-low/pso/1",
                                                      "gain-low/cmaes/0", "gain-low/cmaes/1"]
     assert not (tmp_path / "s.sqlite").exists()
+
+
+def _die_on_one(x):
+    """A run whose worker process dies (as an OOM kill or a segfault would)."""
+    if x == 1:
+        os._exit(3)
+    return x * 10
+
+
+def test_a_dead_worker_fails_its_runs_and_the_campaign_goes_on():
+    from concurrent.futures.process import BrokenProcessPool
+
+    from emaphm.campaign.executors import LocalExecutor
+
+    out = dict(LocalExecutor(1).map_unordered(_die_on_one, range(6)))
+    assert sorted(out) == list(range(6))                      # every item comes back once
+    assert isinstance(out[1], BrokenProcessPool)
+    done = [x for x, v in out.items() if not isinstance(v, Exception)]
+    assert {3, 4, 5} <= set(done)                             # a new pool ran the rest
+    assert all(out[x] == 10 * x for x in done)
+
+
+def test_an_unreachable_scheduler_fails_before_the_store_is_written(tmp_path, monkeypatch):
+    from emaphm.campaign.executors import DaskExecutor
+    from emaphm.cli import main
+
+    def refuse(self):
+        raise ValueError(f"cannot reach the Dask scheduler at {self.scheduler}")
+
+    monkeypatch.setattr(DaskExecutor, "check", refuse)
+    store = tmp_path / "x.sqlite"
+    rc = main(["campaign", "--scenarios", "friction-low", "--algorithms", "pso", "--runs", "1",
+               "--store", str(store), "--scheduler", "tcp://127.0.0.1:1", "--quiet"])
+    assert rc == 2 and not store.exists()

@@ -198,3 +198,12 @@ def test_direct_construction_validates_too():
         CampaignSpec(scenarios=(ScenarioSpec("x", (0, 0, 0, 0, 0, 0, 0.5, 1.5)),))
     with pytest.raises(SpecError, match=r"master_seed must be an integer >= 0"):
         CampaignSpec(master_seed=-1)
+
+
+@pytest.mark.parametrize("toml", ['algorithms = [{name = "pso", options = 5}]',
+                                  'algorithms = ["pso"]\n[options]\npso = 3'])
+def test_options_that_are_not_a_table_are_refused(tmp_path, toml):
+    p = tmp_path / "spec.toml"
+    p.write_text('scenarios = ["friction-low"]\n' + toml + "\n")
+    with pytest.raises(SpecError, match="must be a table of settings"):
+        CampaignSpec.from_toml(p)

@@ -151,7 +151,7 @@ def test_store_of_another_schema_version_is_refused(store_path):
     for kw in ({"spec": small_spec()}, {"spec": None}, {"readonly": True}):
         with pytest.raises(IncompatibleStoreError,
                            match=r"campaign store of schema version 999 written by emaphm 9\.9\.9; "
-                                 r"this emaphm \(.*\) reads schema version 1.*it was not changed"):
+                                 rf"this emaphm \(.*\) reads schema version {SCHEMA_VERSION}.*it was not changed"):
             CampaignStore.open(store_path, **kw)
     assert dump(store_path) == before
 

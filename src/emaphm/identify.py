@@ -72,7 +72,9 @@ class Identification:
     without polish). ``restarts``: runs repeated because the fit was far above
     ``noise_floor`` (the Eq. 4 value of a perfect model on this trace);
     ``suspect``: still so after them (a wrong basin, or a model that does not
-    describe this actuator). ``evaluations`` and ``polish_s`` count every run.
+    describe this actuator). ``evaluations`` and ``polish_s`` count every run;
+    ``iterations``, ``history``, ``polish_evaluations`` and ``run_evaluations``
+    (its metaheuristic and polish evaluations) are those of the best run.
     """
 
     algorithm: str
@@ -98,6 +100,7 @@ class Identification:
     restarts: int = 0
     noise_floor: float = 0.0
     suspect: bool = False
+    run_evaluations: int = 0
 
     @property
     def evals_per_s(self) -> float:
@@ -123,6 +126,7 @@ class Identification:
             "polish_evaluations": int(self.polish_evaluations),
             "polish_s": float(self.polish_s),
             "restarts": int(self.restarts),
+            "run_evaluations": int(self.run_evaluations),
             "noise_floor": float(self.noise_floor),
             "suspect": bool(self.suspect),
             "k_raw": None if self.k_raw is None else [float(x) for x in self.k_raw],
@@ -327,5 +331,6 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         error_pct_raw=None if k_true is None else float(error_pct(k_raw, k_true)),
         polish_evaluations=best.polish_evaluations, polish_s=sum(r.polish_s for r in runs),
         restarts=len(runs) - 1, noise_floor=floor, suspect=bool(fit > limit),
+        run_evaluations=int(best.res.nfev) + best.polish_evaluations,
     )
 

@@ -81,11 +81,13 @@ def cmd_campaign(args: argparse.Namespace) -> int:
         print(f"{spec.n_runs} runs; spec hash {spec.hash[:12]}", file=sys.stderr)
         return 0
     store_path = Path(args.store)
+    executor = make_executor(args.workers, args.scheduler)
+    if hasattr(executor, "check"):            # a wrong scheduler address fails before the store
+        executor.check()
     # open (and so validate, or create) the store before starting any worker
     with CampaignStore.open(store_path, spec) as st:
         spec = st.spec
         counts = st.counts()
-    executor = make_executor(args.workers, args.scheduler)
     quiet = args.quiet
     if not quiet:
         print(f"campaign {spec.name!r}: {spec.n_runs} runs ({len(spec.scenarios)} scenarios x "

@@ -32,6 +32,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+from concurrent.futures.process import BrokenProcessPool
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any, Callable, Iterable, Iterator, Protocol
 
@@ -116,9 +117,13 @@ class LocalExecutor:
         items = list(items)
         if not items:
             return
-        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
-                                   mp_context=multiprocessing.get_context(self.mp_context),
-                                   initializer=_init_worker)
+
+        def new_pool() -> ProcessPoolExecutor:
+            return ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
+                                       mp_context=multiprocessing.get_context(self.mp_context),
+                                       initializer=_init_worker)
+
+        pool = new_pool()
         # Keep at most two runs per worker queued: pending work stays in the parent,
         # where cancelling it is free and certain.
         todo = list(reversed(items))
@@ -127,16 +132,36 @@ class LocalExecutor:
         try:
             while todo or running:
                 while todo and len(running) < 2 * self.workers:
-                    item = todo.pop()
-                    running[pool.submit(fn, item)] = item
+                    item = todo[-1]
+                    try:
+                        running[pool.submit(fn, item)] = item
+                    except BrokenProcessPool:     # a worker died: the runs in flight fail
+                        break
+                    todo.pop()
+                if not running:                   # the pool broke with nothing in flight
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    pool = new_pool()
+                    continue
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
+                broken = False
                 for fut in done:
                     item = running.pop(fut)
                     try:
                         value = fut.result()
                     except Exception as exc:      # noqa: BLE001 - a broken pool, a pickling error...
                         value = exc
+                        broken = broken or isinstance(exc, BrokenProcessPool)
                     yield item, value
+                if broken:
+                    # a worker died (OOM kill, segfault): every run in flight is lost with
+                    # the pool; report them as failures (a rerun retries them) and go on
+                    # with a new pool for the rest
+                    for fut, item in list(running.items()):
+                        yield item, BrokenProcessPool("a worker of the local pool died while "
+                                                      "this run was in flight")
+                    running.clear()
+                    pool.shutdown(wait=False, cancel_futures=True)
+                    pool = new_pool()
             clean = True
         finally:
             pool.shutdown(wait=clean, cancel_futures=True)
@@ -166,6 +191,12 @@ class DaskExecutor:
         addr = self.scheduler if isinstance(self.scheduler, str) else getattr(self.scheduler, "scheduler", None)
         addr = getattr(addr, "address", addr)
         return f"Dask cluster at {addr}"
+
+    def check(self) -> None:
+        """Connect once, so that a wrong address fails before anything is written."""
+        client, own = self._client()
+        if own:
+            client.close()
 
     def _client(self) -> tuple[Any, bool]:
         from distributed import Client

@@ -286,14 +286,16 @@ def _bars(spec: Any, cells: dict[tuple[str, str], Cell], field: str, ylabel: str
 
 
 def _curve(r: RunResult) -> tuple[np.ndarray, np.ndarray]:
-    """(evaluations, best fitness) after each iteration, then each polish poll."""
+    """(evaluations, best fitness) after each iteration, then each polish poll, of the
+    run that gave the result (a restarted identification's best run)."""
     h = np.asarray(r.history, dtype=float)
     it = int(r.iterations or 0)
-    meta = int(r.evaluations or 0) - int(r.polish_evaluations or 0)
+    total = int(r.run_evaluations or r.evaluations or 0)
+    meta = total - int(r.polish_evaluations or 0)
     x = np.empty(h.size)
     x[:it] = np.arange(1, it + 1) * (meta / it if it else 0.0)
     if h.size > it:
-        x[it:] = np.linspace(meta, int(r.evaluations or meta), h.size - it + 1)[1:]
+        x[it:] = np.linspace(meta, total, h.size - it + 1)[1:]
     return x, h
 
 
@@ -427,7 +429,7 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
             c = cells.get((s.name, a))
             if c is None:
                 mdrows.append([s.name, algo_label(a), "0", "n/a", "n/a", "n/a", "n/a", "n/a"])
-                raw.append([s.name, s.mode, s.magnitude, a, 0] + [math.nan] * 14)
+                raw.append([s.name, s.mode, s.magnitude, a, 0] + [math.nan] * 13)
                 continue
             mdrows.append([s.name, algo_label(a), str(c.n),
                            f"{_f(c.stat('time'))} ± {_f(c.stat('time', 'std'))}",

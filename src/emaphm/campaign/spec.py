@@ -565,8 +565,14 @@ def parse_algorithms(items: Any, options: Mapping[str, Any] | None = None) -> tu
                 raise SpecError(f"an algorithm table has name and optionally label, options, "
                                 f"budget; got {dict(item)!r}")
             label = item.get("label") or item["name"]
-            opts = dict(item.get("options", {}))
-            opts.update(options.pop(label, {}))
+            own, extra_opts = item.get("options", {}), options.pop(label, {})
+            for where, o in ((f"the options of algorithm {label!r}", own),
+                             (f"[options.{label}]", extra_opts)):
+                if not isinstance(o, Mapping):
+                    raise SpecError(f"{where} must be a table of settings, e.g. "
+                                    f"{{pop_size = 30}}, got {o!r}")
+            opts = dict(own)
+            opts.update(extra_opts)
             out.append(AlgorithmSpec(item["name"], label, opts, item.get("budget")))
         else:
             raise SpecError(f"an algorithm is a name or a {{name, ...}} table, got {item!r}")

@@ -51,7 +51,7 @@ __all__ = [
 ]
 
 #: Version of the table layout; a store of another version is refused, untouched.
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 
 _SQLITE_HEADER = b"SQLite format 3\x00"
 
@@ -82,6 +82,9 @@ CREATE TABLE IF NOT EXISTS runs (
     evaluations        INTEGER,
     iterations         INTEGER,
     polish_evaluations INTEGER,
+    run_evaluations    INTEGER,
+    restarts           INTEGER,
+    suspect            INTEGER,
     elapsed_s          REAL,
     kernel_s           REAL,
     simulate_s         REAL,
@@ -151,6 +154,9 @@ class RunResult:
     evaluations: int | None = None
     iterations: int | None = None
     polish_evaluations: int | None = None
+    run_evaluations: int | None = None
+    restarts: int | None = None
+    suspect: bool | None = None
     elapsed_s: float | None = None
     kernel_s: float | None = None
     simulate_s: float | None = None
@@ -176,7 +182,9 @@ class RunResult:
             fitness_raw=None if ident.fitness_raw is None else float(ident.fitness_raw),
             error_pct_raw=None if ident.error_pct_raw is None else float(ident.error_pct_raw),
             evaluations=int(ident.evaluations), iterations=int(ident.iterations),
-            polish_evaluations=int(ident.polish_evaluations), elapsed_s=float(ident.elapsed_s),
+            polish_evaluations=int(ident.polish_evaluations),
+            run_evaluations=int(ident.run_evaluations), restarts=int(ident.restarts),
+            suspect=bool(ident.suspect), elapsed_s=float(ident.elapsed_s),
             kernel_s=float(ident.kernel_s), simulate_s=float(simulate_s), reason=str(ident.reason),
             diverged=int(ident.diverged), history=tuple(float(x) for x in ident.history),
             worker=f"{socket.gethostname()}:{os.getpid()}", finished_at=_now())
@@ -206,7 +214,8 @@ def _run_fields(run: Run) -> dict[str, Any]:
 _COLUMNS = ("run_key", "run_index", "scenario", "algorithm", "optimizer", "run", "seed",
             "noise_seed", "spawn_key", "status", "error_text", "k_true", "k", "fitness",
             "error_pct", "k_raw", "fitness_raw", "error_pct_raw", "evaluations", "iterations",
-            "polish_evaluations", "elapsed_s", "kernel_s", "simulate_s", "reason", "diverged",
+            "polish_evaluations", "run_evaluations", "restarts", "suspect", "elapsed_s",
+            "kernel_s", "simulate_s", "reason", "diverged",
             "history", "version", "worker", "finished_at")
 _JSON_FIELDS = {"spawn_key", "k_true", "k", "k_raw", "history"}
 _FIELD_OF = {"run_key": "key", "run_index": "index"}
