@@ -64,6 +64,22 @@ def arg_type(convert: Callable[[str], Any], valid: Callable[[Any], bool],
 _seed = arg_type(int, lambda s: s >= 0, "seed must be a non-negative integer")
 
 
+def budget_option(text: str | None) -> Any:
+    """The value of a ``--budget`` option: ``"5000"`` -> 5000 evaluations, ``"30s"`` a
+    wall-clock budget, None the algorithm's default; checked by
+    :func:`emaphm.identify.parse_budget` (a :class:`UsageError` naming the option)."""
+    from .identify import parse_budget
+
+    if text is None:
+        return None
+    value: Any = int(text) if text.strip().isdigit() else text
+    try:
+        parse_budget(value)
+    except ValueError as exc:
+        raise UsageError(f"--budget: {exc}") from None
+    return value
+
+
 # ----------------------------------------------------------------------------- scenarios
 def cmd_scenarios(args: argparse.Namespace) -> int:
     from .faults import K_NAMES, SCENARIOS
@@ -179,7 +195,7 @@ def _table(ident, diag) -> str:
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .diagnosis import diagnose
     from .faults import scenario
-    from .identify import identify, parse_budget
+    from .identify import identify
     from .optim import ALL_ALGORITHMS
     from .plots import plot_identification
     from .simulate import DEFAULT_SENSORS, simulate
@@ -190,13 +206,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.algorithm not in ALL_ALGORITHMS:
         raise UsageError(f"unknown algorithm {args.algorithm!r}; choose one of "
                          f"{', '.join(sorted(ALL_ALGORITHMS))}")
-    budget: Any = args.budget
-    if isinstance(budget, str) and budget.strip().isdigit():
-        budget = int(budget)
-    try:
-        parse_budget(budget)
-    except ValueError as exc:
-        raise UsageError(f"--budget: {exc}") from None
+    budget = budget_option(args.budget)
     plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
     params = _load_params(args.params)
     if args.trace is not None:

@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from emaphm.cli import arg_type
+from emaphm.cli import arg_type, budget_option
 
 __all__ = ["register", "cmd_campaign", "cmd_report"]
 
@@ -53,8 +53,7 @@ def build_spec(args: argparse.Namespace) -> Any:
     if args.noise is not None:
         changes["noise"] = args.noise
     if args.budget is not None:
-        b = args.budget.strip()
-        changes["budget"] = int(b) if b.isdigit() else b
+        changes["budget"] = budget_option(args.budget)
     if args.polish is not None:
         changes["polish"] = args.polish
     return dataclasses.replace(spec, **changes) if changes else spec

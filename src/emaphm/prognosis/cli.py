@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from emaphm.cli import _seed, arg_type
+from emaphm.cli import _seed, arg_type, budget_option
 
 __all__ = ["register"]
 
@@ -84,17 +84,10 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def cmd_add(args: argparse.Namespace) -> int:
-    from ..identify import parse_budget
     from ..traces import read_trace
     from .history import HealthHistory, inspect
 
-    budget: Any = args.budget
-    if isinstance(budget, str) and budget.strip().isdigit():
-        budget = int(budget)
-    try:
-        parse_budget(budget)
-    except ValueError as exc:
-        raise _usage(f"--budget: {exc}") from None
+    budget = budget_option(args.budget)
     params = None
     if args.params:
         from ..params import load_params
