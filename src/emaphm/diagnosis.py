@@ -5,10 +5,10 @@ than its detection threshold. The default thresholds (:data:`DEFAULT_THRESHOLDS`
 were chosen from the spread of ``k`` identified on nominal reference-model
 traces with realistic sensor noise (``emaphm.simulate.DEFAULT_SENSORS``) over
 20 noise seeds and the three algorithms (``benchmarks/bench_false_alarms.py``,
-table in ``BENCHMARKS.md``): each threshold sits at about three times the
-largest nominal deviation seen there, and well below the paper's low fault
-magnitude (0.25), so nominal traces raise no alarm and every single fault of
-the paper's scenarios is named.
+table in ``BENCHMARKS.md``): each threshold sits 2 to 10 times above the
+largest nominal deviation seen there (least for backlash, the noisiest
+component), and well below the paper's low fault magnitude (0.25), so nominal
+traces raise no alarm and every single fault of the paper's scenarios is named.
 """
 
 from __future__ import annotations

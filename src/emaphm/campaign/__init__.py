@@ -14,7 +14,6 @@ store              :class:`CampaignStore`: one SQLite file, one row per run
 runner             :func:`run_campaign`, :func:`execute_run`, :func:`replay`
 executors          serial, local process pool, Dask (imported only there)
 report             Tables 3 and 4 of the paper, per-magnitude tables, figures
-baselines          scipy's DE and CMA-ES behind the optimizer protocol
 cli                ``emaphm campaign`` and ``emaphm report``
 =================  ===========================================================
 

@@ -496,10 +496,10 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
              "interval_details": {k: v for k, v in a.interval.details.items()
                                   if isinstance(v, (int, float, str))},
              "budget": ident.options.get("budget"),
-             "seed_used": ident.seed}
+             "seed_used": ident.seed}          # the run kept; ``seed`` replays the inspection
     ins = history.add(actuator_id, at, a.k, k_lo=a.interval.lo, k_hi=a.interval.hi,
                       spread_method=a.interval.method, level=a.interval.level,
                       diagnosis=diag.to_dict(), fingerprint=fp, algorithm=ident.algorithm,
-                      seed=int(ident.seed), fitness=ident.fitness, evaluations=a.evaluations,
+                      seed=int(seed), fitness=ident.fitness, evaluations=a.evaluations,
                       source=source, extra=extra)
     return ins, a

@@ -20,7 +20,7 @@ Two ways to observe a scenario at inspection times:
 
 * :func:`simulate_degradation`: a reference-model trace (switching PWM,
   realistic sensors) per inspection, for the full loop simulate, identify,
-  record, predict (:func:`emaphm.prognosis.history.record_identification`);
+  record, predict (:func:`emaphm.prognosis.history.inspect`);
 * :func:`synthetic_k_history`: the true k plus Gaussian noise at the level
   of an identification (per-component standard deviation ``noise``, default
   0.007: the Eq. 9 errors of 0.2-0.4 % measured on noisy reference-model traces

@@ -359,11 +359,6 @@ class RULPrediction:
     excluded: tuple = ()
 
     @property
-    def eol_median(self) -> float:
-        """Predicted end of life (time of the threshold crossing), median."""
-        return self.t_now + self.median
-
-    @property
     def p_reach(self) -> float:
         """Share of draws whose trend ever reaches the threshold."""
         return float(np.mean(np.isfinite(self.samples)))

@@ -241,8 +241,8 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     component's interval. An identification whose fitness exceeds
     ``suspect_ratio`` times the trace's noise floor
     (:meth:`emaphm.fitness.Eq4Objective.noise_floor`) is *suspect* (the optimizer
-    ended in a wrong basin: with the default budget this happened to 2 of 90
-    inspections of the benchmark, at Eq. 9 errors above 70 %, fitness 700 times
+    ended in a wrong basin: before the restarts, PSO with its default budget did so
+    on 2 of 90 benchmark inspections, at Eq. 9 errors above 70 %, fitness 700 times
     the noise level); :func:`emaphm.identify.identify` runs it again with up to
     ``retries`` more seeds (spawned from ``seed``) and keeps the best run. ``details`` records
     ``fitness_ratio``, ``retries`` and ``suspect`` (still suspect after the
@@ -258,7 +258,8 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     if np.any(~np.isfinite(floor)) or np.any(floor < 0):
         raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
     t0 = time.perf_counter()
-    base = objective if objective is not None else Eq4Objective.from_trace(trace, params)
+    base = objective if objective is not None else Eq4Objective.from_trace(
+        trace, params, n_sub=kwargs.get("n_sub", 1), mode=kwargs.get("mode", "phases"))
     rec = _Recorder(base)
     run_seeds = [int(s.generate_state(1)[0] % (2 ** 31))
                  for s in np.random.SeedSequence(int(seed)).spawn(n_runs + 1)]
@@ -274,8 +275,9 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     runs = [first]
     if method == "seeds":
         runs += [run(s, rec) for s in run_seeds[1:n_runs]]
-        good = [r for r in runs if r.fitness <= limit]
-        runs = good or runs
+    spent = int(sum(r.evaluations for r in runs))     # every run, kept or not
+    if method == "seeds":
+        runs = [r for r in runs if r.fitness <= limit] or runs
     K, f = rec.points()
     best = min(runs, key=lambda r: r.fitness)
     f_min = float(min(np.min(f[np.isfinite(f)]) if np.isfinite(f).any() else np.inf, best.fitness))
@@ -312,7 +314,8 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
         interval = replace(interval, lo=lo, hi=hi,
                            details={**interval.details, "error_floor": floor.tolist()})
     return Assessment(identification=ident, interval=interval, runs=tuple(runs),
-                      evaluations=int(sum(r.evaluations for r in runs)),
+                      evaluations=spent + (0 if method != "bootstrap" else
+                                           int(sum(r.evaluations for r in runs[1:]))),
                       elapsed_s=time.perf_counter() - t0)
 
 
