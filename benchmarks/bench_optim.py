@@ -38,6 +38,7 @@ from scipy.optimize import differential_evolution
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
 from emaphm.optim import DE, GWO, PSO, MaxIterations, minimize  # noqa: E402
+from emaphm.optim.problems import rastrigin, rosenbrock, sphere  # noqa: E402
 
 try:  # optional reference (test-only dependency)
     import niapy
@@ -50,18 +51,6 @@ except ImportError:  # pragma: no cover
 
 N_VAR, N_POP, N_ITER = 8, 50, 200
 BUDGET = N_POP * N_ITER
-
-
-def sphere(X):
-    return np.sum(X**2, axis=-1)
-
-
-def rastrigin(X):
-    return 10.0 * X.shape[-1] + np.sum(X**2 - 10.0 * np.cos(2.0 * np.pi * X), axis=-1)
-
-
-def rosenbrock(X):
-    return np.sum(100.0 * (X[..., 1:] - X[..., :-1] ** 2) ** 2 + (1.0 - X[..., :-1]) ** 2, axis=-1)
 
 
 PROBLEMS = {

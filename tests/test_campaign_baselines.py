@@ -16,14 +16,11 @@ from scipy.optimize import differential_evolution
 from emaphm.optim import (ALGORITHMS, ALL_ALGORITHMS, MaxEvaluations, MaxIterations, as_bounds,
                           get_optimizer, minimize, resume)
 from emaphm.optim.baselines import BASELINES, CMAES, ScipyDE
+from emaphm.optim.problems import rastrigin
 from emaphm.optim.base import child_rng
 
 BOX = ([-5.12] * 6, [5.12] * 6)
 NAMES = sorted(BASELINES)
-
-
-def rastrigin(X):
-    return 10.0 * X.shape[1] + np.sum(X**2 - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
 
 
 def test_scipy_de_adapter_is_scipys_own_run():

@@ -19,6 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from emaphm.optim.problems import rastrigin, rosenbrock, sphere, standard_box
 from emaphm.optim import (
     ALGORITHMS,
     DE,
@@ -41,27 +42,11 @@ N_VAR = 8
 
 
 # ----------------------------------------------------------------------------- test functions
-# Batch form: X (n_pop, n_var) -> (n_pop,). Known optimum f* = 0 for all three.
+# emaphm.optim.problems, batch form: X (n_pop, n_var) -> (n_pop,). Known optimum f* = 0.
 
 
-def sphere(X):
-    """Sphere, minimum 0 at x = 0."""
-    return np.sum(X**2, axis=1)
-
-
-def rastrigin(X):
-    """Rastrigin (A = 10), minimum 0 at x = 0; ~10^n local minima on [-5.12, 5.12]^n."""
-    return 10.0 * X.shape[1] + np.sum(X**2 - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
-
-
-def rosenbrock(X):
-    """Rosenbrock, minimum 0 at x = (1, ..., 1); for n = 8 a local minimum f ~ 3.99 lies
-    near (-1, 1, ..., 1)."""
-    return np.sum(100.0 * (X[:, 1:] - X[:, :-1] ** 2) ** 2 + (1.0 - X[:, :-1]) ** 2, axis=1)
-
-
-BOX_5 = ([-5.12] * N_VAR, [5.12] * N_VAR)  # standard box for sphere and Rastrigin
-BOX_ROSEN = ([-5.0] * N_VAR, [10.0] * N_VAR)  # standard box for Rosenbrock
+BOX_5 = standard_box("sphere", N_VAR)  # standard box for sphere and Rastrigin
+BOX_ROSEN = standard_box("rosenbrock", N_VAR)  # standard box for Rosenbrock
 
 
 def _box_checking(f, lo, hi, seen):
@@ -631,3 +616,13 @@ def test_de_dither_is_used_and_reproducible():
     assert np.array_equal(a.history, b.history)
     assert not np.array_equal(a.history, c.history)
     assert DE(F=[0.5, 1.0]).F == (0.5, 1.0)
+
+
+def test_test_problems_have_their_known_optimum():
+    from emaphm.optim.problems import TEST_PROBLEMS
+
+    rng = np.random.default_rng(0)
+    for name, (f, (lo, hi), f_star, x_star) in TEST_PROBLEMS.items():
+        assert f(np.full((1, N_VAR), x_star))[0] == f_star, name
+        X = rng.uniform(lo, hi, size=(100, N_VAR))
+        assert np.all(f(X) > f_star), name

@@ -44,22 +44,11 @@ import pytest
 from scipy.optimize import differential_evolution
 
 from emaphm.optim import DE, GWO, PSO, MaxIterations, minimize
+from emaphm.optim.problems import rastrigin, rosenbrock, sphere
 
 N_VAR = 8
 # Seeds per problem: Rastrigin's two groups of outcomes need more runs (see above).
 SEEDS = {"sphere": range(5), "rosenbrock": range(10), "rastrigin": range(20)}
-
-
-def sphere(X):
-    return np.sum(X**2, axis=-1)
-
-
-def rastrigin(X):
-    return 10.0 * X.shape[-1] + np.sum(X**2 - 10.0 * np.cos(2.0 * np.pi * X), axis=-1)
-
-
-def rosenbrock(X):
-    return np.sum(100.0 * (X[..., 1:] - X[..., :-1] ** 2) ** 2 + (1.0 - X[..., :-1]) ** 2, axis=-1)
 
 
 PROBLEMS = {
