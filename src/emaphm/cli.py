@@ -4,6 +4,8 @@
     emaphm scenarios  list the named fault scenarios
     emaphm diagnose   identify the faults of a trace (or of a simulated scenario)
     emaphm params     write the default parameters as a TOML file to edit
+    emaphm campaign, report                   (emaphm.campaign.cli)
+    emaphm history, prognose, demo-degradation (emaphm.prognosis.cli)
 
 Bad input exits with status 2 and a message that says what to fix.
 """
