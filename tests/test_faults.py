@@ -10,8 +10,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from emaphm.faults import (K_NAMES, K_NOMINAL, MAX_SHORTED_FRACTION, N_K, SCENARIOS,
-                           FaultVectorError, apply_faults, as_k, error_pct, scenario)
+from emaphm.faults import (K_NAMES, K_NOMINAL, MAX_SHORTED_FRACTION, N_K, PAPER_SCENARIOS,
+                           SCENARIO_FAULT_MODELS, SCENARIOS, FaultVectorError, apply_faults,
+                           as_k, error_pct, scenario, scenario_fault_model)
 from emaphm.models.layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                                   C_L_A, C_R_A, N_CP, pack, pack_population)
 from emaphm.params import siemens_1fk7060
@@ -177,8 +178,12 @@ def test_scenario_names_and_values():
     assert set(SCENARIOS) == {
         "nominal", "friction-low", "friction-high", "backlash-low", "backlash-high",
         "short-circuit-low", "short-circuit-high", "eccentricity-low", "eccentricity-high",
-        "gain-low", "gain-high", "multiple"}
-    assert len(SCENARIOS) == 12
+        "gain-low", "gain-high", "multiple", "turn-short-5pct", "turn-short-15pct"}
+    assert len(SCENARIOS) == 14
+    assert len(PAPER_SCENARIOS) == 11 and "nominal" not in PAPER_SCENARIOS
+    assert {SCENARIO_FAULT_MODELS[n] for n in PAPER_SCENARIOS} == {"paper"}
+    assert scenario_fault_model("turn-short-15pct") == "physical"
+    assert scenario("turn-short-15pct")[2] == 0.15
     assert SCENARIOS["nominal"].tolist() == K_NOMINAL.tolist()
     for mode, idx in [("friction", 0), ("backlash", 1), ("short-circuit", 2),
                       ("eccentricity", 5), ("gain", 7)]:
@@ -286,3 +291,21 @@ def test_error_pct_takes_the_eccentricity_phase_the_short_way_round():
     assert error_pct(np.array([0, 0, 0, 0, 0, 0.5, 1.0, 0.5]), k_true) == pytest.approx(0.0, abs=1e-12)
     near = np.array([0, 0, 0, 0, 0, 0.5, 0.98, 0.5])          # 0.02 of a turn away
     assert error_pct(near, k_true) == pytest.approx(100 / np.sqrt(6.5) * np.sqrt(0.5 * 0.02**2))
+
+
+# --------------------------------------------------------------------------- fault models
+
+def test_physical_fault_model_keeps_the_winding_and_records_the_shorted_turns():
+    k = [0.0, 0.0, 0.15, 0.0, 0.3, 0.0, 0.5, 0.5]
+    f = apply_faults(NOMINAL, k, "physical")
+    m = NOMINAL.motor
+    assert f.motor.R == m.R and f.motor.L == m.L and f.motor.c0 == m.c0
+    assert f.motor.mu == (0.15, 0.0, 0.3)
+    assert f.motor.R_f == m.R_f
+    p = apply_faults(NOMINAL, k, "paper")
+    assert p.motor.mu == (0.0, 0.0, 0.0)
+    assert p.motor.R[0] == pytest.approx(m.R[0] * 0.85)
+    # the other components map the same way under both models
+    assert f.transmission == p.transmission and f.controller == p.controller
+    with pytest.raises(FaultVectorError, match="unknown fault model 'ideal'; choose 'physical'"):
+        apply_faults(NOMINAL, k, "ideal")

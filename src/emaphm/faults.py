@@ -14,6 +14,18 @@ k7     eccentricity phase      Eq. 2 phase = 2 pi (k7 - 0.5)    (-180..180 deg)
 k8     proportional gain       Kp x (0.5 + k8)                  (0.5x..1.5x)
 =====  ======================  =========================================================
 
+Two **fault models** map k3..k5 (``fault_model``, :data:`FAULT_MODELS`):
+
+* ``"paper"``: the paper's turn removal above, ``R x (1 - s)``, ``L x (1 - s)^2``,
+  ``c0 x (1 - s)``: the shorted turns simply vanish from the phase;
+* ``"physical"``: an inter-turn short circuit as it happens: ``s`` is the
+  fraction ``Motor.mu`` of the phase's turns bridged by the fault resistance
+  ``Motor.R_f``, and a fault-loop current flows through them
+  (:mod:`emaphm.models.windings`). R, L and c0 keep their healthy values.
+
+The paper's scenarios keep the paper's fault model; ``turn-short-*`` are
+physical scenarios of realistic size (:data:`SCENARIO_FAULT_MODELS`).
+
 Nominal is ``[0, 0, 0, 0, 0, 0, 0.5, 0.5]``. The shorted fraction ``s`` is
 capped at :data:`MAX_SHORTED_FRACTION` so that a phase keeps a finite, non-zero
 inductance (a fully shorted winding is no RL branch any more).
@@ -49,7 +61,12 @@ __all__ = [
     "eccentricity_phase",
     "gain_scale",
     "apply_faults",
+    "FAULT_MODELS",
+    "check_fault_model",
     "SCENARIOS",
+    "SCENARIO_FAULT_MODELS",
+    "PAPER_SCENARIOS",
+    "scenario_fault_model",
     "scenario",
     "error_pct",
 ]
@@ -127,21 +144,41 @@ def gain_scale(k8):
     return 0.5 + k8
 
 
-def apply_faults(params: ActuatorParams, k: Sequence[float] | np.ndarray) -> ActuatorParams:
+#: The mappings of k3..k5: the paper's turn removal, or a physical fault loop.
+FAULT_MODELS = ("paper", "physical")
+
+
+def check_fault_model(name: str) -> str:
+    """``name`` if it is one of :data:`FAULT_MODELS`, else a FaultVectorError naming them."""
+    if name not in FAULT_MODELS:
+        raise FaultVectorError(f"unknown fault model {name!r}; choose 'physical' (the shorted "
+                               "turns carry a fault-loop current) or 'paper' (the shorted turns "
+                               "are removed: R x (1-k), L x (1-k)^2)")
+    return name
+
+
+def apply_faults(params: ActuatorParams, k: Sequence[float] | np.ndarray,
+                 fault_model: str = "paper") -> ActuatorParams:
     """Map nominal parameters and a fault vector onto faulty parameters (pure).
 
     ``params`` describes the healthy actuator (its eccentricity must be zero);
-    the result carries per-phase R, L, c0, the eccentricity of Eq. 2, the scaled
-    friction, backlash and proportional gain.
+    the result carries the short circuits (per-phase R, L, c0 under
+    ``fault_model="paper"``; the shorted fractions ``Motor.mu`` under
+    ``"physical"``), the eccentricity of Eq. 2, the scaled friction, backlash
+    and proportional gain.
     """
     kk = as_k(k)
+    check_fault_model(fault_model)
     m, tr, ctl = params.motor, params.transmission, params.controller
     s = shorted_fraction(kk[2:5])
-    R = tuple(float(r * (1.0 - si)) for r, si in zip(m.R, s))
-    L = tuple(float(ell * (1.0 - si) ** 2) for ell, si in zip(m.L, s))
-    c0 = tuple(float(c * (1.0 - si)) for c, si in zip(m.c0, s))
-    motor = replace(m, R=R, L=L, c0=c0, ecc=float(kk[5]),
-                    ecc_phase=float(eccentricity_phase(kk[6])))
+    if fault_model == "paper":
+        R = tuple(float(r * (1.0 - si)) for r, si in zip(m.R, s))
+        L = tuple(float(ell * (1.0 - si) ** 2) for ell, si in zip(m.L, s))
+        c0 = tuple(float(c * (1.0 - si)) for c, si in zip(m.c0, s))
+        motor = replace(m, R=R, L=L, c0=c0)
+    else:
+        motor = replace(m, mu=tuple(float(si) for si in s))
+    motor = replace(motor, ecc=float(kk[5]), ecc_phase=float(eccentricity_phase(kk[6])))
     fs = float(friction_scale(kk[0]))
     trans = replace(tr, FSJ=tr.FSJ * fs, FDJ=tr.FDJ * fs,
                     backlash=tr.backlash * float(backlash_scale(kk[1])))
@@ -168,11 +205,23 @@ def _scenarios() -> dict[str, np.ndarray]:
     multiple = np.array([0.0133, 0.05, 0.003, 0.0, 0.0, 0.012, 0.5, 0.35])  # paper Eq. 8
     multiple.setflags(write=False)
     out["multiple"] = multiple
+    # physical inter-turn short circuits of realistic size: 5 % and 15 % of phase A's turns
+    out["turn-short-5pct"] = _single(2, 0.05)
+    out["turn-short-15pct"] = _single(2, 0.15)
     return out
 
 
-#: The paper's scenarios (section 3.2 and 4) plus ``nominal``: name -> k.
+#: The paper's scenarios (section 3.2 and 4) plus ``nominal`` and the physical
+#: ``turn-short-*`` ones: name -> k.
 SCENARIOS: Mapping[str, np.ndarray] = MappingProxyType(_scenarios())
+
+#: The paper's 11 fault scenarios (5 modes x 2 magnitudes, and the multiple faults).
+PAPER_SCENARIOS = tuple(n for n in SCENARIOS if n != "nominal" and not n.startswith("turn-short"))
+
+#: The fault model each scenario is defined under: the paper's keep the paper's turn
+#: removal (so the paper campaign keeps its meaning), ``turn-short-*`` are physical.
+SCENARIO_FAULT_MODELS: Mapping[str, str] = MappingProxyType(
+    {name: ("physical" if name.startswith("turn-short") else "paper") for name in SCENARIOS})
 
 
 def scenario(name: str) -> np.ndarray:
@@ -183,6 +232,12 @@ def scenario(name: str) -> np.ndarray:
         raise FaultVectorError(
             f"unknown scenario {name!r}; choose one of {', '.join(SCENARIOS)} "
             "(`emaphm scenarios` lists them with their k)") from None
+
+
+def scenario_fault_model(name: str) -> str:
+    """The fault model a named scenario is defined under."""
+    scenario(name)
+    return SCENARIO_FAULT_MODELS[name]
 
 
 def error_pct(k, k_true) -> float:

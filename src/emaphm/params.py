@@ -14,6 +14,9 @@ field                      unit                meaning
                                                per mechanical rad/s (also N m/A)
 ``Motor.ecc``              --                  static eccentricity modulus (Eq. 2)
 ``Motor.ecc_phase``        rad                 static eccentricity phase (Eq. 2)
+``Motor.L_sigma``          --                  leakage share of the synchronous inductance
+``Motor.mu``               --                  shorted fraction of each phase's turns
+``Motor.R_f``              ohm                 fault resistance across the shorted turns
 ``Motor.J_m``              kg m^2              rotor inertia
 ``Motor.C_m``              N m s/rad           viscous friction coefficient
 ``Motor.T_max``            N m                 maximum torque
@@ -35,7 +38,15 @@ field                      unit                meaning
 ``Transmission.backlash``  rad                 total backlash width
 ``Load.J_l``               kg m^2              load inertia behind the backlash
 ``Load.C_l``               N m s/rad           load viscous damping
+``Plant.omega_s``          rad/s               Stribeck velocity of the dry friction
+``Plant.K_c``              N m/rad             backlash contact stiffness
+``Plant.D_c``              N m s/rad           backlash contact damping
 =========================  ==================  =====================================
+
+``[plant]`` holds physics that only the reference plant has (the monitoring
+model uses Borello's two-level friction and a rigid, momentum-conserving
+backlash contact); ``Motor.mu``/``Motor.R_f`` describe an inter-turn short
+circuit (healthy: ``mu = 0``), see :mod:`emaphm.models.windings`.
 
 The default preset :func:`siemens_1fk7060` describes the paper's test bench
 motor, a Siemens 1FK7060-2AC71. The paper's data table is missing from our
@@ -64,6 +75,7 @@ __all__ = [
     "Controller",
     "Transmission",
     "Load",
+    "Plant",
     "ActuatorParams",
     "siemens_1fk7060",
     "load_params",
@@ -110,6 +122,12 @@ _UNITS: dict[str, str] = {
     "backlash": "rad",
     "J_l": "kg m^2",
     "C_l": "N m s/rad",
+    "L_sigma": "-, 0..1",
+    "mu": "-, shorted fraction 0..1",
+    "R_f": "ohm",
+    "omega_s": "rad/s",
+    "K_c": "N m/rad",
+    "D_c": "N m s/rad",
 }
 
 
@@ -130,7 +148,8 @@ def _check(owner: str, name: str, value: float, *, lo: float | None = None,
     return v
 
 
-def _phase3(owner: str, name: str, value: Any) -> Phase3:
+def _phase3(owner: str, name: str, value: Any, *, lo: float = 0.0,
+            strict_lo: bool = True, hi: float | None = None) -> Phase3:
     """Accept a scalar (same on all phases) or three per-phase values."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         value = (value, value, value)
@@ -144,7 +163,8 @@ def _phase3(owner: str, name: str, value: Any) -> Phase3:
         raise ParameterError(
             f"{owner}.{name} [{_UNITS[name]}] needs 3 per-phase values (a, b, c), "
             f"got {len(vals)}")
-    return tuple(_check(owner, name, v, lo=0.0) for v in vals)  # type: ignore[return-value]
+    return tuple(_check(owner, name, v, lo=lo, strict_lo=strict_lo, hi=hi)  # type: ignore[return-value]
+                 for v in vals)
 
 
 @dataclass(frozen=True)
@@ -165,9 +185,15 @@ class Motor:
     C_m: float = 5e-4
     T_max: float = 18.0
     I_max: float = 14.14
+    L_sigma: float = 0.15
+    mu: Phase3 = (0.0, 0.0, 0.0)
+    R_f: Phase3 = (0.15, 0.15, 0.15)
 
     def __post_init__(self) -> None:
         o = "Motor"
+        object.__setattr__(self, "L_sigma", _check(o, "L_sigma", self.L_sigma, lo=0.0, hi=1.0))
+        object.__setattr__(self, "mu", _phase3(o, "mu", self.mu, strict_lo=False, hi=0.99))
+        object.__setattr__(self, "R_f", _phase3(o, "R_f", self.R_f, strict_lo=False))
         if isinstance(self.p, bool) or not isinstance(self.p, int) or self.p < 1:
             raise ParameterError(f"{o}.p [pole pairs, integer] must be an integer >= 1, got {self.p!r}")
         for name in ("R", "L", "c0"):
@@ -278,8 +304,37 @@ class Load:
         object.__setattr__(self, "C_l", _check(o, "C_l", self.C_l, lo=0.0, strict_lo=False))
 
 
+@dataclass(frozen=True)
+class Plant:
+    """Physics that only the reference plant has (the monitoring model lacks it).
+
+    Dry friction falls from ``FSJ`` to ``FDJ`` with speed (Stribeck):
+    ``T_f = FDJ + (FSJ - FDJ) exp(-(omega/omega_s)^2)`` while moving;
+    backlash closes on a compliant, damped contact of stiffness ``K_c`` and
+    damping ``D_c`` (the transmission's torsional compliance) instead of a
+    rigid impact. Defaults: ``omega_s = 1 rad/s``; ``K_c = 4000 N m/rad`` and
+    ``D_c = 0.5 N m s/rad``, a well-damped two-mass resonance near 500 Hz
+    with the preset's inertias.
+    """
+
+    omega_s: float = 1.0
+    K_c: float = 4000.0
+    D_c: float = 0.5
+
+    def __post_init__(self) -> None:
+        o = "Plant"
+        for name in ("omega_s", "K_c"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
+        object.__setattr__(self, "D_c", _check(o, "D_c", self.D_c, lo=0.0, strict_lo=False))
+
+
 _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
-             "transmission": Transmission, "load": Load}
+             "transmission": Transmission, "load": Load, "plant": Plant}
+
+#: Sections and fields added after files were first written: a file without them takes
+#: the defaults (a healthy winding, the default plant physics).
+_OPTIONAL_SECTIONS = {"plant"}
+_OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}}
 
 
 @dataclass(frozen=True)
@@ -291,6 +346,7 @@ class ActuatorParams:
     controller: Controller = field(default_factory=Controller)
     transmission: Transmission = field(default_factory=Transmission)
     load: Load = field(default_factory=Load)
+    plant: Plant = field(default_factory=Plant)
     name: str = "custom"
 
     def __post_init__(self) -> None:
@@ -323,6 +379,9 @@ class ActuatorParams:
         for sec, klass in _SECTIONS.items():
             given = data.get(sec)
             base = getattr(defaults, sec) if defaults is not None else None
+            if given is None and sec in _OPTIONAL_SECTIONS:
+                parts[sec] = base if base is not None else klass()
+                continue
             if given is None:
                 if base is None:
                     raise ParameterError(f"{source}: missing section [{sec}] with fields "
@@ -337,7 +396,7 @@ class ActuatorParams:
                 raise ParameterError(
                     f"{source}: unknown field(s) {sorted(extra)} in [{sec}]; known fields: "
                     + ", ".join(f"{n} [{_UNITS[n]}]" for n in sorted(names)))
-            missing = names - set(given)
+            missing = names - set(given) - _OPTIONAL_FIELDS.get(sec, set())
             if missing and base is None:
                 raise ParameterError(
                     f"{source}: [{sec}] is missing "
