@@ -3,6 +3,7 @@
     emaphm simulate   simulate an actuator and write its trace (CSV or Parquet)
     emaphm scenarios  list the named fault scenarios
     emaphm diagnose   identify the faults of a trace (or of a simulated scenario)
+    emaphm calibrate  estimate a healthy unit's parameters from its traces
     emaphm params     write the default parameters as a TOML file to edit
     emaphm campaign, report                   (emaphm.campaign.cli)
     emaphm history, prognose, demo-degradation (emaphm.prognosis.cli)
@@ -84,22 +85,22 @@ def budget_option(text: str | None) -> Any:
 
 # ----------------------------------------------------------------------------- scenarios
 def cmd_scenarios(args: argparse.Namespace) -> int:
-    from .faults import K_NAMES, SCENARIOS
+    from .faults import K_NAMES, SCENARIO_FAULT_MODELS, SCENARIOS
 
     if args.json:
         print(json.dumps({n: k.tolist() for n, k in SCENARIOS.items()}))
         return 0
     width = max(len(n) for n in SCENARIOS)
-    print(f"{'scenario':{width}s}  k = [{', '.join(K_NAMES)}]")
+    print(f"{'scenario':{width}s}  {'fault model':11s}  k = [{', '.join(K_NAMES)}]")
     for name, k in SCENARIOS.items():
-        print(f"{name:{width}s}  {','.join(f'{x:g}' for x in k)}")
+        print(f"{name:{width}s}  {SCENARIO_FAULT_MODELS[name]:11s}  {','.join(f'{x:g}' for x in k)}")
     return 0
 
 
 # ----------------------------------------------------------------------------- simulate
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .faults import as_k, scenario
-    from .models.reference import Sensors
+    from .acquisition import Sensors
     from .plots import plot_trace
     from .simulate import DEFAULT_SENSORS, simulate
     from .traces import write_trace
@@ -109,7 +110,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     out = _check_out_path(args.out, (".csv", ".parquet"), "--out")
     plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
     k = as_k(args.k) if args.k is not None else scenario(args.scenario)
+    fault_model = _fault_model_option(args)
     params = _load_params(args.params)
+    unit = _unit_options(args, params)
     if args.noise is None:
         sensors = DEFAULT_SENSORS if args.seed is not None else Sensors()
     else:
@@ -117,7 +120,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if sensors.current_noise > 0 and args.seed is None:
         raise UsageError("sensor noise needs --seed S (randomness always flows from an explicit seed)")
     t0 = time.perf_counter()
-    trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed)
+    trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed,
+                     fault_model=fault_model, **unit)
     if args.scenario:
         trace = trace.with_meta(scenario=args.scenario)
     elapsed = time.perf_counter() - t0
@@ -127,11 +131,40 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if plot:
         overlay = None
         if not np.allclose(k, scenario("nominal")) and not args.no_overlay:
-            overlay = simulate(scenario("nominal"), model=args.model, params=params).with_meta(
-                scenario="nominal")
+            overlay = simulate(scenario("nominal"), model=args.model, params=params,
+                               fault_model=fault_model, **unit).with_meta(scenario="nominal")
         plot_trace(trace, overlay, path=plot)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
+
+
+def _fault_model_option(args: argparse.Namespace) -> str:
+    """--fault-model, else the scenario's own, else physical."""
+    from .faults import check_fault_model, scenario_fault_model
+
+    if args.fault_model is not None:
+        return check_fault_model(args.fault_model)
+    return scenario_fault_model(args.scenario) if args.scenario else "physical"
+
+
+def _unit_options(args: argparse.Namespace, params) -> dict[str, Any]:
+    """--unit-seed, --tolerances and --unreported-load as keyword arguments of simulate()."""
+    from .units import load_tolerances
+
+    if args.tolerances is not None and args.unit_seed is None:
+        raise UsageError("--tolerances needs --unit-seed N (the seed of the unit to draw)")
+    if (args.unit_seed is not None or args.unreported_load is not None) \
+            and getattr(args, "model", "reference") != "reference":
+        raise UsageError("--unit-seed, --tolerances and --unreported-load describe the plant: "
+                         "use them with --model reference")
+    out: dict[str, Any] = {}
+    if args.unit_seed is not None:
+        out["unit_seed"] = args.unit_seed
+        if args.tolerances is not None:
+            out["tolerances"] = load_tolerances(args.tolerances)
+    if args.unreported_load is not None:
+        out["unreported_load"] = args.unreported_load
+    return out
 
 
 # ----------------------------------------------------------------------------- diagnose
@@ -172,6 +205,7 @@ def _table(ident, diag) -> str:
             row += f" {ident.k_true[i]:8.4f}"
         lines.append(row)
     lines.append("")
+    lines.append(f"fault model {ident.fault_model}")
     lines.append(f"algorithm {ident.algorithm}, seed {ident.seed}: {ident.evaluations} evaluations, "
                  f"{ident.iterations} iterations in {ident.elapsed_s:.2f} s "
                  f"({ident.evals_per_s:.0f} evals/s, {100 * ident.kernel_s / max(ident.elapsed_s, 1e-12):.0f}% "
@@ -212,28 +246,38 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
     params = _load_params(args.params)
     if args.trace is not None:
+        if args.unit_seed is not None or args.unreported_load is not None \
+                or args.tolerances is not None:
+            raise UsageError("--unit-seed, --tolerances and --unreported-load describe a simulated "
+                             "plant: use them with --scenario, not with a trace file")
         path = Path(args.trace)
         if not path.exists():
             raise UsageError(f"trace file {path} does not exist")
         trace = read_trace(path)
     else:
         k_true = scenario(args.scenario)
-        print(f"simulating scenario {args.scenario} on the reference model "
-              f"(switching PWM, sensor noise {DEFAULT_SENSORS.current_noise * 1e3:.0f} mA rms, "
-              f"seed {args.seed})", file=sys.stderr)
+        sim_fault_model = _fault_model_option(args)
+        unit = _unit_options(args, params)
+        print(f"simulating scenario {args.scenario} on the reference plant "
+              f"({sim_fault_model} fault model, switching PWM, sensor noise "
+              f"{DEFAULT_SENSORS.current_noise * 1e3:.0f} mA rms, seed {args.seed}"
+              + (f", unit {args.unit_seed}" if args.unit_seed is not None else "") + ")",
+              file=sys.stderr)
         trace = simulate(k_true, model="reference", params=params, sensors=DEFAULT_SENSORS,
-                         seed=args.seed).with_meta(scenario=args.scenario)
+                         seed=args.seed, fault_model=sim_fault_model,
+                         **unit).with_meta(scenario=args.scenario)
     progress = _Progress(enabled=not args.quiet and sys.stderr.isatty())
     if not args.quiet:
         print(f"identifying with {args.algorithm.upper()} (seed {args.seed})", file=sys.stderr)
     try:
         ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
-                         callback=progress)
+                         callback=progress, fault_model=args.fault_model)
     finally:
         progress.close()
-    diag = diagnose(ident.k, params=params)
+    diag = diagnose(ident.k, params=params, fault_model=ident.fault_model)
     if args.json:
-        out = {**ident.to_dict(), **diag.to_dict(), "scenario": args.scenario,
+        out = {**ident.to_dict(), **diag.to_dict(),
+               "scenario": args.scenario or trace.meta.get("scenario"),
                "trace": args.trace, "version": __version__}
         if not args.history:
             out.pop("history", None)
@@ -242,6 +286,44 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         print(_table(ident, diag))
     if plot:
         plot_identification(trace, ident, path=plot)
+        print(f"wrote {plot}", file=sys.stderr)
+    return 0
+
+
+# ----------------------------------------------------------------------------- calibrate
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    from .calibration import CalibrationError, calibrate
+    from .params import save_params
+    from .traces import read_trace
+
+    out = _check_out_path(args.out, (".toml",), "--out")
+    plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
+    params = _load_params(args.params)
+    traces = []
+    for name in args.traces:
+        path = Path(name)
+        if not path.exists():
+            raise UsageError(f"trace file {path} does not exist")
+        traces.append(read_trace(path))
+    if not args.quiet:
+        print(f"calibrating on {len(traces)} healthy trace(s) around "
+              f"{args.params or 'the default preset'}", file=sys.stderr)
+    try:
+        res = calibrate(traces, params, sources=[str(Path(n).name) for n in args.traces])
+    except CalibrationError as exc:
+        raise UsageError(str(exc)) from None
+    save_params(res.params, out)
+    if args.json:
+        d = res.to_dict()
+        d.update(out=str(out), version=__version__)
+        print(json.dumps(d))
+    else:
+        print(res.summary())
+    print(f"wrote {out}: pass it with --params to diagnose this unit", file=sys.stderr)
+    if plot:
+        from .plots import plot_calibration
+
+        plot_calibration(res, path=plot)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
 
@@ -255,6 +337,23 @@ def cmd_params(args: argparse.Namespace) -> int:
     print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it and "
           "pass it with --params", file=sys.stderr)
     return 0
+
+
+def _plant_arguments(p: argparse.ArgumentParser, *, diagnose: bool = False) -> None:
+    p.add_argument("--fault-model", choices=("physical", "paper"), default=None,
+                   help=("mapping of k3..k5 in the monitoring model: physical (inter-turn fault "
+                         "loop) or paper (turns removed); default the trace's own, physical for a "
+                         "bench trace" if diagnose else
+                         "physical (inter-turn fault loop) or paper (turns removed: R x(1-k), "
+                         "L x(1-k)^2); default the scenario's own, physical for --k"))
+    where = "the simulated plant (with --scenario)" if diagnose else "the plant (--model reference)"
+    p.add_argument("--unit-seed", type=_seed, default=None,
+                   help=f"draw {where} as a production unit within tolerances, from this seed")
+    p.add_argument("--tolerances", default=None,
+                   help="TOML file with [tolerances] name = [lo, hi] (with --unit-seed; see "
+                        "emaphm.units)")
+    p.add_argument("--unreported-load", type=float, default=None,
+                   help=f"constant load torque [N m] on {where} that the trace does not report")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -273,6 +372,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_seed, help="seed of the sensor noise (enables realistic sensors)")
     s.add_argument("--noise", type=float, help="current noise in A rms (default 0.02 with --seed, else 0)")
     s.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
+    _plant_arguments(s)
     s.set_defaults(func=cmd_simulate)
 
     c = sub.add_parser("scenarios", help="list the named fault scenarios")
@@ -292,7 +392,20 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--plot", help="write measured vs identified currents and convergence (.png)")
     d.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
     d.add_argument("--quiet", action="store_true", help="no progress line")
+    _plant_arguments(d, diagnose=True)
     d.set_defaults(func=cmd_diagnose)
+
+    cal = sub.add_parser("calibrate", help="estimate a healthy unit's parameters from its traces",
+                         description="Fit inertia, flux, resistance, inductance, friction, "
+                                     "current sensor gains and offsets and an unreported load "
+                                     "of a unit known to be healthy; write its parameters.")
+    cal.add_argument("traces", nargs="+", help="traces of the healthy unit (.csv or .parquet)")
+    cal.add_argument("--out", required=True, help="calibrated parameters, .toml")
+    cal.add_argument("--params", help="data-sheet parameters TOML (default: the preset)")
+    cal.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    cal.add_argument("--plot", help="measured vs calibrated currents of the first trace (.png)")
+    cal.add_argument("--quiet", action="store_true")
+    cal.set_defaults(func=cmd_calibrate)
 
     p = sub.add_parser("params", help="write the default actuator parameters to a TOML file")
     p.add_argument("--out", required=True)

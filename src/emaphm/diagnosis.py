@@ -19,11 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from .faults import (K_NOMINAL, as_k, backlash_scale, eccentricity_phase, friction_scale,
-                     gain_scale, shorted_fraction)
+from .faults import (K_NOMINAL, as_k, backlash_scale, check_fault_model, eccentricity_phase,
+                     friction_scale, gain_scale, shorted_fraction)
 from .params import ActuatorParams, siemens_1fk7060
 
-__all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "Fault", "Diagnosis", "diagnose", "FAULT_MODES"]
+__all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fault", "Diagnosis",
+           "diagnose", "FAULT_MODES"]
 
 FAULT_MODES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift")
 
@@ -50,6 +51,11 @@ class Thresholds:
 
 DEFAULT_THRESHOLDS = Thresholds()
 
+#: Thresholds per fault model (k3..k5 mean different things under each): under
+#: ``physical`` a short-circuit component is the shorted fraction of the turns itself.
+THRESHOLDS_BY_FAULT_MODEL = {"paper": DEFAULT_THRESHOLDS,
+                             "physical": Thresholds(short_circuit=0.02)}
+
 
 @dataclass(frozen=True)
 class Fault:
@@ -70,6 +76,7 @@ class Diagnosis:
     k: np.ndarray
     faults: tuple[Fault, ...]
     thresholds: Thresholds = DEFAULT_THRESHOLDS
+    fault_model: str = "paper"
 
     @property
     def healthy(self) -> bool:
@@ -81,7 +88,7 @@ class Diagnosis:
 
     def to_dict(self) -> dict[str, Any]:
         return {"healthy": self.healthy, "faults": [asdict(f) for f in self.faults],
-                "thresholds": asdict(self.thresholds)}
+                "thresholds": asdict(self.thresholds), "fault_model": self.fault_model}
 
     def summary(self) -> str:
         if self.healthy:
@@ -89,14 +96,18 @@ class Diagnosis:
         return "faulty: " + "; ".join(f.reading for f in self.faults)
 
 
-def diagnose(k, *, thresholds: Thresholds = DEFAULT_THRESHOLDS,
-             params: ActuatorParams | None = None) -> Diagnosis:
+def diagnose(k, *, thresholds: Thresholds | None = None,
+             params: ActuatorParams | None = None, fault_model: str = "paper") -> Diagnosis:
     """Read the faults out of an identified ``k``.
 
     ``params`` (the healthy actuator, default preset) turns the components into
-    physical values for the readings.
+    physical values for the readings; ``fault_model`` says what k3..k5 mean
+    (and picks the default thresholds, :data:`THRESHOLDS_BY_FAULT_MODEL`).
     """
     k = as_k(k)
+    check_fault_model(fault_model)
+    if thresholds is None:
+        thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
     p = params if params is not None else siemens_1fk7060()
     tr, ctl = p.transmission, p.controller
     faults: list[Fault] = []
@@ -113,9 +124,15 @@ def diagnose(k, *, thresholds: Thresholds = DEFAULT_THRESHOLDS,
         kj = float(k[2 + j])
         if kj > thresholds.short_circuit:
             s = float(shorted_fraction(kj))
-            faults.append(Fault("short_circuit", f"k{3 + j}", kj, kj,
-                                f"{100 * s:.0f}% of phase {ph} turns shorted "
-                                f"(R x{1 - s:.2f}, L x{(1 - s) ** 2:.2f})", phase=ph))
+            if fault_model == "physical":
+                reading = (f"inter-turn short circuit in phase {ph}: {100 * s:.1f}% of its turns "
+                           f"as seen through a fault resistance of {p.motor.R_f[j]:g} ohm (a "
+                           "higher fault resistance needs more shorted turns for the same "
+                           "fault current)")
+            else:
+                reading = (f"{100 * s:.0f}% of phase {ph} turns shorted "
+                           f"(R x{1 - s:.2f}, L x{(1 - s) ** 2:.2f})")
+            faults.append(Fault("short_circuit", f"k{3 + j}", kj, kj, reading, phase=ph))
     if k[5] > thresholds.eccentricity:
         phase_deg = math.degrees(float(eccentricity_phase(k[6])))
         faults.append(Fault("eccentricity", "k6,k7", float(k[5]), float(k[5]),
@@ -127,4 +144,4 @@ def diagnose(k, *, thresholds: Thresholds = DEFAULT_THRESHOLDS,
         faults.append(Fault("gain_drift", "k8", float(k[7]), abs(drift) / 0.5,
                             f"proportional gain {100 * (g - 1):+.0f}% (Kp {ctl.Kp * g:.1f} 1/s "
                             f"instead of {ctl.Kp:.1f})"))
-    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds)
+    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model)

@@ -17,21 +17,34 @@ amplitude for balanced currents).
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
 
+from .faults import check_fault_model
 from .models.monitoring import STATUS_DIVERGED, MonitoringModel
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
 
 __all__ = ["eq4_weights", "equivalent_current", "white_noise_sigma", "Eq4Objective",
-           "FITNESS_MODES"]
+           "FITNESS_MODES", "trace_fault_model", "effective_samples"]
 
 FITNESS_MODES = ("phases", "equivalent")
+
+
+def trace_fault_model(trace: Trace) -> str:
+    """The fault model to diagnose ``trace`` with: the one its metadata names; ``"paper"``
+    for a trace simulated by emaphm before fault models existed (metadata with a
+    ``model`` but no ``fault_model``); ``"physical"`` for a bench trace."""
+    meta = trace.meta if isinstance(trace.meta, dict) else {}
+    fm = meta.get("fault_model")
+    if isinstance(fm, str) and fm:
+        return check_fault_model(fm)
+    return "paper" if meta.get("model") in ("reference", "monitoring") else "physical"
 
 
 def eq4_weights(i_meas: np.ndarray, dT: float) -> np.ndarray:
@@ -50,6 +63,36 @@ def white_noise_sigma(x: np.ndarray) -> np.ndarray:
     x = np.asarray(x, dtype=float)
     d2 = x[2:] - 2.0 * x[1:-1] + x[:-2]
     return 1.4826 * np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0) / np.sqrt(6.0)
+
+
+def effective_samples(residual: np.ndarray, max_lag: int | None = None) -> tuple[float, float]:
+    """Independent samples in ``residual`` (n, c): ``(n_eff, tau)``.
+
+    ``tau = 1 + 2 sum_l rho(l)`` is the integrated autocorrelation time of each
+    column (mean autocorrelation over the columns), summed over lags until the
+    autocorrelation first drops below zero (the initial positive sequence of
+    Geyer 1992); ``n_eff = n c / tau``.
+    """
+    r = np.asarray(residual, dtype=float)
+    if r.ndim == 1:
+        r = r[:, None]
+    n, c = r.shape
+    if n < 4:
+        return float(n * c), 1.0
+    x = r - r.mean(axis=0)
+    m = 1 << int(math.ceil(math.log2(2 * n)))
+    spec = np.fft.rfft(x, m, axis=0)
+    acf = np.fft.irfft(spec * np.conj(spec), m, axis=0)[:n].sum(axis=1)
+    if acf[0] <= 0:
+        return float(n * c), 1.0
+    rho = acf / acf[0]
+    max_lag = n // 4 if max_lag is None else max_lag
+    tau = 1.0
+    for lag in range(1, max_lag):
+        if rho[lag] <= 0:
+            break
+        tau += 2.0 * rho[lag]
+    return float(n * c / tau), float(tau)
 
 
 def equivalent_current(i_abc: np.ndarray) -> np.ndarray:
@@ -86,12 +129,17 @@ class Eq4Objective:
 
     @classmethod
     def from_trace(cls, trace: Trace, params: ActuatorParams | None = None, *, n_sub: int = 1,
-                   mode: str = "phases", load_torque: np.ndarray | None = None) -> "Eq4Objective":
+                   mode: str = "phases", load_torque: np.ndarray | None = None,
+                   fault_model: str | None = None) -> "Eq4Objective":
         """Fitness against ``trace``: the model replays its command from its first angle.
 
         The load torque is the one of the profile stored in the trace's metadata
         (a simulated trace) unless given; a bench trace without it gets zero.
+        ``fault_model`` maps k3..k5 in the monitoring model (default: the trace's
+        own, :func:`trace_fault_model`).
         """
+        fault_model = check_fault_model(fault_model if fault_model is not None
+                                        else trace_fault_model(trace))
         if mode not in FITNESS_MODES:
             raise ValueError(f"unknown fitness mode {mode!r}; choose one of {', '.join(FITNESS_MODES)}")
         params = params if params is not None else siemens_1fk7060()
@@ -116,13 +164,19 @@ class Eq4Objective:
             load_torque = np.asarray(load_torque, dtype=float)
             if load_torque.shape != (n,):
                 raise ValueError(f"load_torque must have shape ({n},) on the model grid")
+        # a calibrated unit: its constant load, and its current sensors' gains and offsets
+        load_torque = load_torque + params.load.T_0
         profile = Profile.from_samples(t_model, on_grid.theta_ref, load_torque)
-        model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]))
+        model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]),
+                                fault_model=fault_model)
         i = np.asarray(on_grid.i_abc)
+        raw = np.asarray(trace.i_abc)
+        if not params.sensors.ideal:
+            i = params.sensors.correct(i)
+            raw = params.sensors.correct(raw)
         target = equivalent_current(i)[:, None] if mode == "equivalent" else i
         # the noise is measured on the samples as recorded: resampling a slower trace
         # onto the model grid interpolates between them and would hide it
-        raw = np.asarray(trace.i_abc)
         raw = equivalent_current(raw)[:, None] if mode == "equivalent" else raw
         return cls(model, np.ascontiguousarray(target), np.ascontiguousarray(eq4_weights(target, T_s)),
                    mode, noise_sigma=white_noise_sigma(raw))

@@ -101,6 +101,7 @@ class Identification:
     noise_floor: float = 0.0
     suspect: bool = False
     run_evaluations: int = 0
+    fault_model: str = "paper"
 
     @property
     def evals_per_s(self) -> float:
@@ -110,6 +111,7 @@ class Identification:
         """JSON-serialisable summary (no traces)."""
         d = {
             "algorithm": self.algorithm,
+            "fault_model": self.fault_model,
             "seed": self.seed,
             "k": [float(x) for x in self.k],
             "k_named": {n: float(x) for n, x in zip(K_NAMES, self.k)},
@@ -223,7 +225,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
              polish: bool = True, search: str = "ecc-xy", restarts: int | None = None,
              suspect_ratio: float = 5.0,
              callback: Callable[[Any], bool | None] | None = None,
-             objective: Eq4Objective | None = None) -> Identification:
+             objective: Eq4Objective | None = None,
+             fault_model: str | None = None) -> Identification:
     """Identify the fault vector of ``trace``.
 
     Parameters
@@ -266,6 +269,10 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         Called with the optimizer state after every iteration; True stops.
     objective
         A prebuilt objective for this trace (reused across runs to skip setup).
+    fault_model
+        Mapping of k3..k5 in the monitoring model (:data:`emaphm.faults.FAULT_MODELS`);
+        default the trace's own (:func:`emaphm.fitness.trace_fault_model`: its
+        metadata's, ``"physical"`` for a bench trace).
     """
     if algorithm not in ALL_ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose one of "
@@ -284,7 +291,12 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     optimizer = get_optimizer(algorithm, **(options or {}))
     validate(trace)
     if objective is None:
-        objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode)
+        objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode,
+                                            fault_model=fault_model)
+    elif fault_model is not None and fault_model != objective.model.fault_model:
+        raise ValueError(f"fault_model {fault_model!r} differs from the prebuilt objective's "
+                         f"{objective.model.fault_model!r}")
+    fault_model = objective.model.fault_model
     k0 = objective.stats.kernel_s
     e0 = objective.stats.diverged
     t0 = time.perf_counter()
@@ -324,6 +336,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         history=history, reason=res.reason, model_trace=model_trace,
         k_true=k_true, error_pct=None if k_true is None else float(error_pct(k, k_true)),
         diverged=objective.stats.diverged - e0,
+        fault_model=fault_model,
         options={**(options or {}), "n_sub": n_sub, "mode": mode, "polish": bool(polish),
                  "search": search,
                  "budget": None if budget is None else str(budget)},

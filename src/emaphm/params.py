@@ -76,6 +76,8 @@ __all__ = [
     "Transmission",
     "Load",
     "Plant",
+    "CurrentSensors",
+    "Calibration",
     "ActuatorParams",
     "siemens_1fk7060",
     "load_params",
@@ -128,6 +130,13 @@ _UNITS: dict[str, str] = {
     "omega_s": "rad/s",
     "K_c": "N m/rad",
     "D_c": "N m s/rad",
+    "T_0": "N m",
+    "gain": "-, per phase",
+    "offset": "A, per phase",
+    "date": "ISO date",
+    "sources": "file names",
+    "estimates": "[name, value, standard error]",
+    "fixed": "names",
 }
 
 
@@ -297,11 +306,63 @@ class Load:
 
     J_l: float = 7.7e-4
     C_l: float = 5e-4
+    T_0: float = 0.0
 
     def __post_init__(self) -> None:
         o = "Load"
         object.__setattr__(self, "J_l", _check(o, "J_l", self.J_l, lo=0.0))
         object.__setattr__(self, "C_l", _check(o, "C_l", self.C_l, lo=0.0, strict_lo=False))
+        object.__setattr__(self, "T_0", _check(o, "T_0", self.T_0, lo=-50.0, hi=50.0))
+
+
+@dataclass(frozen=True)
+class CurrentSensors:
+    """Known gains and offsets of the recording's current sensors (a calibration finds them).
+
+    A measured phase current is ``gain_j * i_j + offset_j``; diagnosis divides it back.
+    """
+
+    gain: Phase3 = (1.0, 1.0, 1.0)
+    offset: Phase3 = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        o = "CurrentSensors"
+        object.__setattr__(self, "gain", _phase3(o, "gain", self.gain, lo=0.5, hi=2.0))
+        object.__setattr__(self, "offset", _phase3(o, "offset", self.offset, lo=-5.0,
+                                                    strict_lo=False, hi=5.0))
+
+    @property
+    def ideal(self) -> bool:
+        return self.gain == (1.0, 1.0, 1.0) and self.offset == (0.0, 0.0, 0.0)
+
+    def correct(self, i_abc):
+        """The true currents of measured ones ``i_abc (n, 3)`` (a new array)."""
+        import numpy as np
+
+        return (np.asarray(i_abc, dtype=float) - np.asarray(self.offset)) / np.asarray(self.gain)
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """Where a unit's parameters came from: date, source traces, each estimate with its
+    standard error, and the parameters kept at their data-sheet values (not separable on
+    the calibration profile). Written by ``emaphm calibrate``; empty for a data sheet."""
+
+    date: str = ""
+    sources: tuple[str, ...] = ()
+    estimates: tuple[tuple[str, float, float], ...] = ()
+    fixed: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "date", str(self.date))
+        object.__setattr__(self, "sources", tuple(str(x) for x in self.sources))
+        try:
+            est = tuple((str(n), float(v), float(se)) for n, v, se in self.estimates)
+        except (TypeError, ValueError):
+            raise ParameterError("Calibration.estimates must be a list of [name, value, "
+                                 f"standard error] triples, got {self.estimates!r}") from None
+        object.__setattr__(self, "estimates", est)
+        object.__setattr__(self, "fixed", tuple(str(x) for x in self.fixed))
 
 
 @dataclass(frozen=True)
@@ -329,12 +390,13 @@ class Plant:
 
 
 _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
-             "transmission": Transmission, "load": Load, "plant": Plant}
+             "transmission": Transmission, "load": Load, "plant": Plant,
+             "sensors": CurrentSensors, "calibration": Calibration}
 
 #: Sections and fields added after files were first written: a file without them takes
-#: the defaults (a healthy winding, the default plant physics).
-_OPTIONAL_SECTIONS = {"plant"}
-_OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}}
+#: the defaults (a healthy winding, the default plant physics, ideal sensors, no calibration).
+_OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
+_OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"}}
 
 
 @dataclass(frozen=True)
@@ -347,6 +409,8 @@ class ActuatorParams:
     transmission: Transmission = field(default_factory=Transmission)
     load: Load = field(default_factory=Load)
     plant: Plant = field(default_factory=Plant)
+    sensors: CurrentSensors = field(default_factory=CurrentSensors)
+    calibration: Calibration = field(default_factory=Calibration)
     name: str = "custom"
 
     def __post_init__(self) -> None:
@@ -360,7 +424,8 @@ class ActuatorParams:
         d: dict[str, Any] = {"name": self.name}
         for sec in _SECTIONS:
             sub = asdict(getattr(self, sec))
-            d[sec] = {k: (list(v) if isinstance(v, tuple) else v) for k, v in sub.items()}
+            d[sec] = {k: ([list(x) if isinstance(x, tuple) else x for x in v]
+                          if isinstance(v, tuple) else v) for k, v in sub.items()}
         return d
 
     @classmethod

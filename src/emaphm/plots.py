@@ -14,7 +14,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .identify import Identification
     from .traces import Trace
 
-__all__ = ["plot_trace", "plot_identification", "save_figure"]
+__all__ = ["plot_trace", "plot_identification", "plot_calibration", "save_figure"]
 
 _PHASES = ("i_a", "i_b", "i_c")
 
@@ -113,6 +113,35 @@ def plot_identification(measured: "Trace", ident: "Identification", *,
     if ident.error_pct is not None:
         title += f", error {ident.error_pct:.2f}% (Eq. 9)"
     fig.suptitle(title, fontsize=10)
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+def plot_calibration(result, *, path: str | os.PathLike[str] | None = None,
+                     source: int = 0) -> "Figure":
+    """Measured vs calibrated monitoring-model currents of one source trace, and the residual.
+
+    ``result`` is an :class:`emaphm.calibration.CalibrationResult`; ``source`` the index of
+    the trace to draw.
+    """
+    fig, ax = _figure(4, 9.0)
+    t, meas, model = result.fits[source]
+    name = list(result.fit_ratio)[source]
+    for j, ph in enumerate(_PHASES):
+        ax[j].plot(t, meas[:, j], color="0.55", lw=1.6, label="measured")
+        ax[j].plot(t, model[:, j], color=f"C{j + 1}", lw=0.8, label="calibrated model")
+        ax[j].set_ylabel(f"{ph} [A]")
+        ax[j].legend(loc="upper right", fontsize=8)
+    for j, ph in enumerate(_PHASES):
+        ax[3].plot(t, meas[:, j] - model[:, j], color=f"C{j + 1}", lw=0.6, label=ph)
+    ax[3].set_ylabel("measured - model [A]")
+    ax[3].legend(loc="upper right", fontsize=8, ncol=3)
+    ax[3].set_xlabel("time [s]")
+    est = [f"{n} {e['value']:+.3f}" for n, e in result.estimates.items()]
+    fig.suptitle(f"calibration on {name}: fit {result.fit_ratio[name]:.2f}x the noise floor\n"
+                 "deviations from the data sheet: " + ", ".join(est[:7])
+                 + ("\n" + ", ".join(est[7:]) if len(est) > 7 else ""), fontsize=9)
     if path is not None:
         save_figure(fig, path)
     return fig

@@ -7,12 +7,14 @@ from typing import Literal, Sequence
 import numpy as np
 
 from . import __version__
-from .faults import as_k, scenario as scenario_k
+from .acquisition import Sensors
+from .faults import as_k, check_fault_model, scenario as scenario_k, scenario_fault_model
 from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
-from .models.reference import Sensors, run_reference
+from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
 from .traces import Trace
+from .units import Tolerances, Unit, draw_unit, nominal_unit
 
 __all__ = ["simulate", "MODELS", "DEFAULT_SENSORS"]
 
@@ -31,7 +33,12 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
              sensors: Sensors | None = None,
              seed: int | None = None,
              n_sub: int | None = None,
-             pwm: bool = True) -> Trace:
+             pwm: bool = True,
+             fault_model: str | None = None,
+             unit: Unit | None = None,
+             unit_seed: int | None = None,
+             tolerances: Tolerances | None = None,
+             unreported_load: float | None = None) -> Trace:
     """Simulate the actuator with fault vector ``k`` (or a named ``scenario``).
 
     Parameters
@@ -39,9 +46,21 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     k, scenario
         The fault vector (8 values in [0, 1]) or a scenario name; nominal if neither.
     model
-        ``"reference"`` (switching PWM, fine step) or ``"monitoring"`` (averaged, coarse).
+        ``"reference"``: the plant (switching PWM at a fine step, Stribeck
+        friction, compliant backlash, leakage and mutual inductance, physical
+        fault loops, a production unit); ``"monitoring"``: the fast model
+        (averaged inverter, coarse step, data-sheet parameters).
+    fault_model
+        Mapping of k3..k5 (:data:`emaphm.faults.FAULT_MODELS`): a scenario's own
+        by default, ``"physical"`` for a bare ``k``.
+    unit, unit_seed, tolerances, unreported_load
+        The production unit the plant plays (reference model only): a drawn
+        :class:`~emaphm.units.Unit`, or one drawn here from ``unit_seed`` within
+        ``tolerances`` (default :data:`emaphm.units.DEFAULT_TOLERANCES`); the
+        nominal unit if none. ``unreported_load`` [N m] overrides the unit's
+        constant load that the trace's metadata does not report.
     params
-        Healthy actuator parameters (default :func:`emaphm.params.siemens_1fk7060`).
+        Healthy data-sheet parameters (default :func:`emaphm.params.siemens_1fk7060`).
     profile
         Command and load profile (default :func:`emaphm.profiles.diagnostic`).
     sensors
@@ -60,16 +79,38 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         raise ValueError("give either a fault vector k or a scenario name, not both")
     kk = scenario_k(scenario) if scenario is not None else as_k(k if k is not None else
                                                                  scenario_k("nominal"))
+    if fault_model is None:
+        fault_model = scenario_fault_model(scenario) if scenario is not None else "physical"
+    check_fault_model(fault_model)
     if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
         raise ValueError(f"seed must be an integer, got {seed!r}")
     params = params if params is not None else siemens_1fk7060()
     profile = profile if profile is not None else diagnostic()
     sensors = sensors if sensors is not None else Sensors()
+    if unit is not None and unit_seed is not None:
+        raise ValueError("give either a unit or a unit_seed, not both")
+    if unit_seed is not None:
+        unit = draw_unit(params, unit_seed, tolerances) if tolerances is not None \
+            else draw_unit(params, unit_seed)
+    elif tolerances is not None:
+        raise ValueError("tolerances need a unit_seed to draw a unit with")
+    if unreported_load is not None:
+        if not (isinstance(unreported_load, (int, float)) and np.isfinite(unreported_load)
+                and abs(unreported_load) <= 5.0):
+            raise ValueError(f"unreported_load [N m] must be a number within +-5, "
+                             f"got {unreported_load!r}")
+        unit = Unit(**{**(unit or nominal_unit(params)).__dict__, "load": float(unreported_load)})
+    if unit is not None and model != "reference":
+        raise ValueError("a production unit (unit, unit_seed, unreported_load) is what the "
+                         "plant plays: use model='reference'")
+    unit = unit if unit is not None else nominal_unit(params)
     if model == "reference":
-        out = run_reference(params, kk, profile, n_sub=n_sub or 128, pwm=pwm)
+        sensors = sensors.with_unit(unit.sensor_gain, unit.sensor_offset)
+        out = run_reference(unit.params, kk, profile, fault_model=fault_model,
+                            n_sub=n_sub or 128, pwm=pwm, extra_load=unit.load + unit.params.load.T_0)
         status = "tripped" if out["trip_time"] is not None else "ok"
     else:
-        mm = MonitoringModel(params, profile, n_sub=n_sub or 1)
+        mm = MonitoringModel(params, profile, n_sub=n_sub or 1, fault_model=fault_model)
         r = mm.simulate(kk)
         out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
                "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}
@@ -83,16 +124,18 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     meta = {
         "model": model,
         "k": kk.tolist(),
+        "fault_model": fault_model,
         "scenario": scenario,
         "parameters": params.to_dict(),
         "profile": profile.to_dict(),
         "seed": None if seed is None else int(seed),
-        "sensors": {"current_noise": sensors.current_noise, "current_lsb": sensors.current_lsb,
-                    "encoder_counts": sensors.encoder_counts},
+        "sensors": sensors.to_dict(),
         "n_sub": n_sub or (128 if model == "reference" else 1),
         "pwm": bool(pwm) if model == "reference" else False,
         "drive": status,
         "emaphm_version": __version__,
     }
+    if model == "reference":
+        meta["unit"] = unit.to_dict()
     return Trace(t=out["t"], theta_ref=out["theta_ref"], theta_m=theta_m, omega_m=out["omega_m"],
                  i_abc=i_abc, torque=out["torque"], meta=meta)

@@ -24,7 +24,8 @@ from emaphm.cli import arg_type, budget_option
 
 __all__ = ["register", "cmd_campaign", "cmd_report"]
 
-_SPEC_OPTIONS = ("spec", "scenarios", "algorithms", "runs", "seed", "noise", "budget", "polish")
+_SPEC_OPTIONS = ("spec", "scenarios", "algorithms", "runs", "seed", "noise", "budget", "polish",
+                 "fault_model")
 
 
 _positive_int = arg_type(int, lambda n: n >= 1, "expected a positive integer")
@@ -56,6 +57,8 @@ def build_spec(args: argparse.Namespace) -> Any:
         changes["budget"] = budget_option(args.budget)
     if args.polish is not None:
         changes["polish"] = args.polish
+    if args.fault_model is not None:
+        changes["fault_model"] = args.fault_model
     return dataclasses.replace(spec, **changes) if changes else spec
 
 
@@ -177,6 +180,9 @@ def register(sub: Any) -> None:
                                     "reproducible); default: each algorithm's stopping rule")
     c.add_argument("--polish", action=argparse.BooleanOptionalAction, default=None,
                    help="compass-search polish after the metaheuristic (default on)")
+    c.add_argument("--fault-model", choices=("physical", "paper"), default=None,
+                   help="mapping of k3..k5 for every scenario; default each scenario's own (the "
+                        "paper's scenarios: paper; turn-short-*: physical)")
     c.add_argument("--store", default="results.sqlite", help="result store, SQLite (default results.sqlite)")
     c.add_argument("--workers", type=_non_negative_int,
                    help="local worker processes (default: all cores; 0: in this process)")

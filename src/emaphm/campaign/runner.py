@@ -41,7 +41,7 @@ def execute_run(run: Run) -> RunResult:
     try:
         warm_up()                               # outside the timing; no-op once warm
         from emaphm.identify import identify
-        from emaphm.models.reference import Sensors
+        from emaphm.acquisition import Sensors
         from emaphm.params import ActuatorParams
         from emaphm.simulate import simulate
 
@@ -49,11 +49,12 @@ def execute_run(run: Run) -> RunResult:
         t0 = time.perf_counter()
         trace = simulate(run.k_true, model="reference", params=params,
                          sensors=Sensors(current_noise=run.noise, current_lsb=run.adc_lsb),
-                         seed=run.noise_seed).with_meta(scenario=run.scenario)
+                         seed=run.noise_seed,
+                         fault_model=run.fault_model).with_meta(scenario=run.scenario)
         simulate_s = time.perf_counter() - t0
         ident = identify(trace, run.optimizer, seed=run.seed, budget=run.budget, params=params,
                          options=dict(run.options), n_sub=run.n_sub, mode=run.fitness_mode,
-                         polish=run.polish, search=run.search)
+                         polish=run.polish, search=run.search, fault_model=run.fault_model)
         return RunResult.from_identification(run, ident, simulate_s)
     except Exception as exc:                    # noqa: BLE001 - a failure is a value
         text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__, limit=-6))

@@ -48,7 +48,7 @@ import json
 import math
 import re
 import tomllib
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -130,10 +130,11 @@ class ScenarioSpec:
     k: tuple[float, ...]
     mode: str = ""
     magnitude: str = ""
+    fault_model: str = "paper"
 
     @classmethod
     def named(cls, name: str) -> "ScenarioSpec":
-        from emaphm.faults import SCENARIOS
+        from emaphm.faults import SCENARIO_FAULT_MODELS, SCENARIOS
 
         if name not in SCENARIOS:
             groups = ", ".join(SCENARIO_GROUPS)
@@ -144,22 +145,25 @@ class ScenarioSpec:
         if m:
             mode, magnitude = m.group(1), m.group(2)
         return cls(name=name, k=tuple(float(x) for x in SCENARIOS[name]), mode=mode,
-                   magnitude=magnitude)
+                   magnitude=magnitude, fault_model=SCENARIO_FAULT_MODELS[name])
 
     @classmethod
-    def custom(cls, name: str, k: Any, mode: str | None = None, magnitude: str = "") -> "ScenarioSpec":
-        from emaphm.faults import FaultVectorError, as_k
+    def custom(cls, name: str, k: Any, mode: str | None = None, magnitude: str = "",
+               fault_model: str = "physical") -> "ScenarioSpec":
+        from emaphm.faults import FaultVectorError, as_k, check_fault_model
 
         _check_name("scenario", name)
         try:
             kk = as_k(k)
+            check_fault_model(fault_model)
         except FaultVectorError as exc:
             raise SpecError(f"scenario {name!r}: {exc}") from None
         return cls(name=name, k=tuple(float(x) for x in kk), mode=str(mode or name),
-                   magnitude=str(magnitude or ""))
+                   magnitude=str(magnitude or ""), fault_model=fault_model)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "k": list(self.k), "mode": self.mode, "magnitude": self.magnitude}
+        return {"name": self.name, "k": list(self.k), "mode": self.mode, "magnitude": self.magnitude,
+                "fault_model": self.fault_model}
 
 
 @dataclass(frozen=True)
@@ -216,6 +220,7 @@ class Run:
     n_sub: int
     fitness_mode: str
     params: dict | None = field(default=None, hash=False)
+    fault_model: str = "paper"
 
 
 # ----------------------------------------------------------------------------- spec
@@ -269,6 +274,12 @@ class CampaignSpec:
     fitness_mode  str                 "phases"         Eq. 4 on the three phases or "equivalent"
     params        dict or None        None             healthy actuator (ActuatorParams.to_dict);
                                                        None: the default preset
+    fault_model   str or None         None             mapping of k3..k5 for every scenario
+                                                       ("paper" or "physical"); None: each
+                                                       scenario's own (a named scenario's, or
+                                                       a custom one's ``fault_model``, default
+                                                       "physical"); stores written before fault
+                                                       models existed read as "paper"
     name          str                 "campaign"       a label (not part of the identity)
     ============  ==================  ===============  ===========================================
     """
@@ -285,6 +296,7 @@ class CampaignSpec:
     n_sub: int = 1
     fitness_mode: str = "phases"
     params: dict | None = field(default=None, hash=False)
+    fault_model: str | None = None
     name: str = "campaign"
 
     def __post_init__(self) -> None:
@@ -296,7 +308,14 @@ class CampaignSpec:
         for s in scen:
             if not isinstance(s, ScenarioSpec):
                 raise SpecError(f"scenarios must be names or ScenarioSpec, got {s!r}")
-            ScenarioSpec.custom(s.name, s.k)        # validates the name and k
+            ScenarioSpec.custom(s.name, s.k, fault_model=s.fault_model)  # validates name, k
+        if self.fault_model is not None:
+            from emaphm.faults import FAULT_MODELS
+
+            if self.fault_model not in FAULT_MODELS:
+                raise SpecError(f"unknown fault_model {self.fault_model!r}; choose one of "
+                                f"{', '.join(FAULT_MODELS)}")
+            scen = tuple(replace(s, fault_model=self.fault_model) for s in scen)
         _no_duplicates("scenario", [s.name for s in scen])
         object.__setattr__(self, "scenarios", scen)
 
@@ -352,16 +371,18 @@ class CampaignSpec:
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_dict(cls, data: Mapping[str, Any], *, base_dir: str | Path | None = None,
-                  source: str = "spec") -> "CampaignSpec":
+                  source: str = "spec", stored: bool = False) -> "CampaignSpec":
         """Build from the TOML schema (see the module docstring); ``params`` may be a
-        TOML file name, relative to ``base_dir``, or an inline table."""
+        TOML file name, relative to ``base_dir``, or an inline table. ``stored``: the
+        spec of a store (a custom scenario without ``fault_model`` is then "paper")."""
         try:
-            return cls._from_dict(dict(data), base_dir)
+            return cls._from_dict(dict(data), base_dir, stored)
         except SpecError as exc:
             raise SpecError(f"{source}: {exc}") from None
 
     @classmethod
-    def _from_dict(cls, data: dict[str, Any], base_dir: str | Path | None) -> "CampaignSpec":
+    def _from_dict(cls, data: dict[str, Any], base_dir: str | Path | None,
+                   stored: bool = False) -> "CampaignSpec":
         known = {f.name for f in fields(cls)} | {"options"}
         unknown = sorted(set(data) - known)
         if unknown:
@@ -369,7 +390,9 @@ class CampaignSpec:
         kw: dict[str, Any] = {k: v for k, v in data.items()
                               if k not in ("scenarios", "algorithms", "options", "params")}
         if "scenarios" in data:
-            kw["scenarios"] = parse_scenarios(data["scenarios"])
+            # a stored spec written before fault models existed: its scenarios are the paper's
+            kw["scenarios"] = parse_scenarios(data["scenarios"],
+                                              default_fault_model="paper" if stored else "physical")
         options = data.get("options", {})
         if not isinstance(options, Mapping):
             raise SpecError("[options] must be a table of tables, one per algorithm label")
@@ -423,6 +446,8 @@ class CampaignSpec:
             "fitness_mode": self.fitness_mode,
             "params": self.params,
         }
+        if self.fault_model is not None:
+            d["fault_model"] = self.fault_model
         return d
 
     def to_json(self) -> str:
@@ -430,7 +455,7 @@ class CampaignSpec:
 
     @classmethod
     def from_json(cls, text: str) -> "CampaignSpec":
-        return cls.from_dict(json.loads(text), source="stored spec")
+        return cls.from_dict(json.loads(text), source="stored spec", stored=True)
 
     # ------------------------------------------------------------------ identity
     def identity(self) -> dict[str, Any]:
@@ -490,7 +515,7 @@ class CampaignSpec:
                         seed=_seed_int(ss), noise_seed=_seed_int(noise_seqs[i][r]),
                         noise=self.noise, adc_lsb=self.adc_lsb, polish=self.polish,
                         search=self.search, n_sub=self.n_sub, fitness_mode=self.fitness_mode,
-                        params=self.params))
+                        params=self.params, fault_model=sc.fault_model))
         return out
 
     def run(self, key: str) -> Run:
@@ -515,8 +540,9 @@ def paper_spec(runs: int = 10, master_seed: int = 2023, **kw: Any) -> CampaignSp
     return CampaignSpec(runs=runs, master_seed=master_seed, **kw)
 
 
-def parse_scenarios(items: Any) -> tuple[ScenarioSpec, ...]:
-    """Scenarios from names, groups, comma-separated strings or ``{name, k}`` tables."""
+def parse_scenarios(items: Any, default_fault_model: str = "physical") -> tuple[ScenarioSpec, ...]:
+    """Scenarios from names, groups, comma-separated strings or ``{name, k}`` tables
+    (a table without ``fault_model`` gets ``default_fault_model``)."""
     if isinstance(items, str):
         items = [x for x in (p.strip() for p in items.split(",")) if x]
     if not isinstance(items, (list, tuple)) or not items:
@@ -531,12 +557,13 @@ def parse_scenarios(items: Any) -> tuple[ScenarioSpec, ...]:
             else:
                 out.append(ScenarioSpec.named(item))
         elif isinstance(item, Mapping):
-            extra = set(item) - {"name", "k", "mode", "magnitude"}
+            extra = set(item) - {"name", "k", "mode", "magnitude", "fault_model"}
             if extra or "name" not in item or "k" not in item:
                 raise SpecError(f"a custom scenario is a table {{name = ..., k = [8 values]}} "
-                                f"(optionally mode, magnitude), got {dict(item)!r}")
+                                f"(optionally mode, magnitude, fault_model), got {dict(item)!r}")
             out.append(ScenarioSpec.custom(item["name"], item["k"], item.get("mode"),
-                                           item.get("magnitude", "")))
+                                           item.get("magnitude", ""),
+                                           item.get("fault_model", default_fault_model)))
         else:
             raise SpecError(f"a scenario is a name or a {{name, k}} table, got {item!r}")
     return tuple(out)

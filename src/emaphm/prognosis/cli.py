@@ -105,6 +105,7 @@ def cmd_add(args: argparse.Namespace) -> int:
                   file=sys.stderr)
         ins, a = inspect(h, args.actuator, trace, args.at, seed=args.seed, method=args.spread,
                          source=str(trace_path), params=params, algorithm=args.algorithm,
+                         fault_model=args.fault_model,
                          budget=budget, n_runs=args.runs)
         unit = h.actuator(args.actuator).time_unit
     if args.json:
@@ -376,7 +377,9 @@ def register(subparsers: Any) -> None:
     a.add_argument("trace", help="trace file (.csv or .parquet)")
     a.add_argument("--at", type=_time, required=True,
                    help="time of the inspection (flight hours or cycles), after the last one")
-    a.add_argument("--algorithm", default="pso", choices=("pso", "de", "gwo"))
+    a.add_argument("--algorithm", default="pso", choices=("pso", "de", "gwo", "scipy-de", "cmaes"))
+    a.add_argument("--fault-model", choices=("physical", "paper"), default=None,
+                   help="mapping of k3..k5: default the trace's own, physical for a bench trace")
     a.add_argument("--seed", type=_seed, default=0, help="seed of the optimizer (default 0)")
     a.add_argument("--budget", help="evaluations (e.g. 5000) or seconds (e.g. 10s); default: "
                                     "the paper's stopping rules")

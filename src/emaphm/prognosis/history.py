@@ -178,8 +178,16 @@ class Inspection:
     recorded_utc: str
     extra: dict = field(default_factory=dict)
 
+    @property
+    def fault_model(self) -> str:
+        """The fault model the inspection was diagnosed with (``"paper"`` for inspections
+        recorded before fault models existed)."""
+        fm = (self.extra or {}).get("fault_model")
+        return fm if isinstance(fm, str) else "paper"
+
     def to_dict(self) -> dict[str, Any]:
         d = dict(self.__dict__)
+        d["fault_model"] = self.fault_model
         for name in ("k", "k_lo", "k_hi"):
             d[name] = [float(x) for x in d[name]]
         return d
@@ -481,7 +489,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     keyword arguments (``algorithm``, ``budget``, ``options``, ``n_runs``,
     ``level``) go to :func:`emaphm.prognosis.uncertainty.identify_with_spread`.
     """
-    from ..diagnosis import DEFAULT_THRESHOLDS, diagnose
+    from ..diagnosis import diagnose
     from ..traces import validate
     from .uncertainty import identify_with_spread
 
@@ -490,8 +498,10 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     validate(trace)
     a = identify_with_spread(trace, seed=seed, method=method, params=params, **kwargs)
     ident = a.identification
-    diag = diagnose(a.k, thresholds=thresholds or DEFAULT_THRESHOLDS, params=params)
+    diag = diagnose(a.k, thresholds=thresholds, params=params, fault_model=ident.fault_model)
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
+             "fault_model": ident.fault_model,
+             "parameters": None if params is None else params.to_dict(),
              "k_true": None if ident.k_true is None else ident.k_true.tolist(),
              "interval_details": {k: v for k, v in a.interval.details.items()
                                   if isinstance(v, (int, float, str))},

@@ -275,10 +275,11 @@ class DegradationRun:
 
 def simulate_degradation(scenario: DegradationScenario, times: Sequence[float], *, seed: int,
                          model: str = "reference", params: Any = None, profile: Any = None,
-                         sensors: Any = None) -> DegradationRun:
+                         sensors: Any = None, fault_model: str = "paper") -> DegradationRun:
     """One trace per inspection time, with sensor noise (:data:`emaphm.simulate.DEFAULT_SENSORS`
     by default). The inspection ``i`` uses the noise seed drawn from the ``i``-th child of
-    ``SeedSequence(seed)``."""
+    ``SeedSequence(seed)``. The degradation presets and their failure thresholds are
+    stated in the paper's fault model (``fault_model="paper"``)."""
     from ..simulate import DEFAULT_SENSORS, simulate
 
     seed = _check_seed(seed)
@@ -290,6 +291,7 @@ def simulate_degradation(scenario: DegradationScenario, times: Sequence[float], 
     traces = []
     for t, k, s in zip(times, K, seeds):
         tr = simulate(k, model=model, params=params, profile=profile,
-                      sensors=DEFAULT_SENSORS if sensors is None else sensors, seed=s)
+                      sensors=DEFAULT_SENSORS if sensors is None else sensors, seed=s,
+                      fault_model=fault_model)
         traces.append(tr.with_meta(inspection_time=float(t), degradation=scenario.to_dict()))
     return DegradationRun(scenario=scenario, times=times, k_true=K, traces=tuple(traces), seeds=seeds)

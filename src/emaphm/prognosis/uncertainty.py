@@ -59,7 +59,7 @@ import numpy as np
 from scipy import stats
 
 from ..faults import K_NAMES
-from ..fitness import Eq4Objective, eq4_weights
+from ..fitness import Eq4Objective, eq4_weights, effective_samples
 
 __all__ = ["SPREAD_METHODS", "KInterval", "Assessment", "identify_with_spread",
            "population_interval", "effective_samples",
@@ -152,36 +152,6 @@ class _Recorder:
         return np.concatenate(self.K), np.concatenate(self.f)
 
 
-def effective_samples(residual: np.ndarray, max_lag: int | None = None) -> tuple[float, float]:
-    """Independent samples in ``residual`` (n, c): ``(n_eff, tau)``.
-
-    ``tau = 1 + 2 sum_l rho(l)`` is the integrated autocorrelation time of each
-    column (mean autocorrelation over the columns), summed over lags until the
-    autocorrelation first drops below zero (the initial positive sequence of
-    Geyer 1992); ``n_eff = n c / tau``.
-    """
-    r = np.asarray(residual, dtype=float)
-    if r.ndim == 1:
-        r = r[:, None]
-    n, c = r.shape
-    if n < 4:
-        return float(n * c), 1.0
-    x = r - r.mean(axis=0)
-    m = 1 << int(math.ceil(math.log2(2 * n)))
-    spec = np.fft.rfft(x, m, axis=0)
-    acf = np.fft.irfft(spec * np.conj(spec), m, axis=0)[:n].sum(axis=1)
-    if acf[0] <= 0:
-        return float(n * c), 1.0
-    rho = acf / acf[0]
-    max_lag = n // 4 if max_lag is None else max_lag
-    tau = 1.0
-    for lag in range(1, max_lag):
-        if rho[lag] <= 0:
-            break
-        tau += 2.0 * rho[lag]
-    return float(n * c / tau), float(tau)
-
-
 def _residual(objective: Any, k: np.ndarray) -> np.ndarray:
     """Weighted residual sqrt(w) (model - measured) at ``k`` on the model grid (n, c)."""
     pop = objective.model.simulate(k)
@@ -259,7 +229,8 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
         raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
     t0 = time.perf_counter()
     base = objective if objective is not None else Eq4Objective.from_trace(
-        trace, params, n_sub=kwargs.get("n_sub", 1), mode=kwargs.get("mode", "phases"))
+        trace, params, n_sub=kwargs.get("n_sub", 1), mode=kwargs.get("mode", "phases"),
+        fault_model=kwargs.get("fault_model"))
     rec = _Recorder(base)
     run_seeds = [int(s.generate_state(1)[0] % (2 ** 31))
                  for s in np.random.SeedSequence(int(seed)).spawn(n_runs + 1)]

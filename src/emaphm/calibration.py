@@ -1,0 +1,319 @@
+"""Commissioning: estimate how a healthy unit differs from its data sheet.
+
+No real actuator matches its data-sheet preset to a few percent, and a
+model-based diagnosis reads every mismatch as a fault. :func:`calibrate`
+fits, to one or more traces of a unit known to be healthy, the parameters in
+which units differ (the *nuisance* parameters, :data:`PARAMETERS`):
+
+=============  =====================================================  ===========
+name           what it scales                                         unit
+=============  =====================================================  ===========
+``J``          motor and load inertia (one factor)                    relative
+``flux``       magnet flux: back-EMF coefficient = torque constant    relative
+``R``          winding resistance (temperature)                       relative
+``L``          synchronous inductance                                 relative
+``friction``   dry friction FSJ and FDJ (one factor)                  relative
+``viscous``    viscous friction C_m                                   relative
+``gain_a..c``  each current sensor's gain                             relative
+``offset_a..c`` each current sensor's offset                          A
+``load``       a constant load torque the bench does not report       N m
+=============  =====================================================  ===========
+
+Method: SciPy's :func:`~scipy.optimize.least_squares` (trust-region
+reflective, bounded) on the monitoring model's residuals, weighted as in
+Eq. 4 and scaled by each trace's white-noise level, with a finite-difference
+Jacobian. Standard errors come from ``s^2 (J^T J)^-1``, inflated by the
+residual's integrated autocorrelation time (a misfit that is not white noise
+carries fewer independent samples than it has). Parameters the profile cannot
+separate (a pair with ``|correlation| > CORRELATION_LIMIT``; on the
+diagnostic profile inertia, flux and the sensor gains all scale the current)
+are named, and the less certain one of each pair is kept at its data-sheet
+value and the fit repeated: the others then absorb it, which is what the
+monitoring model needs to reproduce the unit's currents.
+
+The result is an :class:`~emaphm.params.ActuatorParams` (the unit's, with a
+``[calibration]`` section holding the date, the sources, each estimate and
+its standard error) that ``diagnose --params`` and the health history read.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import time
+from dataclasses import dataclass, replace
+from typing import Any, Sequence
+
+import numpy as np
+
+from .faults import K_NOMINAL
+from .fitness import effective_samples, eq4_weights, white_noise_sigma
+from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
+from .profiles import Profile, ProfileError
+from .traces import Trace, TraceError, resample, validate
+
+__all__ = ["PARAMETERS", "CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT", "CalibrationError",
+           "CalibrationResult", "calibrate", "apply_deviations"]
+
+#: Calibrated parameters: name -> (lower bound, upper bound, unit) of the deviation.
+PARAMETERS: dict[str, tuple[float, float, str]] = {
+    "J": (-0.5, 1.0, "relative"), "flux": (-0.3, 0.3, "relative"),
+    "R": (-0.5, 1.0, "relative"), "L": (-0.5, 0.5, "relative"),
+    "friction": (-0.9, 3.0, "relative"), "viscous": (-0.99, 5.0, "relative"),
+    "gain_a": (-0.2, 0.2, "relative"), "gain_b": (-0.2, 0.2, "relative"),
+    "gain_c": (-0.2, 0.2, "relative"),
+    "offset_a": (-1.0, 1.0, "A"), "offset_b": (-1.0, 1.0, "A"), "offset_c": (-1.0, 1.0, "A"),
+    "load": (-2.0, 2.0, "N m"),
+}
+_NAMES = tuple(PARAMETERS)
+
+#: A pair of estimates more correlated than this is not separable on the profile.
+CORRELATION_LIMIT = 0.95
+
+#: A trace whose calibrated fit stays above this many times its noise floor (Eq. 4 of
+#: white noise) does not look like a healthy unit the model describes.
+HEALTHY_FIT_LIMIT = 4.0
+
+
+#: Current noise [A rms] below which a trace is taken as noise-free (no sensor, or a dead
+#: channel): a recorded current carries at least its ADC's quantisation noise.
+MIN_NOISE = 1e-4
+
+
+class CalibrationError(ValueError):
+    """The traces cannot calibrate the unit (not healthy, too short, no motion)."""
+
+
+def apply_deviations(params: ActuatorParams, dev: dict[str, float]) -> ActuatorParams:
+    """``params`` with the deviations ``dev`` (names of :data:`PARAMETERS`) applied."""
+    d = {n: float(dev.get(n, 0.0)) for n in _NAMES}
+    m, tr, ld = params.motor, params.transmission, params.load
+    motor = replace(m, J_m=m.J_m * (1 + d["J"]), c0=tuple(c * (1 + d["flux"]) for c in m.c0),
+                    R=tuple(r * (1 + d["R"]) for r in m.R), L=tuple(x * (1 + d["L"]) for x in m.L),
+                    C_m=m.C_m * (1 + d["viscous"]))
+    trans = replace(tr, FSJ=tr.FSJ * (1 + d["friction"]), FDJ=tr.FDJ * (1 + d["friction"]))
+    load = replace(ld, J_l=ld.J_l * (1 + d["J"]), T_0=ld.T_0 + d["load"])
+    s = params.sensors
+    sensors = CurrentSensors(
+        gain=tuple(g * (1 + d[f"gain_{p}"]) for g, p in zip(s.gain, "abc")),
+        offset=tuple(o + d[f"offset_{p}"] for o, p in zip(s.offset, "abc")))
+    return replace(params, motor=motor, transmission=trans, load=load, sensors=sensors)
+
+
+@dataclass(frozen=True)
+class _Target:
+    """One healthy trace on the monitoring model's grid."""
+
+    source: str
+    theta_ref: np.ndarray
+    load: np.ndarray
+    theta0: float
+    i_meas: np.ndarray          # (n, 3) as recorded (sensor gains and offsets in it)
+    w: np.ndarray               # (n, 3) Eq. 4 weights
+    sqrt_w: np.ndarray          # (n, 3) sqrt of the Eq. 4 weights, over the noise sigma
+    floor: float                # Eq. 4 value of white noise alone
+
+
+def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
+    validate(trace)
+    T_s = params.inverter.T_s
+    t0 = float(trace.t[0])
+    n = int(np.floor((float(trace.t[-1]) - t0) / T_s + 1e-9)) + 1
+    if n < 16:
+        raise CalibrationError(f"{source}: the trace lasts {trace.duration:.3g} s, too short to "
+                               "calibrate on; record at least one diagnostic profile (0.5 s)")
+    t_model = np.arange(n) * T_s
+    on = resample(trace, t0 + t_model)
+    load = np.zeros(n)
+    prof = trace.meta.get("profile") if isinstance(trace.meta, dict) else None
+    if isinstance(prof, dict):
+        try:
+            load = Profile.from_dict(prof).load_torque(t_model)
+        except ProfileError:
+            pass
+    i = np.asarray(on.i_abc, dtype=float)
+    sigma = white_noise_sigma(np.asarray(trace.i_abc, dtype=float))
+    if not np.all(sigma > MIN_NOISE):
+        raise CalibrationError(f"{source}: the phase currents carry no measurement noise (a "
+                               "simulated trace without sensors, or a dead channel); calibrate "
+                               "on recorded traces")
+    w = eq4_weights(i, T_s)
+    return _Target(source, np.ascontiguousarray(on.theta_ref), load, float(on.theta_m[0]), i,
+                   w, np.sqrt(w) / sigma, float(np.sum(w * sigma ** 2)))
+
+
+def _model_currents(params: ActuatorParams, tg: _Target) -> np.ndarray:
+    from .models.monitoring import MonitoringModel
+
+    prof = Profile.from_samples(np.arange(tg.theta_ref.size) * params.inverter.T_s, tg.theta_ref,
+                                tg.load + params.load.T_0)
+    mm = MonitoringModel(params, prof, theta0=tg.theta0, fault_model="physical")
+    r = mm.simulate(K_NOMINAL)
+    i = r.i_abc[0]
+    s = params.sensors
+    return i * np.asarray(s.gain) + np.asarray(s.offset)
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """A calibrated unit: its parameters, each estimate with its uncertainty, the fit.
+
+    ``estimates``: name -> ``{"value", "se", "lo95", "hi95", "unit"}`` (deviations from
+    the data sheet; parameters kept at the data sheet are absent and listed in
+    ``fixed``); ``correlated``: the pairs found not separable, with their correlation;
+    ``fit_ratio``: per source, the fitted Eq. 4 over the trace's white-noise floor;
+    ``fits``: per source, ``(t, measured, model)`` currents on the model grid (for plots).
+    """
+
+    params: ActuatorParams
+    estimates: dict[str, dict[str, Any]]
+    fixed: tuple[str, ...]
+    correlated: tuple[tuple[str, str, float], ...]
+    fit_ratio: dict[str, float]
+    evaluations: int
+    elapsed_s: float
+    fits: tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...] = ()   # (t, measured, model)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"estimates": self.estimates, "fixed": list(self.fixed),
+                "correlated": [list(c) for c in self.correlated],
+                "fit_ratio": self.fit_ratio, "evaluations": self.evaluations,
+                "elapsed_s": self.elapsed_s, "calibration": self.params.calibration.date,
+                "parameters": self.params.to_dict()}
+
+    def summary(self) -> str:
+        lines = [f"{'parameter':10s} {'deviation':>10s} {'95 % interval':>22s}  unit"]
+        for n, e in self.estimates.items():
+            lines.append(f"{n:10s} {e['value']:+10.4f} [{e['lo95']:+9.4f}, {e['hi95']:+9.4f}]  "
+                         f"{e['unit']}")
+        if self.fixed:
+            lines.append("kept at the data sheet (not separable on this profile): "
+                         + ", ".join(self.fixed))
+        if self.correlated:
+            lines.append("not separable: " + "; ".join(f"{a} ~ {b} (r = {r:+.3f})"
+                                                        for a, b, r in self.correlated))
+        lines.append("fit / noise floor: " + ", ".join(f"{s} {r:.2f}x"
+                                                      for s, r in self.fit_ratio.items()))
+        lines.append(f"{self.evaluations} model runs in {self.elapsed_s:.2f} s")
+        return "\n".join(lines)
+
+
+def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
+              sources: Sequence[str] | None = None, free: Sequence[str] | None = None,
+              fit_limit: float = HEALTHY_FIT_LIMIT,
+              correlation_limit: float = CORRELATION_LIMIT) -> CalibrationResult:
+    """Calibrate a healthy unit on ``traces`` around its data sheet ``params``.
+
+    ``free``: the parameters to estimate (default all of :data:`PARAMETERS`);
+    ``sources``: a name per trace for the report. Raises :class:`CalibrationError`
+    when a trace does not look healthy after calibration (its fit stays above
+    ``fit_limit`` times its noise floor) or cannot be used.
+    """
+    from scipy.optimize import least_squares
+
+    base = params if params is not None else siemens_1fk7060()
+    traces = list(traces)
+    if not traces:
+        raise CalibrationError("calibration needs at least one trace of the healthy unit")
+    sources = list(sources) if sources is not None else [f"trace {i + 1}" for i in range(len(traces))]
+    if len(sources) != len(traces):
+        raise ValueError("give one source name per trace")
+    free = list(free) if free is not None else list(_NAMES)
+    unknown = [n for n in free if n not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from "
+                         + ", ".join(_NAMES))
+    targets = [_target(tr, base, src) for tr, src in zip(traces, sources)]
+    t0 = time.perf_counter()
+    count = [0]
+
+    def residual(x: np.ndarray, names: list[str]) -> np.ndarray:
+        p = apply_deviations(base, dict(zip(names, x)))
+        out = []
+        for tg in targets:
+            count[0] += 1
+            i = _model_currents(p, tg)
+            if not np.all(np.isfinite(i)):
+                return np.full(sum(t.i_meas.size for t in targets), 1e6)
+            out.append(((i - tg.i_meas) * tg.sqrt_w).ravel())
+        return np.concatenate(out)
+
+    def fit(names: list[str]):
+        lo = np.array([PARAMETERS[n][0] for n in names])
+        hi = np.array([PARAMETERS[n][1] for n in names])
+        return least_squares(residual, np.zeros(len(names)), args=(names,), bounds=(lo, hi),
+                             method="trf", diff_step=1e-3, x_scale=np.maximum(hi - lo, 1e-3) / 10,
+                             xtol=1e-8, ftol=1e-10, max_nfev=60)
+
+    names = list(free)
+    fixed: list[str] = []
+    pairs: list[tuple[str, str, float]] = []
+    while True:
+        res = fit(names)
+        cov, corr = _covariance(res, targets)
+        worst = None
+        for a in range(len(names)):
+            for b in range(a + 1, len(names)):
+                r = corr[a, b]
+                if abs(r) > correlation_limit and (worst is None or abs(r) > abs(worst[2])):
+                    worst = (a, b, float(r))
+        if worst is None or len(names) <= 1:
+            break
+        a, b, r = worst
+        pairs.append((names[a], names[b], r))
+        # keep the less certain one (relative to its range) at the data sheet
+        span = lambda j: PARAMETERS[names[j]][1] - PARAMETERS[names[j]][0]  # noqa: E731
+        drop = a if math.sqrt(cov[a, a]) / span(a) >= math.sqrt(cov[b, b]) / span(b) else b
+        fixed.append(names.pop(drop))
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    dev = dict(zip(names, res.x))
+    unit = apply_deviations(base, dev)
+    # the fit of each trace against its own noise floor
+    fits = []
+    ratios: dict[str, float] = {}
+    for tg in targets:
+        i = _model_currents(unit, tg)
+        fits.append((np.arange(i.shape[0]) * base.inverter.T_s, tg.i_meas, i))
+        ratios[tg.source] = float(np.sum(tg.w * (i - tg.i_meas) ** 2) / tg.floor)
+    elapsed = time.perf_counter() - t0
+    bad = {s: r for s, r in ratios.items() if not r <= fit_limit}
+    if bad:
+        raise CalibrationError(
+            "the unit does not look healthy after calibration: "
+            + ", ".join(f"{s} fits at {r:.1f}x its noise floor" for s, r in bad.items())
+            + f" (a healthy unit fits below {fit_limit:g}x); diagnose it (emaphm diagnose) "
+            "before using it as a reference, or check that the traces are of this unit and "
+            "its parameters (--params)")
+    estimates = {}
+    for n, v, s in zip(names, res.x, se):
+        estimates[n] = {"value": float(v), "se": float(s), "lo95": float(v - 1.96 * s),
+                        "hi95": float(v + 1.96 * s), "unit": PARAMETERS[n][2]}
+    calib = Calibration(date=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+                        sources=tuple(sources),
+                        estimates=tuple((n, e["value"], e["se"]) for n, e in estimates.items()),
+                        fixed=tuple(fixed))
+    return CalibrationResult(params=replace(unit, calibration=calib), estimates=estimates,
+                             fixed=tuple(fixed), correlated=tuple(pairs), fit_ratio=ratios,
+                             evaluations=count[0], elapsed_s=elapsed,
+                             fits=tuple(fits))
+
+
+def _covariance(res: Any, targets: list[_Target]) -> tuple[np.ndarray, np.ndarray]:
+    """Covariance and correlation of the estimates at a least-squares solution."""
+    Jm = np.asarray(res.jac, dtype=float)
+    m, p = Jm.shape
+    r = np.asarray(res.fun, dtype=float)
+    s2 = float(r @ r) / max(m - p, 1)
+    # a residual that is not white carries fewer independent samples
+    n_eff = 0.0
+    off = 0
+    for tg in targets:
+        k = tg.i_meas.size
+        n_eff += effective_samples(r[off:off + k].reshape(-1, 3))[0]
+        off += k
+    inflate = max(m / max(n_eff, 1.0), 1.0)
+    JtJ = Jm.T @ Jm
+    cov = np.linalg.pinv(JtJ) * s2 * inflate
+    d = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+    corr = cov / np.outer(d, d)
+    return cov, corr

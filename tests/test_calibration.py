@@ -1,0 +1,106 @@
+"""Commissioning (emaphm.calibration): known answers on twin traces, refusals, the CLI."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from emaphm.acquisition import Sensors
+from emaphm.calibration import (PARAMETERS, CalibrationError, apply_deviations, calibrate)
+from emaphm.cli import main
+from emaphm.params import load_params, siemens_1fk7060
+from emaphm.simulate import DEFAULT_SENSORS, simulate
+from emaphm.traces import write_trace
+
+NOMINAL = siemens_1fk7060()
+TRUE = {"J": 0.06, "R": 0.12, "friction": -0.15, "gain_a": 0.02, "gain_b": -0.01,
+        "offset_c": 0.03}
+
+
+def _unit_traces(seeds, dev=TRUE, k=None):
+    unit = apply_deviations(NOMINAL, dev)
+    s = unit.sensors
+    sensors = Sensors(current_noise=0.02, current_lsb=DEFAULT_SENSORS.current_lsb,
+                      gain=s.gain, offset=s.offset)
+    # the monitoring model's own physics (a twin): calibration must find the truth
+    return [simulate(k, model="monitoring", params=replace(unit, sensors=type(s)()),
+                     sensors=sensors, seed=seed, fault_model="physical") for seed in seeds]
+
+
+@pytest.fixture(scope="module")
+def twin_result():
+    return calibrate(_unit_traces([1, 2]), NOMINAL, sources=["a", "b"],
+                     free=["J", "R", "L", "friction", "gain_a", "gain_b", "offset_c"])
+
+
+def test_twin_calibration_recovers_the_unit(twin_result):
+    r = twin_result
+    # measured on these seeds: |error| J 0.002, R 0.006, L 0.006, friction 0.012, gains
+    # 0.003-0.004, offset 0.0006; the bounds allow about twice that
+    tol = {"J": 0.005, "R": 0.03, "L": 0.015, "friction": 0.03, "gain_a": 0.008,
+           "gain_b": 0.008, "offset_c": 0.002}
+    for name, e in r.estimates.items():
+        assert e["value"] == pytest.approx(TRUE.get(name, 0.0), abs=tol[name]), name
+        assert e["lo95"] < e["value"] < e["hi95"] and e["se"] > 0
+    # calibrated: the fit is at the noise floor (the floor's own estimate scatters ~20 %)
+    assert all(0.8 < x < 1.3 for x in r.fit_ratio.values())
+    # the calibrated parameters carry their provenance
+    cal = r.params.calibration
+    assert cal.sources == ("a", "b") and {n for n, _, _ in cal.estimates} == set(r.estimates)
+
+
+def test_inertia_and_flux_cannot_be_told_apart_on_the_profile():
+    r = calibrate(_unit_traces([3]), NOMINAL, free=["J", "flux", "offset_a"])
+    assert ("J", "flux") in {(a, b) for a, b, _ in r.correlated}
+    assert len(r.fixed) == 1 and r.fixed[0] in ("J", "flux")
+    assert r.fixed[0] not in r.estimates
+
+
+def test_a_faulty_unit_is_refused():
+    k = [0.75, 0, 0, 0, 0, 0, 0.5, 0.5]     # friction x2.5
+    traces = _unit_traces([4], dev={}, k=k)
+    with pytest.raises(CalibrationError, match="does not look healthy after calibration"):
+        calibrate(traces, NOMINAL, free=["J", "R", "gain_a"])
+
+
+def test_a_trace_without_noise_or_of_unknown_parameters_is_refused():
+    clean = simulate(model="monitoring", fault_model="physical")
+    with pytest.raises(CalibrationError, match="carry no measurement noise"):
+        calibrate([clean], NOMINAL)
+    with pytest.raises(ValueError, match="unknown calibration parameter"):
+        calibrate(_unit_traces([1]), NOMINAL, free=["inertia"])
+    with pytest.raises(CalibrationError, match="at least one trace"):
+        calibrate([], NOMINAL)
+
+
+def test_apply_deviations_scales_what_it_says():
+    p = apply_deviations(NOMINAL, {"J": 0.1, "flux": -0.05, "load": 0.2, "gain_b": 0.03})
+    assert p.motor.J_m == pytest.approx(NOMINAL.motor.J_m * 1.1)
+    assert p.load.J_l == pytest.approx(NOMINAL.load.J_l * 1.1)
+    assert p.motor.c0[1] == pytest.approx(NOMINAL.motor.c0[1] * 0.95)
+    assert p.load.T_0 == pytest.approx(0.2)
+    assert p.sensors.gain == pytest.approx((1.0, 1.03, 1.0))
+    assert p.controller == NOMINAL.controller        # the drive keeps its data-sheet k_T
+    assert set(PARAMETERS) >= {"J", "flux", "R", "L", "friction", "viscous", "load"}
+
+
+def test_cli_calibrate_writes_parameters_diagnose_reads(tmp_path, capsys):
+    paths = []
+    for i, tr in enumerate(_unit_traces([5, 6])):
+        p = tmp_path / f"h{i}.csv"
+        write_trace(tr, p)
+        paths.append(str(p))
+    out = tmp_path / "unit.toml"
+    assert main(["calibrate", *paths, "--out", str(out), "--json", "--quiet",
+                 "--plot", str(tmp_path / "cal.png")]) == 0
+    import json
+
+    d = json.loads(capsys.readouterr().out)
+    assert "estimates" in d and d["fit_ratio"]
+    p = load_params(out)
+    assert p.calibration.sources == ("h0.csv", "h1.csv")
+    assert p.sensors.gain[0] == pytest.approx(1.02, abs=0.005)
+    assert (tmp_path / "cal.png").stat().st_size > 10_000
+    # a missing trace is refused with the reason
+    assert main(["calibrate", str(tmp_path / "nope.csv"), "--out", str(out)]) == 2
+    assert "does not exist" in capsys.readouterr().err

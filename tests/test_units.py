@@ -1,0 +1,78 @@
+"""Production units (emaphm.units) and the acquisition chain (emaphm.acquisition)."""
+
+import numpy as np
+import pytest
+
+from emaphm.acquisition import Sensors
+from emaphm.params import siemens_1fk7060
+from emaphm.units import (DEFAULT_TOLERANCES, Tolerances, draw_unit, load_tolerances,
+                          nominal_unit)
+
+NOMINAL = siemens_1fk7060()
+
+
+def test_same_seed_same_unit_other_seed_other_unit():
+    a, b, c = draw_unit(NOMINAL, 3), draw_unit(NOMINAL, 3), draw_unit(NOMINAL, 4)
+    assert a == b
+    assert a.params != c.params
+
+
+def test_drawn_units_stay_inside_their_tolerances():
+    t = DEFAULT_TOLERANCES
+    m0, tr0 = NOMINAL.motor, NOMINAL.transmission
+    devs = []
+    for seed in range(200):
+        u = draw_unit(NOMINAL, seed)
+        m = u.params.motor
+        dJ = m.J_m / m0.J_m - 1
+        assert t.J[0] <= dJ <= t.J[1]
+        assert u.params.load.J_l / NOMINAL.load.J_l - 1 == pytest.approx(dJ)
+        assert t.flux[0] <= m.c0[0] / m0.c0[0] - 1 <= t.flux[1]
+        assert t.R[0] <= m.R[0] / m0.R[0] - 1 <= t.R[1]
+        assert t.L[0] <= m.L[0] / m0.L[0] - 1 <= t.L[1]
+        assert t.friction[0] <= u.params.transmission.FSJ / tr0.FSJ - 1 <= t.friction[1]
+        assert all(t.sensor_gain[0] <= g - 1 <= t.sensor_gain[1] for g in u.sensor_gain)
+        assert all(t.sensor_offset[0] <= o <= t.sensor_offset[1] for o in u.sensor_offset)
+        assert t.load[0] <= u.load <= t.load[1]
+        # the drive keeps its data-sheet torque constant: the firmware does not know the unit
+        assert u.params.controller == NOMINAL.controller
+        devs.append(dJ)
+    # uniform over the interval: the draws cover it
+    assert min(devs) < -0.08 and max(devs) > 0.08
+
+
+def test_the_nominal_unit_is_the_data_sheet():
+    u = nominal_unit(NOMINAL)
+    assert u.params == NOMINAL and u.load == 0 and u.sensor_gain == (1, 1, 1)
+
+
+def test_tolerances_from_toml_and_bad_ones_named(tmp_path):
+    p = tmp_path / "tol.toml"
+    p.write_text("[tolerances]\nJ = [-0.02, 0.02]\nload = [0.0, 0.05]\n")
+    t = load_tolerances(p)
+    assert t.J == (-0.02, 0.02) and t.load == (0.0, 0.05) and t.R == DEFAULT_TOLERANCES.R
+    p.write_text("[tolerances]\ninertia = [0, 1]\n")
+    with pytest.raises(ValueError, match=r"unknown tolerance\(s\) \['inertia'\]"):
+        load_tolerances(p)
+    with pytest.raises(ValueError, match="relative deviation"):
+        Tolerances(J=(-0.1, 10.0))
+    with pytest.raises(ValueError, match="lo <= hi"):
+        Tolerances(R=(0.2, 0.1))
+    with pytest.raises(ValueError, match="give it in amperes"):
+        Tolerances(sensor_offset=(-20.0, 20.0))
+    with pytest.raises(ValueError, match="does not exist"):
+        load_tolerances(tmp_path / "missing.toml")
+    with pytest.raises(ValueError, match="unit seed must be a non-negative integer"):
+        draw_unit(NOMINAL, -1)
+
+
+def test_sensor_gain_and_offset_act_per_phase():
+    i = np.tile([[1.0, -0.5, -0.5]], (4, 1))
+    s = Sensors(gain=(1.03, 1.0, 0.97), offset=(0.01, 0.0, -0.02))
+    _, out = s.apply(np.zeros(4), i, None)
+    assert out[0] == pytest.approx([1.04, -0.5, -0.505])
+    # ideal sensors leave the currents bit for bit
+    _, same = Sensors().apply(np.zeros(4), i, None)
+    assert np.array_equal(same, i)
+    with pytest.raises(ValueError, match="Sensors.gain"):
+        Sensors(gain=(1.0, 1.0))
