@@ -37,3 +37,25 @@ def test_unknown_space_is_refused():
     assert set(SEARCH_SPACES) == {"ecc-xy", "k"}
     with pytest.raises(ValueError, match="unknown search space 'polar'; choose one of ecc-xy, k"):
         to_k(np.zeros((1, 8)), "polar")
+
+
+def test_sparse_short_circuit_space_has_healthy_phases_and_small_shorts():
+    from emaphm.search import SC_SEARCH_MAX, default_search
+
+    rng = np.random.default_rng(0)
+    Z = rng.uniform(size=(20000, 8))
+    K = to_k(Z, "ecc-xy-sc")
+    sc = K[:, 2:5]
+    assert sc.min() == 0.0 and sc.max() <= SC_SEARCH_MAX
+    # half of each coordinate is a healthy phase; an eighth of the box has all three healthy
+    assert np.mean(sc == 0.0) == pytest.approx(0.5, abs=0.01)
+    assert np.mean(np.all(sc == 0.0, axis=1)) == pytest.approx(0.125, abs=0.01)
+    # and the rest concentrates on small shorts: P(0 < k < 0.15) = sqrt(0.25)/2
+    assert np.mean((sc > 0) & (sc < 0.15)) == pytest.approx(0.25, abs=0.01)
+    # the other components are those of ecc-xy
+    assert np.array_equal(np.delete(K, [2, 3, 4], axis=1),
+                          np.delete(to_k(Z, "ecc-xy"), [2, 3, 4], axis=1))
+    # round trip for shorts inside the range
+    k = np.array([[0.2, 0.1, 0.05, 0.0, 0.3, 0.4, 0.3, 0.6]])
+    assert to_k(from_k(k, "ecc-xy-sc"), "ecc-xy-sc") == pytest.approx(k)
+    assert default_search("physical") == "ecc-xy-sc" and default_search("paper") == "ecc-xy"

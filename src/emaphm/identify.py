@@ -21,7 +21,7 @@ from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination,
                     get_optimizer, minimize)
 from .optim.local import compass_search
 from .params import ActuatorParams
-from .search import to_k
+from .search import default_search, to_k
 from .traces import Trace, validate
 
 __all__ = ["Identification", "identify", "parse_budget"]
@@ -222,7 +222,7 @@ def _k_true(trace: Trace) -> np.ndarray | None:
 def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
              budget: Any = None, params: ActuatorParams | None = None,
              options: dict[str, Any] | None = None, n_sub: int = 1, mode: str = "phases",
-             polish: bool = True, search: str = "ecc-xy", restarts: int | None = None,
+             polish: bool = True, search: str | None = None, restarts: int | None = None,
              suspect_ratio: float = 5.0,
              callback: Callable[[Any], bool | None] | None = None,
              objective: Eq4Objective | None = None,
@@ -254,8 +254,10 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         when a callback stopped the run. False gives the bare algorithm, as in
         the paper.
     search
-        Search space (:mod:`emaphm.search`): ``"ecc-xy"`` (default, Cartesian
-        eccentricity) or ``"k"`` (the paper's, k itself).
+        Search space (:mod:`emaphm.search`): ``"ecc-xy"`` (Cartesian
+        eccentricity), ``"ecc-xy-sc"`` (and sparse short circuits) or ``"k"`` (the
+        paper's, k itself); default :func:`emaphm.search.default_search` of the
+        fault model (``"ecc-xy-sc"`` under physical, ``"ecc-xy"`` under paper).
     restarts, suspect_ratio
         A fit whose Eq. 4 value exceeds ``suspect_ratio`` times the trace's noise
         floor (:meth:`Eq4Objective.noise_floor`, the value a perfect model would
@@ -286,7 +288,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     if isinstance(suspect_ratio, bool) or not isinstance(suspect_ratio, (int, float)) \
             or not suspect_ratio > 1:
         raise ValueError(f"suspect_ratio must be a number > 1, got {suspect_ratio!r}")
-    to_k(np.zeros((1, 8)), search)       # validates the search space name
+    if search is not None:
+        to_k(np.zeros((1, 8)), search)   # validates the search space name
     termination = parse_budget(budget)
     optimizer = get_optimizer(algorithm, **(options or {}))
     validate(trace)
@@ -297,6 +300,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         raise ValueError(f"fault_model {fault_model!r} differs from the prebuilt objective's "
                          f"{objective.model.fault_model!r}")
     fault_model = objective.model.fault_model
+    if search is None:
+        search = default_search(fault_model)
     k0 = objective.stats.kernel_s
     e0 = objective.stats.diverged
     t0 = time.perf_counter()

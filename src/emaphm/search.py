@@ -11,16 +11,34 @@ where a search stalls and a small true eccentricity is missed; in Cartesian
 form the fitness is smooth through zero eccentricity. Points with
 ``x^2 + y^2 > 1`` are clipped to modulus 1.
 
-Both maps are vectorised: ``to_k(Z)`` takes (n_pop, 8) in the unit box.
+``"ecc-xy-sc"`` (default under the physical fault model): ``"ecc-xy"``, and
+the short-circuit components k3..k5 searched as sparse: ``k = SC_SEARCH_MAX
+((z - 1/2) / (1/2))^2`` for ``z > 1/2`` and 0 below. A physical fault loop
+of a few percent of the turns already moves the currents by amperes, so a
+uniform search over [0, 1] puts almost every candidate into shorts far
+larger than any real one (where the drive trips and the fitness is flat),
+and the chance that a start has all three phases near zero is ``0.05^3``.
+Here half of each coordinate's range is a healthy phase and the rest
+concentrates near small shorts; the map is continuously differentiable.
+
+All maps are vectorised: ``to_k(Z)`` takes (n_pop, 8) in the unit box.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SEARCH_SPACES", "to_k", "from_k"]
+__all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search"]
 
-SEARCH_SPACES = ("ecc-xy", "k")
+SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc")
+
+#: Largest shorted fraction the sparse short-circuit search ``"ecc-xy-sc"`` reaches.
+SC_SEARCH_MAX = 0.6
+
+
+def default_search(fault_model: str) -> str:
+    """The default search space of a fault model."""
+    return "ecc-xy-sc" if fault_model == "physical" else "ecc-xy"
 
 
 def _check(space: str) -> None:
@@ -39,6 +57,9 @@ def to_k(Z: np.ndarray, space: str = "ecc-xy") -> np.ndarray:
     y = 2.0 * Z[:, 6] - 1.0
     K[:, 5] = np.minimum(np.hypot(x, y), 1.0)
     K[:, 6] = np.where(K[:, 5] > 0.0, np.arctan2(y, x) / (2.0 * np.pi) + 0.5, 0.5)
+    if space == "ecc-xy-sc":
+        r = np.maximum(2.0 * Z[:, 2:5] - 1.0, 0.0)
+        K[:, 2:5] = SC_SEARCH_MAX * r * r
     return K
 
 
@@ -52,4 +73,6 @@ def from_k(K: np.ndarray, space: str = "ecc-xy") -> np.ndarray:
     phi = 2.0 * np.pi * (K[:, 6] - 0.5)
     Z[:, 5] = 0.5 * (1.0 + K[:, 5] * np.cos(phi))
     Z[:, 6] = 0.5 * (1.0 + K[:, 5] * np.sin(phi))
+    if space == "ecc-xy-sc":
+        Z[:, 2:5] = 0.5 + 0.5 * np.sqrt(np.clip(K[:, 2:5] / SC_SEARCH_MAX, 0.0, 1.0))
     return Z

@@ -54,7 +54,8 @@ def execute_run(run: Run) -> RunResult:
         simulate_s = time.perf_counter() - t0
         ident = identify(trace, run.optimizer, seed=run.seed, budget=run.budget, params=params,
                          options=dict(run.options), n_sub=run.n_sub, mode=run.fitness_mode,
-                         polish=run.polish, search=run.search, fault_model=run.fault_model)
+                         polish=run.polish, search=None if run.search == "auto" else run.search,
+                         fault_model=run.fault_model)
         return RunResult.from_identification(run, ident, simulate_s)
     except Exception as exc:                    # noqa: BLE001 - a failure is a value
         text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__, limit=-6))

@@ -269,7 +269,8 @@ class CampaignSpec:
                                                        algorithm's own stopping rule
     polish        bool                True             compass-search polish (identify's default);
                                                        False: the bare algorithms, as the paper
-    search        str                 "ecc-xy"         search space (emaphm.search)
+    search        str                 "auto"           search space (emaphm.search); "auto":
+                                                       the fault model's default
     n_sub         int >= 1            1                monitoring-model sub-steps
     fitness_mode  str                 "phases"         Eq. 4 on the three phases or "equivalent"
     params        dict or None        None             healthy actuator (ActuatorParams.to_dict);
@@ -292,7 +293,7 @@ class CampaignSpec:
     adc_lsb: float = _DEFAULT_LSB
     budget: Any = None
     polish: bool = True
-    search: str = "ecc-xy"
+    search: str = "auto"
     n_sub: int = 1
     fitness_mode: str = "phases"
     params: dict | None = field(default=None, hash=False)
@@ -352,8 +353,9 @@ class CampaignSpec:
         object.__setattr__(self, "budget", _budget_value("budget", self.budget))
         if not isinstance(self.polish, bool):
             raise SpecError(f"polish must be true or false, got {self.polish!r}")
-        if self.search not in SEARCH_SPACES:
-            raise SpecError(f"unknown search space {self.search!r}; choose one of {', '.join(SEARCH_SPACES)}")
+        if self.search not in SEARCH_SPACES + ("auto",):
+            raise SpecError(f"unknown search space {self.search!r}; choose auto or one of "
+                            f"{', '.join(SEARCH_SPACES)}")
         if self.fitness_mode not in FITNESS_MODES:
             raise SpecError(f"unknown fitness_mode {self.fitness_mode!r}; choose one of "
                             f"{', '.join(FITNESS_MODES)}")
