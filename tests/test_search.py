@@ -34,8 +34,8 @@ def test_ecc_xy_round_trip_inside_the_disk():
 
 
 def test_unknown_space_is_refused():
-    assert set(SEARCH_SPACES) == {"ecc-xy", "k"}
-    with pytest.raises(ValueError, match="unknown search space 'polar'; choose one of ecc-xy, k"):
+    assert set(SEARCH_SPACES) == {"ecc-xy", "k", "ecc-xy-sc"}
+    with pytest.raises(ValueError, match="unknown search space 'polar'; choose one of ecc-xy, k, ecc-xy-sc"):
         to_k(np.zeros((1, 8)), "polar")
 
 
