@@ -16,6 +16,14 @@ the process CPU time, which time-sharing with other work does not inflate:
   median over repeats of ms per population and of ns per candidate-step
   ``time / (N * n_steps * n_sub)``;
 * the same at N = 1, 10, 50, 200 (scaling);
+* side by side with the kernel of an earlier revision (``--baseline-rev``, default
+  8a69e1c: three RL branches with the star point held, before the winding circuit),
+  extracted with ``git archive`` into a temporary package imported as
+  ``emaphm_baseline``: ns per candidate-step of the SIMD kernel alone (P, CP packed
+  beforehand) for the baseline (paper fault model) and today's paper and physical
+  fault models, repeats interleaved round-robin so that all three see the same load;
+  the cost of packing a population (``pack_population``: the exact winding step of
+  every candidate) and its share of a population evaluation;
 * the NumPy-vectorised MM (:mod:`emaphm.models.monitoring_numpy`) on the same
   population, and its ratio to the kernel;
 * the reference model (RM), one trace at n_sub = 128 with and without PWM;
@@ -37,6 +45,7 @@ for _var in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MK
     os.environ[_var] = "1"
 
 import argparse  # noqa: E402
+import importlib  # noqa: E402
 import datetime as _dt  # noqa: E402
 import platform  # noqa: E402
 import statistics  # noqa: E402
@@ -58,6 +67,10 @@ from emaphm.models.reference import run_reference  # noqa: E402
 from emaphm.profiles import diagnostic  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results" / "models.md"
+REPO = Path(__file__).resolve().parent.parent
+BASELINE_REV = "8a69e1c"     # before the winding circuit: RL branches, star point held
+MAX_RATIO = 1.5              # physical / baseline kernel cost (design notes)
+MAX_PACK_SHARE = 0.20        # pack_population / population evaluation
 TARGET_NS = 40.0        # ns per candidate-step, one core
 TARGET_WARM_S = 1.0     # s, first call in a fresh process with a warm cache
 N_MAIN = 50
@@ -129,6 +142,98 @@ def _first_call(cache_dir: str) -> dict[str, float]:
     return res
 
 
+# --- side by side with an earlier revision ---------------------------------------------
+
+def _baseline_package(rev: str, root: str):
+    """``emaphm`` of git revision ``rev``, extracted under ``root`` and imported as
+    ``emaphm_baseline`` (its modules import each other relatively)."""
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", rev, "src/emaphm"],
+                             check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", root], input=archive, check=True)
+    os.rename(os.path.join(root, "src", "emaphm"), os.path.join(root, "emaphm_baseline"))
+    sys.path.insert(0, root)
+    return importlib.import_module("emaphm_baseline")
+
+
+def _kernel_call(kernel, P, CP, ref, load, n_sub, target, weights):
+    """The SIMD kernel alone on packed ``P, CP``: fitness only, as ``weighted_sse`` runs it."""
+    n_pop = CP.shape[0]
+    fitness = np.zeros(n_pop)
+    status = np.zeros(n_pop, dtype=np.int64)
+    none3, none2 = np.zeros((0, 0, 3)), np.zeros((0, 0))
+    return lambda: kernel(P, CP, ref, load, n_sub, target, weights, none3, none2, none2, none2,
+                          fitness, status)
+
+
+def _interleaved(fns: dict, repeats: int) -> dict:
+    """Median CPU and wall time [s] of each ``fns[name]()``, the calls taken round-robin."""
+    for fn in fns.values():
+        fn()
+    wall = {name: [] for name in fns}
+    cpu = {name: [] for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            c0, t0 = time.process_time(), time.perf_counter()
+            fn()
+            wall[name].append(time.perf_counter() - t0)
+            cpu[name].append(time.process_time() - c0)
+    for name in fns:
+        _CPU.append((sum(cpu[name]), sum(wall[name])))
+    return {name: (statistics.median(wall[name]), statistics.median(cpu[name])) for name in fns}
+
+
+def side_by_side(rev: str, quick: bool) -> list[tuple[str, str, str]]:
+    """Rows: the SIMD kernel of revision ``rev`` (paper) against today's paper and
+    physical kernels, N = 50, n_sub = 1, and the cost of packing a population."""
+    from emaphm.models.monitoring_simd import _kernel as new_kernel
+    repeats = 9 if quick else 41
+    profile = diagnostic()
+    K = np.random.default_rng(SEED).random((N_MAIN, 8))
+    rows: list[tuple[str, str, str]] = []
+    with tempfile.TemporaryDirectory(prefix="emaphm-baseline-") as root:
+        base = _baseline_package(rev, root)
+        from emaphm_baseline.models.layout import pack_population as base_pack
+        from emaphm_baseline.models.monitoring import MonitoringModel as BaseModel
+        from emaphm_baseline.models.monitoring_simd import _kernel as base_kernel
+        old = BaseModel(profile=profile)
+        new = {fm: MonitoringModel(profile=profile, fault_model=fm) for fm in ("paper", "physical")}
+        n_steps = old.t.size
+        ref, load = old._ref, old._load
+        target = old.simulate_population(K_NOMINAL[None]).i_abc[0]
+        weights = np.ones_like(target)
+        P0, CP0 = base_pack(old.params, K)
+        fns = {f"baseline {rev} (paper)": _kernel_call(base_kernel, P0, CP0, ref, load, 1,
+                                                       target, weights)}
+        for fm, model in new.items():
+            P, CP = model.pack(K)
+            fns[f"today, {fm}"] = _kernel_call(new_kernel, P, CP, ref, load, 1, target, weights)
+        kern = _interleaved(fns, repeats)
+        packs = _interleaved({fm: (lambda m=m: m.pack(K)) for fm, m in new.items()}, repeats)
+        whole = _interleaved({fm: (lambda m=m: m.weighted_sse(K, target, weights))
+                              for fm, m in new.items()}, max(3, repeats // 2))
+        del base
+    ns = {name: cpu / (N_MAIN * n_steps) * 1e9 for name, (_, cpu) in kern.items()}
+    ns_wall = {name: w / (N_MAIN * n_steps) * 1e9 for name, (w, _) in kern.items()}
+    base_ns = ns[f"baseline {rev} (paper)"]
+    for name in fns:
+        ratio = ns[name] / base_ns
+        tgt = ""
+        if name.endswith("physical"):
+            tgt = f"<= {MAX_RATIO} x baseline ({'met' if ratio <= MAX_RATIO else 'missed'})"
+        rows.append((f"Side by side, SIMD kernel alone, N = {N_MAIN}, n_sub = 1, fitness only, "
+                     f"{name}: ns per candidate-step",
+                     f"{ns[name]:.1f} CPU ({ns_wall[name]:.1f} wall); {ratio:.2f} x baseline", tgt))
+    for fm in new:
+        share = packs[fm][1] / whole[fm][1]
+        rows.append((f"Side by side, `pack_population` (exact winding step), N = {N_MAIN}, {fm}: "
+                     "ms per population",
+                     f"{packs[fm][1] * 1e3:.3f} CPU ({packs[fm][0] * 1e3:.3f} wall); "
+                     f"{100 * share:.0f} % of `weighted_sse` ({whole[fm][1] * 1e3:.2f} ms CPU)",
+                     f"<= {100 * MAX_PACK_SHARE:.0f} % "
+                     f"({'met' if share <= MAX_PACK_SHARE else 'missed'})"))
+    return rows
+
+
 # --- machine ------------------------------------------------------------------------------
 
 def _machine() -> dict[str, str]:
@@ -181,10 +286,17 @@ def _machine() -> dict[str, str]:
 
 # --- the benchmark ------------------------------------------------------------------------
 
-def run(quick: bool) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
+def run(quick: bool, baseline_rev: str = BASELINE_REV,
+        only_side_by_side: bool = False) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
     """All measurements: table rows ``(measurement, value, target)``, machine, a note."""
     def reps(full, q):
         return q if quick else full
+
+    if only_side_by_side:
+        rows = side_by_side(baseline_rev, quick)
+        cpu, wall = (sum(x) for x in zip(*_CPU))
+        return rows, _machine(), (f"Only the side-by-side rows (--side-by-side-only). The process "
+                                  f"got {100 * cpu / wall:.0f} % of its core.")
 
     profile = diagnostic()
     rng = np.random.default_rng(SEED)
@@ -250,11 +362,12 @@ def run(quick: bool) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
                          f"<= {TARGET_NS:.0f} ns" if kind == "fitness" else ""))
 
     # 3. NumPy-vectorised MM on the same population
-    P, CP = pack_population(mm.params, K)
+    packed = {n_sub: pack_population(mm.params, K, n_sub=n_sub) for n_sub in (1, 2)}
+    P, CP = packed[1]
     ref, load = mm.profile.theta_ref(mm.t), mm.profile.load_torque(mm.t)
     for n_sub in (1, 2):
         med, _, cpu = _median_time(
-            lambda: weighted_sse_numpy(P, CP, ref, load, n_sub, target, weights),
+            lambda: weighted_sse_numpy(*packed[n_sub], ref, load, n_sub, target, weights),
             reps(5, 1), warmup=0 if quick else 1)
         head = f"NumPy-vectorised MM, N = {N_MAIN}, n_sub = {n_sub}, fitness only"
         rows.append((f"{head}: ms per population",
@@ -291,6 +404,9 @@ def run(quick: bool) -> tuple[list[tuple[str, str, str]], dict[str, str], str]:
         rows.append((f"First `weighted_sse` call (N = 50) in a fresh process, {label}: s",
                      f"{r['first']:.3f} (CPU {r['first_cpu']:.3f}; import {r['import']:.2f} s, "
                      f"whole process {r['process']:.2f} s)", tgt(r["first"])))
+
+    # 5b. side by side with the kernel of an earlier revision
+    rows += side_by_side(baseline_rev, quick)
 
     # 6. peak memory of one population evaluation
     for n_pop in (N_MAIN, 200):
@@ -331,17 +447,25 @@ def _markdown(rows, machine, note, quick: bool, started: str) -> str:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
-    ap.add_argument("--out", type=Path, default=RESULTS, help="Markdown file to write")
+    ap.add_argument("--out", type=Path, default=None,
+                    help=f"Markdown file to write (default {RESULTS.relative_to(REPO)}; "
+                         "none with --side-by-side-only)")
     ap.add_argument("--pin", type=int, default=None, metavar="CPU",
                     help="pin the process (and its subprocesses) to this CPU")
+    ap.add_argument("--baseline-rev", default=BASELINE_REV, metavar="REV",
+                    help=f"git revision whose kernel is timed side by side (default {BASELINE_REV})")
+    ap.add_argument("--side-by-side-only", action="store_true",
+                    help="only the side-by-side rows (baseline vs today's kernels, pack cost)")
     args = ap.parse_args(argv)
     if args.pin is not None:
         os.sched_setaffinity(0, {args.pin})
     started = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M")
-    rows, machine, note = run(args.quick)
+    rows, machine, note = run(args.quick, args.baseline_rev, args.side_by_side_only)
     text = _markdown(rows, machine, note, args.quick, started)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(text)
+    out = args.out if args.out is not None or args.side_by_side_only else RESULTS
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text)
     print(text)
     return 0
 

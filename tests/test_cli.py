@@ -65,10 +65,11 @@ def test_scenarios_lists_all_names(capsys):
     assert main(["scenarios"]) == 0
     out, _ = capsys.readouterr()
     lines = out.strip().splitlines()
-    assert len(SCENARIOS) == 12
-    assert len(lines) == 1 + 12
+    assert len(SCENARIOS) == 14
+    assert len(lines) == 1 + 14
     names = [line.split()[0] for line in lines[1:]]
     assert names == list(SCENARIOS)
+    assert [line.split()[1] for line in lines[1:]] == ["paper"] * 12 + ["physical"] * 2
     assert "0.25,0,0,0,0,0,0.5,0.5" in out             # friction-low
 
 
@@ -208,7 +209,7 @@ def test_diagnose_trace_file_with_plot(rm_trace_file, workdir, capsys):
     assert rc == 0
     d = json.loads(out)
     assert d["algorithm"] == "de" and d["seed"] == 2
-    assert d["trace"] == str(rm_trace_file) and d["scenario"] is None
+    assert d["trace"] == str(rm_trace_file) and d["scenario"] == rm_trace_file.stem
     assert d["k_true"] == SCENARIOS["gain-high"].tolist()     # from the file's metadata
     assert isinstance(d["error_pct"], float)
     assert isinstance(d["history"], list) and d["history"]

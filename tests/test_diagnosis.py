@@ -46,7 +46,8 @@ def test_nominal_is_healthy():
 
 
 def test_scenario_names_cover_every_mode():
-    assert set(SINGLE) | {"nominal", "multiple"} == set(SCENARIOS)
+    assert set(SINGLE) | {"nominal", "multiple", "turn-short-5pct", "turn-short-15pct"} \
+        == set(SCENARIOS)
     assert set(SINGLE.values()) == set(FAULT_MODES)
 
 
@@ -227,3 +228,20 @@ def test_bad_fault_vector_raises(bad, match):
 
 def test_accepts_a_comma_separated_string():
     assert diagnose("0.75,0,0,0,0,0,0.5,0.5").modes == ("friction",)
+
+
+def test_physical_fault_model_reads_a_shorted_fraction_with_its_own_threshold():
+    from emaphm.diagnosis import THRESHOLDS_BY_FAULT_MODEL
+
+    k = K_NOMINAL.copy()
+    k[3] = 0.08
+    d = diagnose(k, fault_model="physical")
+    assert d.fault_model == "physical" and d.thresholds == THRESHOLDS_BY_FAULT_MODEL["physical"]
+    (f,) = d.faults
+    assert f.mode == "short_circuit" and f.phase == "B"
+    assert "8.0% of its turns" in f.reading and "fault resistance of 0.15 ohm" in f.reading
+    assert "R x" not in f.reading                     # no turn removal under physical
+    assert diagnose(k).faults[0].reading.startswith("8% of phase B turns shorted (R x0.92")
+    assert d.to_dict()["fault_model"] == "physical"
+    with pytest.raises(ValueError, match="unknown fault model"):
+        diagnose(k, fault_model="electrical")

@@ -13,8 +13,9 @@ from hypothesis.extra.numpy import arrays
 from emaphm.faults import (K_NAMES, K_NOMINAL, MAX_SHORTED_FRACTION, N_K, PAPER_SCENARIOS,
                            SCENARIO_FAULT_MODELS, SCENARIOS, FaultVectorError, apply_faults,
                            as_k, error_pct, scenario, scenario_fault_model)
-from emaphm.models.layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
-                                  C_L_A, C_R_A, N_CP, pack, pack_population)
+from emaphm.models.layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
+                                  C_GAMMA, C_KP, C_L_A, C_MU_A, C_PHI, C_R_A, N_CP, P_DT, P_T_S,
+                                  pack, pack_population)
 from emaphm.params import siemens_1fk7060
 
 NOMINAL = siemens_1fk7060()
@@ -257,14 +258,50 @@ def test_error_pct_properties(k, kt):
 
 # --------------------------------------------------------------------------- packing
 
-@given(arrays(np.float64, st.tuples(st.integers(1, 6), st.just(N_K)), elements=unit))
-def test_pack_population_rows_equal_pack_of_apply_faults(K):
-    P, CP = pack_population(NOMINAL, K)
+@given(arrays(np.float64, st.tuples(st.integers(1, 6), st.just(N_K)), elements=unit),
+       st.sampled_from(["paper", "physical"]), st.sampled_from([1, 2, 5]))
+def test_pack_population_rows_equal_pack_of_apply_faults(K, fault_model, n_sub):
+    P, CP = pack_population(NOMINAL, K, 0.0, fault_model, n_sub=n_sub)
     assert CP.shape == (K.shape[0], N_CP)
+    assert P[P_DT] == P[P_T_S] / n_sub
     for j, k in enumerate(K):
-        P1, row = pack(apply_faults(NOMINAL, k))
+        P1, row = pack(apply_faults(NOMINAL, k, fault_model), 0.0, fault_model, n_sub=n_sub)
         np.testing.assert_array_equal(P, P1)
         np.testing.assert_allclose(CP[j], row[0], rtol=1e-15, atol=0.0)
+
+
+def test_pack_population_winding_step_of_each_fault_model():
+    """Paper: R, L, c0 scaled, no loops (their rows and columns of Phi, Gamma exactly
+    decoupled); physical: R, L, c0 healthy, mu = k3..k5 and loops coupled to the phases."""
+    K = np.stack([K_NOMINAL, _k(k3=0.4), _k(k4=0.2, k5=0.995)])
+    _, paper = pack_population(NOMINAL, K, fault_model="paper")
+    _, phys = pack_population(NOMINAL, K, fault_model="physical")
+    m = NOMINAL.motor
+    assert paper[1, C_R_A] == pytest.approx(0.6 * m.R[0]) and not paper[:, C_MU_A:C_MU_A + 3].any()
+    np.testing.assert_array_equal(phys[:, C_R_A:C_R_A + 3], np.tile(m.R, (3, 1)))
+    np.testing.assert_array_equal(phys[:, C_C0_A:C_C0_A + 3], np.tile(m.c0, (3, 1)))
+    np.testing.assert_array_equal(phys[:, C_MU_A:C_MU_A + 3],
+                                  [[0, 0, 0], [0.4, 0, 0], [0, 0.2, MAX_SHORTED_FRACTION]])
+    # the healthy candidate is the same circuit under both models (leakage invisible)
+    np.testing.assert_allclose(phys[0, C_PHI:], paper[0, C_PHI:], rtol=1e-12, atol=1e-15)
+    for row in paper:
+        Phi = row[C_PHI:C_GAMMA].reshape(5, 5)
+        assert not Phi[2:, :2].any() and not Phi[:2, 2:].any()
+    Phi = phys[1, C_PHI:C_GAMMA].reshape(5, 5)
+    Gam = phys[1, C_GAMMA:].reshape(5, 5)
+    assert abs(Phi[0, 2]) > 1e-3 and abs(Gam[2, 0]) > 1e-3         # loop a couples to i_alpha
+    assert not Phi[3:, :3].any() and not Phi[:3, 3:].any()                        # b, c: none
+    np.testing.assert_allclose(Gam, Gam.T, rtol=1e-12, atol=1e-18)               # symmetric
+
+
+def test_pack_refuses_loops_under_the_paper_model():
+    faulty = apply_faults(NOMINAL, _k(k3=0.3), "physical")
+    with pytest.raises(ValueError, match="fault_model='physical'"):
+        pack(faulty)
+    with pytest.raises(FaultVectorError, match="unknown fault model"):
+        pack_population(NOMINAL, K_NOMINAL[None], fault_model="ideal")
+    with pytest.raises(ValueError, match="n_sub must be an integer >= 1"):
+        pack_population(NOMINAL, K_NOMINAL[None], n_sub=0)
 
 
 def test_pack_layout_known_values():

@@ -14,13 +14,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, apply_faults, scenario
+from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, apply_faults, scenario, scenario_fault_model
 from emaphm.models.controller import control_step, pi_step
-from emaphm.models.layout import C_KP, C_R_A, pack_population
+from emaphm.models.layout import C_KP, C_PHI, pack_population
 from emaphm.models.monitoring import (STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, MonitoringModel, _kernel,
                                       simulate_reference)
 from emaphm.models.pmsm import back_emf_coeffs, torque
-from emaphm.models.reference import Sensors, run_reference
+from emaphm.acquisition import Sensors
+from emaphm.models.reference import _run, run_reference
 from emaphm.params import siemens_1fk7060
 from emaphm.profiles import diagnostic
 from emaphm.simulate import DEFAULT_SENSORS, simulate
@@ -57,9 +58,31 @@ def mm():
 
 
 @pytest.fixture(scope="module")
+def mm_physical():
+    return MonitoringModel(PARAMS, PROFILE, fault_model="physical")
+
+
+def mm_of(name, mm, mm_physical):
+    """The MM under the fault model a scenario is defined under."""
+    return mm_physical if scenario_fault_model(name) == "physical" else mm
+
+
+@pytest.fixture(scope="module")
 def rm_traces():
-    """RM (switching PWM, n_sub = 128, about 1 us) for every scenario."""
-    return {name: run_reference(PARAMS, k, PROFILE) for name, k in SCENARIOS.items()}
+    """RM plant (switching PWM, n_sub = 128, about 1 us; Stribeck friction, compliant
+    backlash) for every scenario, under the scenario's own fault model."""
+    return {name: run_reference(PARAMS, k, PROFILE, fault_model=scenario_fault_model(name))
+            for name, k in SCENARIOS.items()}
+
+
+@pytest.fixture(scope="module")
+def rm_rigid_traces():
+    """The same RM on the MM's mechanics (rigid, momentum-conserving backlash contact and
+    two-level Borello friction): what is left of its difference to the MM is the switching
+    inverter and the winding integration."""
+    return {name: _run(PARAMS, k, PROFILE, fault_model=scenario_fault_model(name), n_sub=128,
+                       pwm=True, extra_load=0.0, rigid=True)
+            for name, k in SCENARIOS.items()}
 
 
 # =========================================================================== controller
@@ -118,26 +141,26 @@ def test_control_step_known_answers():
 
 # =========================================================================== RM power balance
 
-@pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "eccentricity-high"])
+@pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "eccentricity-high",
+                                  "turn-short-15pct"])
 def test_reference_model_power_balance(name):
-    """Energy in = copper loss + air-gap (T_m omega) energy + stored magnetic energy.
+    """Energy in = copper (and fault-loop) loss + air-gap (T_m omega) energy + stored
+    magnetic energy.
 
-    The residual is the RM's own first-order discretisation of the bookkeeping (measured
-    max |residual| / E_in = 1.14e-4 nominal, 9.1e-5 short circuit, 8.3e-5 eccentricity
-    at n_sub = 128; a quarter of that at n_sub = 512). A missing or wrong term (a back-EMF
-    not matching the torque, a wrong R in the loss) leaves a residual of order 1.
+    The Crank-Nicolson step of the windings satisfies this exactly with the trapezoidal
+    definitions, so the residual is round-off (measured max |residual| / E_in below 1e-12
+    at n_sub = 128 and 512; the former exact-exponential RM left a first-order 1e-4). A
+    missing or wrong term (a back-EMF not matching the torque, a wrong R in the loss)
+    leaves a residual of order 1.
     """
     k = scenario(name)
-    res = {}
     for n_sub in (128, 512):
-        E = run_reference(PARAMS, k, PROFILE, n_sub=n_sub)["energy"]
+        E = run_reference(PARAMS, k, PROFILE, fault_model=scenario_fault_model(name),
+                          n_sub=n_sub)["energy"]
         E_in, E_cu, E_ag, E_mag = E.T
         assert E_in[-1] > 5.0 and E_cu[-1] > 1.0 and abs(E_ag[-1]) > 1.0     # J, all terms matter
         assert np.all(np.diff(E_cu) >= 0.0) and np.all(E_mag >= 0.0)
-        res[n_sub] = np.max(np.abs(E_in - E_cu - E_ag - E_mag)) / E_in[-1]
-    assert res[128] < 3e-4, res
-    # a discretisation residual: falls at first order with the step
-    assert res[512] < res[128] / 3.0, res
+        assert np.max(np.abs(E_in - E_cu - E_ag - E_mag)) < 1e-10 * E_in[-1], n_sub
 
 
 def test_stored_magnetic_energy_is_half_l_i_squared():
@@ -174,8 +197,9 @@ def test_monitoring_model_converges_with_the_step(name):
 
 @pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "multiple"])
 def test_reference_model_converges_with_the_step(name):
-    """RM in averaged mode (pwm=False) at n_sub = 8..128 against 512: measured order
-    0.95 nominal, 1.15 short circuit, 1.17 multiple."""
+    """RM plant in averaged mode (pwm=False) at n_sub = 8..128 against 512: measured order
+    1.09 nominal, 1.10 short circuit, 1.09 multiple (first order: back-EMF held over the
+    sub-step, symplectic-Euler mechanics; see tests/test_reference_plant.py)."""
     k = scenario(name)
     ref = run_reference(PARAMS, k, PROFILE, n_sub=512, pwm=False)["i_abc"]
     n_subs = np.array([8, 16, 32, 64, 128])
@@ -186,16 +210,25 @@ def test_reference_model_converges_with_the_step(name):
     assert np.all(np.diff(errs) < 0), errs
 
 
-@pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "eccentricity-high", "multiple"])
-@pytest.mark.parametrize("n_sub", [2, 8])
-def test_averaged_reference_model_is_the_monitoring_model(name, n_sub):
-    """The MM is the RM without switching: at the same step they agree to round-off."""
+@pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "eccentricity-high", "multiple",
+                                  "turn-short-15pct"])
+def test_averaged_reference_model_on_rigid_mechanics_is_the_monitoring_model(name):
+    """The MM is the RM without switching and without the plant's mechanics: on the MM's
+    rigid mechanics (private ``rigid=True``) and at the same step, they differ only by the
+    winding integrator (the RM's Crank-Nicolson against the MM's exact step), a difference
+    that falls at second order (measured max current difference 2.8e-5 A at n_sub = 2 and
+    1.7e-6 A at 8 on the paper's scenarios, 8.7e-4 and 5.4e-5 A with the 15 % fault loop)."""
     k = scenario(name)
-    r = run_reference(PARAMS, k, PROFILE, n_sub=n_sub, pwm=False)
-    m = MonitoringModel(PARAMS, PROFILE, n_sub=n_sub).simulate(k)
-    np.testing.assert_allclose(m.i_abc[0], r["i_abc"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(m.theta_m[0], r["theta_m"], rtol=0, atol=1e-9)
-    np.testing.assert_allclose(m.torque[0], r["torque"], rtol=0, atol=1e-9)
+    fm = scenario_fault_model(name)
+    diff = {}
+    for n_sub in (2, 8):
+        r = _run(PARAMS, k, PROFILE, fault_model=fm, n_sub=n_sub, pwm=False, extra_load=0.0,
+                 rigid=True)
+        m = MonitoringModel(PARAMS, PROFILE, n_sub=n_sub, fault_model=fm).simulate(k)
+        diff[n_sub] = np.abs(m.i_abc[0] - r["i_abc"]).max()
+        np.testing.assert_allclose(m.theta_m[0], r["theta_m"], rtol=0, atol=1e-5)
+    assert diff[8] < (1e-4 if fm == "paper" else 2e-4), diff
+    assert diff[8] < diff[2] / 10.0, diff          # 4x the step: 16x the difference
 
 
 def test_step_arguments_are_validated():
@@ -213,16 +246,18 @@ def _random_k(rng, n):
     return K
 
 
+@pytest.mark.parametrize("fault_model", ["paper", "physical"])
 @pytest.mark.parametrize("n_sub", [1, 2])
-def test_batched_kernel_equals_python_reference(n_sub):
+def test_batched_kernel_equals_python_reference(n_sub, fault_model):
     rng = np.random.default_rng(11 + n_sub)
-    K = np.vstack([_random_k(rng, 3), scenario("multiple"), scenario("short-circuit-high")])
-    model = MonitoringModel(PARAMS, PROFILE, n_sub=n_sub)
+    K = np.vstack([_random_k(rng, 3), scenario("multiple"), scenario("short-circuit-high"),
+                   scenario("turn-short-15pct")])
+    model = MonitoringModel(PARAMS, PROFILE, n_sub=n_sub, fault_model=fault_model)
     res = model.simulate_population(K)
     assert res.status.tolist() == [STATUS_OK] * len(K)
     assert res.i_abc.shape == (len(K), PROFILE.grid(T_S).size, 3)
     for j, k in enumerate(K):
-        ref = simulate_reference(PARAMS, k, PROFILE, n_sub=n_sub)
+        ref = simulate_reference(PARAMS, k, PROFILE, n_sub=n_sub, fault_model=fault_model)
         np.testing.assert_allclose(res.i_abc[j], ref["i_abc"], rtol=0, atol=1e-9)
         np.testing.assert_allclose(res.theta_m[j], ref["theta_m"], rtol=0, atol=1e-9)
         np.testing.assert_allclose(res.omega_m[j], ref["omega_m"], rtol=0, atol=1e-9)
@@ -264,10 +299,12 @@ def test_initial_angle(mm):
     np.testing.assert_allclose(a.theta_m - 2 * np.pi, b.theta_m, rtol=0, atol=1e-9)
 
 
-def test_simulate_params_equals_simulate_k(mm):
+@pytest.mark.parametrize("fault_model", ["paper", "physical"])
+def test_simulate_params_equals_simulate_k(fault_model):
+    model = MonitoringModel(PARAMS, PROFILE, fault_model=fault_model)
     k = scenario("multiple")
-    a = mm.simulate(k)
-    b = mm.simulate_params(apply_faults(PARAMS, k))
+    a = model.simulate(k)
+    b = model.simulate_params(apply_faults(PARAMS, k, fault_model))
     np.testing.assert_allclose(b.i_abc, a.i_abc, rtol=0, atol=1e-12)
 
 
@@ -303,13 +340,13 @@ def _run_kernel(P, CP, model, i_target=None, weights=None):
 
 
 def test_diverging_candidate_is_flagged_and_isolated(mm, rm_traces):
-    """A candidate with an unstable electrical pole (negative resistance: a = exp(+5.7) per
-    step) grows past the divergence limit; one with a NaN gain is non-finite at once.
+    """A candidate with an unstable electrical pole (winding step Phi = exp(+5.7) on the
+    phase currents) grows past the divergence limit; one with a NaN gain is non-finite at once.
     Both get STATUS_DIVERGED and infinite fitness; their neighbours are bit-identical
     to their solo runs."""
     K = np.vstack([scenario("friction-high"), K_NOMINAL, scenario("short-circuit-low"), K_NOMINAL])
     P, CP = pack_population(PARAMS, K)
-    CP[1, C_R_A:C_R_A + 3] = -1000.0            # unstable RL pole
+    CP[1, [C_PHI, C_PHI + 6]] = np.exp(5.7)     # unstable pole of y_alpha, y_beta
     CP[3, C_KP] = np.nan                        # non-finite parameter
     target = rm_traces["friction-high"]["i_abc"]
     w = eq4_weights(target, T_S)
@@ -452,30 +489,38 @@ def test_motion_covers_a_revolution_and_a_reversal(mm):
 # =========================================================================== MM vs RM
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
-def test_monitoring_model_agrees_with_reference_model(mm, rm_traces, name):
-    """NRMS of MM (n_sub = 1) minus RM (PWM, 1 us) currents below 2 % (measured 0.30 %
-    to 0.51 %: nominal 0.32, friction 0.32/0.32, backlash 0.33/0.35, short circuit
-    0.37/0.34, eccentricity 0.51/0.46, gain 0.30/0.37, multiple 0.51)."""
-    m = mm.simulate(scenario(name))
+def test_monitoring_model_agrees_with_reference_model(mm, mm_physical, rm_traces,
+                                                     rm_rigid_traces, name):
+    """NRMS of MM (n_sub = 1) minus RM (PWM, 1 us) currents.
+
+    On the MM's own mechanics (rigid backlash, two-level friction) the RM differs by its
+    switching inverter and winding integration only: below 2 % (measured 0.30 % to
+    0.62 %). The plant adds what the MM lacks (Stribeck friction, a compliant contact at
+    about 500 Hz): measured 1.2 % (gain-high) to 8.3 % (backlash-high; backlash-low 4.3 %,
+    every other scenario 1.2-2.6 %), and always more than the rigid RM's, so the plant is
+    no twin. Angles stay within 2.6e-3 rad of the MM's.
+    """
+    m = mm_of(name, mm, mm_physical).simulate(scenario(name))
     r = rm_traces[name]
+    rigid = rm_rigid_traces[name]
     np.testing.assert_array_equal(m.t, r["t"])
+    err_rigid = nrms(m.i_abc[0], rigid["i_abc"])
+    assert err_rigid < 0.02, (name, err_rigid)
+    assert np.abs(m.theta_m[0] - rigid["theta_m"]).max() < 0.01       # rad
     err = nrms(m.i_abc[0], r["i_abc"])
-    assert err < 0.02, (name, err)
-    assert np.abs(m.theta_m[0] - r["theta_m"]).max() < 0.01       # rad
+    assert err_rigid < err < 0.10, (name, err_rigid, err)
+    assert np.abs(m.theta_m[0] - r["theta_m"]).max() < 0.01           # rad
 
 
 LINE = np.linspace(0.0, 1.0, 41)             # step 0.025
 LANDSCAPE_TOL = 0.05
 
 
-@pytest.mark.parametrize("name", FAULTS)
-def test_fitness_landscape_is_minimal_at_the_true_k(mm, rm_traces, name):
-    """Along each single-component line through the true k, the Eq. 4 weighted SSE of MM
-    against RM currents is minimal within 0.05 of the true value (measured: at the true
-    value to the 0.0125 grid for every scenario and component)."""
-    kt = scenario(name)
-    target = rm_traces[name]["i_abc"]
+def _landscape_minima(mm, kt, target, depth):
+    """Best value of each component along its line through the true k (None: invisible);
+    every visible line must be a valley at least ``depth`` deep (max / min fitness)."""
     w = eq4_weights(target, T_S)
+    best = []
     for c in range(8):
         K = np.tile(kt, (LINE.size, 1))
         K[:, c] = LINE
@@ -483,10 +528,48 @@ def test_fitness_landscape_is_minimal_at_the_true_k(mm, rm_traces, name):
         assert not np.any(status == STATUS_DIVERGED)  # far points may trip (finite fitness)
         if c == 6 and kt[5] == 0.0:
             assert np.all(fit == fit[0])             # no eccentricity: the phase is invisible
+            best.append(None)
             continue
-        best = LINE[np.argmin(fit)]
-        assert abs(best - kt[c]) <= LANDSCAPE_TOL, (name, K_NAMES[c], best, kt[c])
-        assert fit.max() > 10 * fit.min()            # a real valley, not a flat line
+        assert fit.max() > depth * fit.min(), (K_NAMES[c], fit.max() / fit.min())
+        best.append(LINE[np.argmin(fit)])
+    return best
+
+
+@pytest.mark.parametrize("name", FAULTS)
+def test_fitness_landscape_is_minimal_at_the_true_k(mm, mm_physical, rm_rigid_traces, name):
+    """Along each single-component line through the true k, the Eq. 4 weighted SSE of MM
+    against the RM on the MM's mechanics is minimal within 0.05 of the true value
+    (measured: at the true value to the 0.025 grid for every scenario and component but
+    backlash-high's backlash, +0.025, and multiple's, whose true values are off the grid)."""
+    kt = scenario(name)
+    best = _landscape_minima(mm_of(name, mm, mm_physical), kt, rm_rigid_traces[name]["i_abc"],
+                             depth=10.0)                 # a real valley, not a flat line
+    for c, b in enumerate(best):
+        if b is not None:
+            assert abs(b - kt[c]) <= LANDSCAPE_TOL, (name, K_NAMES[c], b, kt[c])
+
+
+@pytest.mark.parametrize("name", FAULTS)
+def test_fitness_landscape_on_the_plant_is_biased_where_the_mm_lacks_physics(
+        mm, mm_physical, rm_traces, name):
+    """Against the plant (no inverse crime) the MM explains the Stribeck drop, which
+    raises the friction torque at low speed, with more dry friction: the k1 minimum moves
+    up by 0.025 to 0.25 (measured +0.125 nominal, +0.20 friction-low, +0.25 friction-high
+    (the box edge), +0.0617 multiple, +0.15..0.225 elsewhere, +0.025 gain-low), and the
+    compliant contact moves backlash-high's k2 minimum by -0.125. Every other component
+    keeps its minimum within 0.05 of the truth (measured: within 0.05). The valleys are
+    shallower than on the rigid RM, the plant's misfit being a floor under them: measured
+    max/min fitness 2.7-82 along backlash lines, 10-150 along friction lines, 34 and more
+    elsewhere, and 1.51 along multiple's eccentricity phase (k6 = 0.012)."""
+    kt = scenario(name)
+    best = _landscape_minima(mm_of(name, mm, mm_physical), kt, rm_traces[name]["i_abc"],
+                             depth=1.4)
+    assert 0.0 < best[0] - kt[0] <= 0.25 + 1e-12, (name, best[0], kt[0])
+    for c, b in enumerate(best[1:], start=1):
+        if b is None:
+            continue
+        tol = 0.15 if (name, c) == ("backlash-high", 1) else LANDSCAPE_TOL
+        assert abs(b - kt[c]) <= tol + 1e-12, (name, K_NAMES[c], b, kt[c])
 
 
 # =========================================================================== determinism

@@ -27,7 +27,7 @@ def _inputs(mm):
 def case(request):
     mm = MonitoringModel(n_sub=request.param)
     kernel, well, horizon = conditioning(mm, K)
-    P, CP = pack_population(mm.params, K)
+    P, CP = mm.pack(K)
     vec = simulate_population_numpy(P, CP, *_inputs(mm), mm.n_sub)
     return mm, kernel, vec, well, horizon, (P, CP)
 

@@ -15,7 +15,7 @@ import pytest
 from agreement import N_RANDOM, TOL, assert_traces_agree, conditioning, population, traces
 
 from emaphm.faults import SCENARIOS
-from emaphm.models.layout import C_KP, C_R_A, P_THETA0, pack_population
+from emaphm.models.layout import C_KP, C_PHI, P_THETA0, pack_population
 from emaphm.models.monitoring import STATUS_DIVERGED, STATUS_OK, MonitoringModel
 from emaphm.models.monitoring_simd import LANES, TRIG_LIMIT, _kernel, sincos
 
@@ -52,11 +52,13 @@ def simd_sse(mm, P, CP, i_target, weights):
     return fitness, status
 
 
-@pytest.fixture(scope="module", params=[1, 2], ids=["n_sub=1", "n_sub=2"])
+@pytest.fixture(scope="module", params=[(1, "paper"), (2, "paper"), (1, "physical"), (2, "physical")],
+                ids=["n_sub=1-paper", "n_sub=2-paper", "n_sub=1-physical", "n_sub=2-physical"])
 def case(request):
-    mm = MonitoringModel(n_sub=request.param, kernel="scalar")
+    n_sub, fault_model = request.param
+    mm = MonitoringModel(n_sub=n_sub, kernel="scalar", fault_model=fault_model)
     scalar, well, horizon = conditioning(mm, K)
-    P, CP = pack_population(mm.params, K, mm.theta0)
+    P, CP = mm.pack(K)
     return mm, scalar, simd_traces(mm, P, CP), well, horizon, (P, CP)
 
 
@@ -96,12 +98,13 @@ def test_without_a_target_the_fitness_is_zero_or_inf(case):
     assert np.all(np.isinf(simd["fitness"][diverged]))
 
 
+@pytest.mark.parametrize("fault_model", ["paper", "physical"])
 @pytest.mark.parametrize("n_pop", [1, LANES - 1, LANES + 1, 2 * LANES + 3])
-def test_populations_that_do_not_fill_the_last_block(n_pop):
-    mm = MonitoringModel(kernel="scalar")
+def test_populations_that_do_not_fill_the_last_block(n_pop, fault_model):
+    mm = MonitoringModel(kernel="scalar", fault_model=fault_model)
     k = np.resize(np.array(list(SCENARIOS.values())), (n_pop, 8))   # well conditioned
     scalar = mm.simulate_population(k)
-    P, CP = pack_population(mm.params, k, mm.theta0)
+    P, CP = mm.pack(k)
     simd = simd_traces(mm, P, CP)
     np.testing.assert_array_equal(simd["status"], scalar.status)
     for name, ref in traces(scalar).items():
@@ -115,15 +118,15 @@ def test_empty_population():
     assert r["status"].shape == (0,) and r["fitness"].shape == (0,)
 
 
-@pytest.mark.parametrize("poison", ["negative_R", "nan_Kp"])
+@pytest.mark.parametrize("poison", ["unstable_pole", "nan_Kp"])
 def test_a_diverging_candidate_is_flagged_and_leaves_its_neighbours_alone(poison):
     mm = MonitoringModel(kernel="scalar")
     k = np.resize(K[N_RANDOM:N_RANDOM + 4], (LANES + 2, 8))         # two blocks
     P, CP = pack_population(mm.params, k, mm.theta0)
     bad = CP.copy()
     j = 2
-    if poison == "negative_R":
-        bad[j, C_R_A:C_R_A + 3] *= -100.0          # unstable RL branches: currents blow up
+    if poison == "unstable_pole":
+        bad[j, [C_PHI, C_PHI + 6]] = 300.0         # unstable winding step: currents blow up
     else:
         bad[j, C_KP] = np.nan
     rng = np.random.default_rng(1)
@@ -146,6 +149,13 @@ def test_a_diverging_candidate_is_flagged_and_leaves_its_neighbours_alone(poison
                   i_scalar, *outs, f_scalar, s_scalar)
     np.testing.assert_array_equal(tr_bad["status"], s_scalar)
     np.testing.assert_allclose(tr_bad["i_abc"][others], i_scalar[others], rtol=TOL, atol=TOL)
+
+
+def test_kernel_refuses_a_population_packed_for_another_step():
+    mm = MonitoringModel(n_sub=2)
+    P, CP = pack_population(mm.params, K[:3], n_sub=1)
+    with pytest.raises(ValueError, match="another n_sub"):
+        simd_traces(mm, P, CP)
 
 
 def test_runaway_angle_falls_back_to_libm():

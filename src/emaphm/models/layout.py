@@ -5,31 +5,94 @@
 the reference model (one faulty actuator) and the monitoring model (a
 population of candidate ``k``) are fed through these, so a candidate's row
 built from ``(nominal, k)`` by :func:`pack_population` equals the row of
-:func:`pack` applied to ``apply_faults(nominal, k)``.
+:func:`pack` applied to ``apply_faults(nominal, k, fault_model)``.
+
+A row carries the candidate's electrics twice: as parameters (``R, L, c0``
+per phase, what the paper's fault model scales; ``mu``, the shorted
+fractions of the physical one) and as the exact step of its winding circuit
+(:mod:`emaphm.models.windings`) for the sub-step ``dt = T_s / n_sub``:
+``Phi`` and ``Gamma`` (5 x 5 each, row by row) of ``z' = Phi z + Gamma w``,
+which is what the monitoring model integrates. ``P[P_DT]`` records that
+``dt``; the kernels refuse a ``CP`` packed for another one.
+
+=================  =========================================================
+fault model        winding circuit of a candidate (``s`` = shorted fraction)
+=================  =========================================================
+``"paper"``        ``R (1 - s)``, ``L (1 - s)^2``, uncoupled phases
+                   (``sigma = 1``), no fault loops; ``c0 (1 - s)``
+``"physical"``     healthy ``R, L, c0``, leakage ``Motor.L_sigma``, fault
+                   loops ``mu = s`` across ``Motor.R_f`` of the nominal motor
+=================  =========================================================
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..faults import (as_k, backlash_scale, eccentricity_phase, friction_scale, gain_scale,
-                      shorted_fraction, N_K)
+from ..faults import (as_k, backlash_scale, check_fault_model, eccentricity_phase,
+                      friction_scale, gain_scale, shorted_fraction, N_K)
 from ..params import ActuatorParams
+from .windings import N_Z, reduced, winding_matrices, zoh
 
 # shared parameters P[...]
 (P_POLES, P_J_M, P_C_M, P_T_MAX, P_I_MAX, P_V_DC, P_T_S, P_KP_I, P_KI_I, P_KI, P_KD,
- P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0, P_I_TRIP) = range(19)
-N_P = 19
+ P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT) = range(20)
+N_P = 20
 
 # per-candidate parameters CP[:, ...]
 (C_KP, C_FSJ, C_FDJ, C_BACKLASH, C_R_A, C_R_B, C_R_C, C_L_A, C_L_B, C_L_C,
- C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE) = range(15)
-N_CP = 15
+ C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_MU_A, C_MU_B, C_MU_C) = range(18)
+#: ``Phi`` (25 entries, row-major) and ``Gamma`` (25) of the winding circuit's exact step
+C_PHI = 18
+C_GAMMA = C_PHI + N_Z * N_Z
+N_CP = C_GAMMA + N_Z * N_Z
 
 
-def pack_shared(params: ActuatorParams, theta0: float = 0.0) -> np.ndarray:
+#: Shorted fraction [-] below which a phase has no fault loop. Such a loop (inductance
+#: ``mu sigma L``) is stiffer than the exact step resolves in double precision (as mu -> 0
+#: its inductance underflows and ``L_r`` turns singular), and its effect on the phase
+#: currents and the torque, of order ``mu^2``, is far below round-off.
+MU_MIN = 1e-6
+
+
+def winding_step_matrices(R, L, sigma, mu, R_f, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(Phi, Gamma)`` ``(n, 25)`` [-, A/V]: the exact step of each candidate's winding
+    circuit over ``dt`` [s], row by row.
+
+    ``R`` [ohm], ``L`` [H], ``mu`` [-], ``R_f`` [ohm] ``(n, 3)`` or broadcastable,
+    ``sigma`` [-] leakage share (see :func:`emaphm.models.windings.winding_matrices`).
+    A loop with ``mu_j < MU_MIN`` is absent: exactly decoupled (no round-off coupling
+    from the eigen-decomposition), so its current stays exactly zero.
+    """
+    mu = np.asarray(mu, dtype=float)
+    mu = np.where(mu < MU_MIN, 0.0, mu)
+    L_x, R_x = winding_matrices(R, L, sigma, mu, R_f)
+    L_r, R_r = reduced(L_x, R_x, mu)
+    Phi, Gamma = zoh(L_r, R_r, dt)
+    mu = np.broadcast_to(mu, Phi.shape[:-2] + (3,))
+    for j in range(3):
+        off = mu[..., j] == 0.0
+        if np.any(off):
+            r = 2 + j
+            for M in (Phi, Gamma):
+                M[off, r, :] = 0.0
+                M[off, :, r] = 0.0
+            Phi[off, r, r] = np.exp(-dt)             # the dummy unit loop of reduced()
+            Gamma[off, r, r] = -np.expm1(-dt)
+    n = Phi.shape[:-2]
+    return Phi.reshape(n + (N_Z * N_Z,)), Gamma.reshape(n + (N_Z * N_Z,))
+
+
+def _sub_step(params: ActuatorParams, n_sub: int) -> float:
+    if isinstance(n_sub, bool) or int(n_sub) != n_sub or n_sub < 1:
+        raise ValueError(f"n_sub must be an integer >= 1, got {n_sub!r}")
+    return params.inverter.T_s / int(n_sub)
+
+
+def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> np.ndarray:
     """The shared parameter vector P; ``theta0`` [rad] is the initial motor
-    (and load) angle, at rest (a recorded trace need not start at zero)."""
+    (and load) angle, at rest (a recorded trace need not start at zero);
+    ``P[P_DT] = T_s / n_sub`` the sub-step the electrics are packed for."""
     m, inv, ctl, load = params.motor, params.inverter, params.controller, params.load
     P = np.empty(N_P)
     P[P_POLES] = m.p
@@ -51,12 +114,25 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0) -> np.ndarray:
     P[P_C_L] = load.C_l
     P[P_THETA0] = theta0
     P[P_I_TRIP] = inv.I_trip
+    P[P_DT] = _sub_step(params, n_sub)
     return P
 
 
-def pack(params: ActuatorParams, theta0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """``(P, CP)`` for one actuator as it is (faults already applied); CP has one row."""
+def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper", *,
+         n_sub: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """``(P, CP)`` for one actuator as it is (faults already applied); CP has one row.
+
+    ``fault_model`` says which winding circuit ``params`` describe: ``"paper"``
+    (uncoupled phases with their own ``R, L``; ``Motor.mu`` must be zero) or
+    ``"physical"`` (``Motor.L_sigma``, ``mu``, ``R_f``). ``n_sub``: sub-steps per
+    control period the electrics are stepped with.
+    """
+    check_fault_model(fault_model)
     m, tr, ctl = params.motor, params.transmission, params.controller
+    if fault_model == "paper" and any(m.mu):
+        raise ValueError(f"the paper's fault model has no fault loops, but Motor.mu = {m.mu}; "
+                         "pack with fault_model='physical'")
+    P = pack_shared(params, theta0, n_sub)
     row = np.empty(N_CP)
     row[C_KP] = ctl.Kp
     row[C_FSJ] = tr.FSJ
@@ -67,20 +143,31 @@ def pack(params: ActuatorParams, theta0: float = 0.0) -> tuple[np.ndarray, np.nd
     row[C_C0_A:C_C0_C + 1] = m.c0
     row[C_ECC] = m.ecc
     row[C_ECC_PHASE] = m.ecc_phase
-    return pack_shared(params, theta0), row[None, :]
+    row[C_MU_A:C_MU_C + 1] = m.mu
+    sigma = 1.0 if fault_model == "paper" else m.L_sigma
+    Phi, Gamma = winding_step_matrices(np.array(m.R)[None], np.array(m.L)[None], sigma,
+                                       np.array(m.mu)[None], np.array(m.R_f)[None], P[P_DT])
+    row[C_PHI:C_GAMMA] = Phi[0]
+    row[C_GAMMA:] = Gamma[0]
+    return P, row[None, :]
 
 
-def pack_population(nominal: ActuatorParams, K: np.ndarray,
-                    theta0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def pack_population(nominal: ActuatorParams, K: np.ndarray, theta0: float = 0.0,
+                    fault_model: str = "paper", *, n_sub: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """``(P, CP)`` for a population of fault vectors ``K`` (n_pop, 8) on a healthy actuator.
 
-    Rows of K are not range-checked here (the optimizers keep them in the box);
-    use :func:`emaphm.faults.as_k` for user input.
+    ``fault_model`` maps k3..k5 (:func:`emaphm.faults.apply_faults`): ``"paper"``
+    scales R, L, c0; ``"physical"`` shorts a fraction ``mu`` of the turns across the
+    nominal ``Motor.R_f``. ``n_sub``: sub-steps per control period. Rows of K are not
+    range-checked here (the optimizers keep them in the box); use
+    :func:`emaphm.faults.as_k` for user input.
     """
+    check_fault_model(fault_model)
     K = np.atleast_2d(np.asarray(K, dtype=float))
     if K.ndim != 2 or K.shape[1] != N_K:
         raise ValueError(f"population of fault vectors must have shape (n_pop, {N_K}), got {K.shape}")
-    P, base = pack(nominal, theta0)
+    P, base = pack(nominal, theta0, fault_model, n_sub=n_sub)
+    m = nominal.motor
     CP = np.repeat(base, K.shape[0], axis=0)
     CP[:, C_KP] *= gain_scale(K[:, 7])
     fs = friction_scale(K[:, 0])
@@ -88,12 +175,32 @@ def pack_population(nominal: ActuatorParams, K: np.ndarray,
     CP[:, C_FDJ] *= fs
     CP[:, C_BACKLASH] *= backlash_scale(K[:, 1])
     s = shorted_fraction(K[:, 2:5])
-    CP[:, C_R_A:C_R_C + 1] *= 1.0 - s
-    CP[:, C_L_A:C_L_C + 1] *= (1.0 - s) ** 2
-    CP[:, C_C0_A:C_C0_C + 1] *= 1.0 - s
+    if fault_model == "paper":
+        CP[:, C_R_A:C_R_C + 1] *= 1.0 - s
+        CP[:, C_L_A:C_L_C + 1] *= (1.0 - s) ** 2
+        CP[:, C_C0_A:C_C0_C + 1] *= 1.0 - s
+        sigma, mu = 1.0, np.zeros_like(s)
+    else:
+        CP[:, C_MU_A:C_MU_C + 1] = s
+        sigma, mu = m.L_sigma, s
     CP[:, C_ECC] = K[:, 5]
     CP[:, C_ECC_PHASE] = eccentricity_phase(K[:, 6])
+    CP[:, C_PHI:C_GAMMA], CP[:, C_GAMMA:] = _population_matrices(
+        CP[:, C_R_A:C_R_C + 1], CP[:, C_L_A:C_L_C + 1], sigma, mu, np.array(m.R_f), P[P_DT])
     return P, CP
 
 
-__all__ = ["pack", "pack_shared", "pack_population", "N_P", "N_CP", "as_k"]
+def _population_matrices(R, L, sigma, mu, R_f, dt):
+    """:func:`winding_step_matrices` of the rows with finite parameters; NaN matrices for
+    the others (such a candidate diverges at its first step, as a value)."""
+    n = R.shape[0]
+    Phi = np.full((n, N_Z * N_Z), np.nan)
+    Gamma = np.full((n, N_Z * N_Z), np.nan)
+    ok = np.all(np.isfinite(R) & np.isfinite(L) & np.isfinite(mu), axis=1)
+    if np.any(ok):
+        Phi[ok], Gamma[ok] = winding_step_matrices(R[ok], L[ok], sigma, mu[ok], R_f, dt)
+    return Phi, Gamma
+
+
+__all__ = ["pack", "pack_shared", "pack_population", "winding_step_matrices", "MU_MIN", "N_P",
+           "N_CP", "as_k"]

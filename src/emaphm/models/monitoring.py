@@ -4,8 +4,18 @@ Same controller, transmission and fault semantics as the reference model, but
 an **averaged inverter** (each leg applies its duty cycle times ``V_dc`` over
 the whole control period, no switching), no sensor effects, and a coarse step:
 one control period ``T_s = 1/f_pwm`` (125 us at 8 kHz) divided into ``n_sub``
-sub-steps (default 1). The electrical update is the exact-exponential RL step
-of :mod:`emaphm.models.pmsm`, stable over the whole ``[0, 1]^8`` box.
+sub-steps (default 1).
+
+The electrics of a candidate are the winding circuit of
+:mod:`emaphm.models.windings` (5 states: two zero-sum phase currents and three
+fault-loop currents), advanced by its exact step for the leg voltages and
+back-EMFs held over the sub-step, ``z' = Phi z + Gamma w``
+(:func:`emaphm.models.pmsm.winding_step`; ``Phi, Gamma`` per candidate from
+:func:`emaphm.models.layout.pack_population`), stable over the whole
+``[0, 1]^8`` box. ``fault_model`` (:data:`emaphm.faults.FAULT_MODELS`) says what
+k3..k5 mean: ``"paper"`` scales R, L, c0 of uncoupled phases (no loops);
+``"physical"`` shorts a fraction of the turns across the nominal fault
+resistance, and a fault-loop current flows. Both run the same update.
 
 Two implementations that tests hold equal to round-off:
 
@@ -31,18 +41,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..faults import as_k
+from ..faults import as_k, check_fault_model
 from ..params import ActuatorParams, siemens_1fk7060
 from ..profiles import Profile, diagnostic
 from ._jit import jit
 from .controller import control_step
 from .inverter import modulate, overcurrent
-from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
-                     C_L_A, C_R_A, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M,
-                     P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
-                     P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack, pack_population)
+from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
+                     C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX,
+                     P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
+                     P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
+                     pack_population)
 from .mechanics import transmission_step
-from .pmsm import back_emf_coeffs, phase_step, rl_coeffs, torque
+from .pmsm import (back_emf_coeffs, phase_currents, torque_loops, winding_input,
+                   winding_step)
 
 __all__ = ["MonitoringModel", "PopulationResult", "simulate_reference", "I_DIVERGED",
            "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
@@ -55,6 +67,14 @@ STATUS_TRIPPED = 2
 
 
 @jit
+def _check_step(P, n_sub):
+    """The electrics in CP were packed for the sub-step ``T_s / n_sub``."""
+    if P[P_DT] != P[P_T_S] / n_sub:
+        raise ValueError("CP holds the winding step for another n_sub: pack the population "
+                         "with the n_sub the kernel runs")
+
+
+@jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             out_i, out_theta, out_omega, out_torque, fitness, status):
     """Simulate ``CP.shape[0]`` candidates over ``theta_ref.shape[0]`` control periods.
@@ -64,7 +84,9 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     (n_pop, n, 3)``, ``out_theta, out_omega, out_torque (n_pop, n)`` or
     zero-sized for no traces; ``fitness, status (n_pop,)`` written in place.
     ``fitness`` accumulates ``sum_k sum_j weights[k, j] (i_j - i_target[k, j])^2``.
+    ``P, CP`` must be packed for ``n_sub`` (ValueError otherwise).
     """
+    _check_step(P, n_sub)
     n_pop = CP.shape[0]
     n = theta_ref.shape[0]
     store = out_i.shape[0] == n_pop and n_pop > 0
@@ -77,17 +99,12 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
     T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
     I_trip = P[P_I_TRIP]
-    # per-candidate exact RL coefficients for this step
-    a = np.empty((n_pop, 3))
-    h = np.empty((n_pop, 3))
-    for j in range(n_pop):
-        for ph in range(3):
-            a[j, ph], h[j, ph] = rl_coeffs(CP[j, C_R_A + ph], CP[j, C_L_A + ph], dt)
-    # state
+    # state: the winding circuit's z = [y_alpha, y_beta, f_a, f_b, f_c] and i_abc = Q y
     th_m = np.full(n_pop, P[P_THETA0])
     w_m = np.zeros(n_pop)
     th_l = np.full(n_pop, P[P_THETA0])
     w_l = np.zeros(n_pop)
+    Z = np.zeros((n_pop, 5))
     I = np.zeros((n_pop, 3))
     integ = np.zeros((n_pop, 4))
     for j in range(n_pop):
@@ -101,6 +118,10 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                 continue
             thm, wm, thl, wl = th_m[j], w_m[j], th_l[j], w_l[j]
             ia, ib, ic = I[j, 0], I[j, 1], I[j, 2]
+            z0, z1, z2, z3, z4 = Z[j, 0], Z[j, 1], Z[j, 2], Z[j, 3], Z[j, 4]
+            mu_a, mu_b, mu_c = CP[j, C_MU_A], CP[j, C_MU_B], CP[j, C_MU_C]
+            Phi = CP[j, C_PHI:C_GAMMA]
+            Gam = CP[j, C_GAMMA:C_GAMMA + 25]
             if with_fit:
                 da = ia - i_target[k, 0]
                 db = ib - i_target[k, 1]
@@ -126,20 +147,22 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                     c_e = math.cos(p * thm)
                 ca, cb, cc = back_emf_coeffs(thm, s_e, c_e, CP[j, C_C0_A], CP[j, C_C0_B],
                                              CP[j, C_C0_C], CP[j, C_ECC], CP[j, C_ECC_PHASE])
+                tq0 = torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c)
                 if s == 0 and store:
                     out_i[j, k, 0] = ia
                     out_i[j, k, 1] = ib
                     out_i[j, k, 2] = ic
                     out_theta[j, k] = thm
                     out_omega[j, k] = wm
-                    out_torque[j, k] = torque(ia, ib, ic, ca, cb, cc)
-                ia0, ib0, ic0 = ia, ib, ic
-                ia, ib, ic, _ = phase_step(ia, ib, ic, d_a * V_dc, d_b * V_dc, d_c * V_dc,
-                                           ca * wm, cb * wm, cc * wm,
-                                           a[j, 0], a[j, 1], a[j, 2], h[j, 0], h[j, 1], h[j, 2])
+                    out_torque[j, k] = tq0
+                w0, w1, w2, w3, w4 = winding_input(d_a * V_dc, d_b * V_dc, d_c * V_dc,
+                                                   ca * wm, cb * wm, cc * wm, mu_a, mu_b, mu_c)
+                z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4, Phi, Gam)
+                ia, ib, ic = phase_currents(z0, z1)
                 # the mechanics see the step's mean torque (trapezoid): second order in
                 # the fast current transients of the coarse step
-                T_m = 0.5 * (torque(ia0, ib0, ic0, ca, cb, cc) + torque(ia, ib, ic, ca, cb, cc))
+                T_m = 0.5 * (tq0 + torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc,
+                                                mu_a, mu_b, mu_c))
                 thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
                                                      CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
                                                      CP[j, C_BACKLASH], dt)
@@ -150,40 +173,47 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                 continue
             th_m[j], w_m[j], th_l[j], w_l[j] = thm, wm, thl, wl
             I[j, 0], I[j, 1], I[j, 2] = ia, ib, ic
+            Z[j, 0], Z[j, 1], Z[j, 2], Z[j, 3], Z[j, 4] = z0, z1, z2, z3, z4
 
 
 def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1,
-                       theta0: float = 0.0) -> dict[str, np.ndarray]:
+                       theta0: float = 0.0, fault_model: str = "paper") -> dict[str, np.ndarray]:
     """Readable single-candidate monitoring model in plain Python (slow).
 
     Uses the same physics functions as the kernel (their pure-Python
-    versions). Returns a dict of arrays ``t, theta_ref, theta_m, omega_m,
-    i_abc (n, 3), torque`` sampled at the control instants.
+    versions) and the winding step of :func:`emaphm.models.layout.pack` for
+    ``apply_faults(params, k, fault_model)``. Returns a dict of arrays ``t,
+    theta_ref, theta_m, omega_m, i_abc (n, 3), f_abc (n, 3)`` (fault-loop
+    currents) ``, torque`` sampled at the control instants.
     """
     from ..faults import apply_faults  # local: keep module import light
 
-    faulty = apply_faults(params, k)
+    faulty = apply_faults(params, k, fault_model)
     m, inv, ctl, tr, ld = faulty.motor, faulty.inverter, faulty.controller, faulty.transmission, faulty.load
     T_s = inv.T_s
     dt = T_s / n_sub
     t = profile.grid(T_s)
     ref = profile.theta_ref(t)
     T_load = profile.load_torque(t)
-    coeffs = [rl_coeffs.py_func(m.R[ph], m.L[ph], dt) for ph in range(3)]
-    (a_a, h_a), (a_b, h_b), (a_c, h_c) = coeffs
+    _, cp = pack(faulty, theta0, fault_model, n_sub=n_sub)
+    Phi = tuple(cp[0, C_PHI:C_GAMMA])                 # row by row
+    Gam = tuple(cp[0, C_GAMMA:C_GAMMA + 25])
     thm = thl = theta0
     wm = wl = 0.0
+    z = (0.0,) * 5                                    # [y_alpha, y_beta, f_a, f_b, f_c]
     ia = ib = ic = 0.0
     integ = (0.0, 0.0, 0.0, 0.0)
     tripped = False
     out = {name: np.zeros(t.size) for name in ("theta_m", "omega_m", "torque")}
     out["i_abc"] = np.zeros((t.size, 3))
+    out["f_abc"] = np.zeros((t.size, 3))
     for n in range(t.size):
         s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
         out["theta_m"][n], out["omega_m"][n] = thm, wm
         out["i_abc"][n] = ia, ib, ic
+        out["f_abc"][n] = z[2:]
         ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
-        out["torque"][n] = torque.py_func(ia, ib, ic, ca, cb, cc)
+        out["torque"][n] = torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu)
         tripped = tripped or overcurrent.py_func(ia, ib, ic, inv.I_trip)
         if tripped:                     # active short circuit, controller stopped
             duty = (0.0, 0.0, 0.0)
@@ -196,10 +226,12 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
         for _ in range(n_sub):
             s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
             ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
-            i_new = phase_step.py_func(ia, ib, ic, *(d * inv.V_dc for d in duty),
-                                       ca * wm, cb * wm, cc * wm, a_a, a_b, a_c, h_a, h_b, h_c)[:3]
-            T_m = 0.5 * (torque.py_func(ia, ib, ic, ca, cb, cc) + torque.py_func(*i_new, ca, cb, cc))
-            ia, ib, ic = i_new
+            T_0 = torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu)
+            w = winding_input.py_func(*(d * inv.V_dc for d in duty), ca * wm, cb * wm, cc * wm,
+                                      *m.mu)
+            z = winding_step.py_func(*z, *w, Phi, Gam)
+            ia, ib, ic = phase_currents.py_func(z[0], z[1])
+            T_m = 0.5 * (T_0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu))
             thm, wm, thl, wl = transmission_step.py_func(
                 thm, wm, thl, wl, T_m, T_load[n], m.J_m, m.C_m, tr.FSJ, tr.FDJ, ld.J_l, ld.C_l,
                 tr.backlash, dt)
@@ -239,6 +271,12 @@ class MonitoringModel:
         Sub-steps per control period; the step is ``T_s / n_sub``.
     theta0 : float
         Initial motor angle [rad] (the actuator starts at rest).
+    fault_model : {"paper", "physical"}
+        What the short-circuit components k3..k5 of a candidate mean
+        (:func:`emaphm.faults.apply_faults`): ``"paper"`` (default) scales R, L, c0 of
+        the phase; ``"physical"`` shorts that fraction of its turns across the nominal
+        ``Motor.R_f`` (a fault-loop current flows). :meth:`simulate_params` reads
+        ``params`` under the same model.
     kernel : {"simd", "scalar"}
         ``"simd"`` (default): :mod:`emaphm.models.monitoring_simd`, the population in
         vector lanes (about 5x faster); ``"scalar"``: :func:`_kernel` of this module,
@@ -251,12 +289,14 @@ class MonitoringModel:
     n_sub: int = 1
     theta0: float = 0.0
     kernel: str = "simd"
+    fault_model: str = "paper"
 
     def __post_init__(self) -> None:
         if isinstance(self.n_sub, bool) or not isinstance(self.n_sub, int) or self.n_sub < 1:
             raise ValueError(f"MonitoringModel.n_sub must be an integer >= 1, got {self.n_sub!r}")
         if self.kernel not in ("simd", "scalar"):
             raise ValueError(f"MonitoringModel.kernel must be 'simd' or 'scalar', got {self.kernel!r}")
+        check_fault_model(self.fault_model)
         t = self.profile.grid(self.params.inverter.T_s)
         object.__setattr__(self, "_t", t)
         object.__setattr__(self, "_ref", np.ascontiguousarray(self.profile.theta_ref(t)))
@@ -271,6 +311,11 @@ class MonitoringModel:
     def dt(self) -> float:
         """Integration step [s]."""
         return self.params.inverter.T_s / self.n_sub
+
+    def pack(self, K) -> tuple[np.ndarray, np.ndarray]:
+        """``(P, CP)`` of the population ``K`` (n_pop, 8) for this model's kernels
+        (:func:`emaphm.models.layout.pack_population` with its fault model and step)."""
+        return pack_population(self.params, K, self.theta0, self.fault_model, n_sub=self.n_sub)
 
     def _run(self, CP, P, i_target, weights, store):
         n_pop, n = CP.shape[0], self._t.size
@@ -288,7 +333,7 @@ class MonitoringModel:
 
     def simulate_population(self, K) -> PopulationResult:
         """Traces of every candidate in ``K`` (n_pop, 8)."""
-        P, CP = pack_population(self.params, K, self.theta0)
+        P, CP = self.pack(K)
         empty = np.zeros((0, 3))
         out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
         return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)
@@ -310,13 +355,13 @@ class MonitoringModel:
         if i_target.shape != (n, 3) or weights.shape != (n, 3):
             raise ValueError(f"target currents and weights must have shape ({n}, 3) on the model "
                              f"grid, got {i_target.shape} and {weights.shape}")
-        P, CP = pack_population(self.params, K, self.theta0)
+        P, CP = self.pack(K)
         _, _, fitness, status = self._run(CP, P, i_target, weights, False)
         return fitness, status
 
     def simulate_params(self, params: ActuatorParams) -> PopulationResult:
         """Traces of an actuator given by its (possibly faulty) parameters."""
-        P, CP = pack(params, self.theta0)
+        P, CP = pack(params, self.theta0, self.fault_model, n_sub=self.n_sub)
         empty = np.zeros((0, 3))
         out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
         return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)

@@ -14,11 +14,13 @@ This module exists for two reasons:
 
 It evaluates the SAME equations in the SAME order of floating-point operations
 as ``_kernel`` and the scalar functions it is built from (``control_step``,
-``modulate``, ``back_emf_coeffs``, ``phase_step``, ``torque``,
-``transmission_step``), so the two agree to round-off; the only source of
-difference is NumPy's ``sin`` and ``cos`` against the libm calls Numba emits
-(an ulp, now and then). The RL coefficients, computed once per candidate, use
-the same scalar ``math.exp``/``math.expm1`` as the kernel.
+``modulate``, ``back_emf_coeffs``, ``transmission_step``; the branch-free
+winding functions ``winding_input``, ``winding_step``, ``phase_currents``,
+``torque_loops`` of :mod:`emaphm.models.pmsm` are called as they are, their
+pure-Python versions on whole-population arrays), so the two agree to
+round-off; the only source of difference is NumPy's ``sin`` and ``cos``
+against the libm calls Numba emits (an ulp, now and then). The exact winding
+step ``Phi, Gamma`` of every candidate comes packed in ``CP``.
 
 It is slow (a few hundred NumPy calls per control period whatever the
 population size): use :class:`emaphm.models.monitoring.MonitoringModel` for work.
@@ -35,12 +37,13 @@ import math
 
 import numpy as np
 
-from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP, C_L_A, C_R_A,
-                     P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W,
-                     P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S, P_V_DC, P_THETA0,
-                     P_I_TRIP)
+from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAMMA, C_KP,
+                     C_MU_A, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI,
+                     P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
+                     P_V_DC, P_THETA0, P_I_TRIP)
 from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
-from .pmsm import COS_2PI_3, SIN_2PI_3
+from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
+                   winding_step)
 
 __all__ = ["weighted_sse_numpy", "simulate_population_numpy"]
 
@@ -122,10 +125,6 @@ def _back_emf_coeffs(theta_m, sin_e, cos_e, c0, ecc, ecc_phase, any_ecc):
             np.where(no, r_c, r_c * m_c))
 
 
-def _torque(i_a, i_b, i_c, c_a, c_b, c_c):
-    return c_a * i_a + c_b * i_b + c_c * i_c
-
-
 def _friction_step(omega, T_act, FSJ, FDJ, J, dt):
     """mechanics.friction_step (Borello stick/slip) with masks for its four exits."""
     moving = omega != 0.0
@@ -168,6 +167,9 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
     if isinstance(n_sub, bool) or int(n_sub) != n_sub or n_sub < 1:
         raise ValueError(f"n_sub must be an integer >= 1, got {n_sub!r}")
     n_sub = int(n_sub)
+    if P[P_DT] != P[P_T_S] / n_sub:
+        raise ValueError("CP holds the winding step for another n_sub: pack the population "
+                         "with the n_sub the model runs")
     n_pop, n = CP.shape[0], theta_ref.shape[0]
     if T_load.shape != (n,):
         raise ValueError(f"theta_ref and T_load must have the same shape (n,), got "
@@ -186,21 +188,16 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
     c0 = CP[:, C_C0_A:C_C0_A + 3]
     ecc, ecc_phase = CP[:, C_ECC], CP[:, C_ECC_PHASE]
     any_ecc = bool(np.any(ecc != 0.0))
-    # exact RL coefficients (pmsm.rl_coeffs), (n_pop, 3): computed once with the scalar
-    # libm calls the kernel makes, as NumPy's SIMD exp/expm1 can differ by an ulp and a
-    # candidate whose current loop is unstable amplifies the star point's round-off at rest
-    R, L = CP[:, C_R_A:C_R_A + 3], CP[:, C_L_A:C_L_A + 3]
-    x = dt * R / L
-    a = np.array([math.exp(-v) for v in x.ravel()]).reshape(x.shape)
-    h = -np.array([math.expm1(-v) for v in x.ravel()]).reshape(x.shape) / R
-    a_a, a_b, a_c = a[:, 0], a[:, 1], a[:, 2]
-    h_a, h_b, h_c = h[:, 0], h[:, 1], h[:, 2]
-    h_sum = h_a + h_b + h_c
-    # state
+    # the exact winding step of every candidate: per entry a column (n_pop,), row by row
+    mu = tuple(CP[:, C_MU_A + j].copy() for j in range(3))
+    Phi = tuple(CP[:, C_PHI + e].copy() for e in range(25))
+    Gam = tuple(CP[:, C_GAMMA + e].copy() for e in range(25))
+    # state: the winding circuit's z = [y_alpha, y_beta, f_a, f_b, f_c], i_abc = Q y
     zeros = np.zeros(n_pop)
     th_m, w_m, th_l, w_l = zeros + P[P_THETA0], zeros.copy(), zeros + P[P_THETA0], zeros.copy()
     tripped = np.zeros(n_pop, dtype=bool)
     i_a, i_b, i_c = zeros.copy(), zeros.copy(), zeros.copy()
+    z_all = tuple(zeros.copy() for _ in range(5))
     integ = [zeros.copy() for _ in range(4)]
     fitness = np.zeros(n_pop)
     alive = np.ones(n_pop, dtype=bool)
@@ -211,7 +208,7 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
         ref = theta_ref[k]
         T_l = T_load[k]
         # frozen (diverged) candidates keep their last good state and are masked below
-        thm, wm, thl, wl, ia, ib, ic = th_m, w_m, th_l, w_l, i_a, i_b, i_c
+        thm, wm, thl, wl, ia, ib, ic, z = th_m, w_m, th_l, w_l, i_a, i_b, i_c, z_all
         if with_fit:
             da = ia - i_target[k, 0]
             db = ib - i_target[k, 1]
@@ -234,23 +231,19 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
                 s_e = np.sin(p * thm)
                 c_e = np.cos(p * thm)
             ca, cb, cc = _back_emf_coeffs(thm, s_e, c_e, c0, ecc, ecc_phase, any_ecc)
+            tq0 = torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *mu)
             if s == 0 and store:
                 out_i[alive, k, 0] = ia[alive]
                 out_i[alive, k, 1] = ib[alive]
                 out_i[alive, k, 2] = ic[alive]
                 out_th[alive, k] = thm[alive]
                 out_w[alive, k] = wm[alive]
-                out_tq[alive, k] = _torque(ia, ib, ic, ca, cb, cc)[alive]
-            # pmsm.phase_step
-            e_a, e_b, e_c = ca * wm, cb * wm, cc * wm
-            free = (a_a * ia + a_b * ib + a_c * ic + h_a * (u_a - e_a) + h_b * (u_b - e_b)
-                    + h_c * (u_c - e_c))
-            v_n = free / h_sum
-            ja = a_a * ia + h_a * (u_a - e_a - v_n)
-            jb = a_b * ib + h_b * (u_b - e_b - v_n)
-            jc = a_c * ic + h_c * (u_c - e_c - v_n)
-            T_m = 0.5 * (_torque(ia, ib, ic, ca, cb, cc) + _torque(ja, jb, jc, ca, cb, cc))
-            ia, ib, ic = ja, jb, jc
+                out_tq[alive, k] = tq0[alive]
+            # the winding circuit's exact step (branch-free: the scalar functions as they are)
+            w = winding_input.py_func(u_a, u_b, u_c, ca * wm, cb * wm, cc * wm, *mu)
+            z = winding_step.py_func(*z, *w, Phi, Gam)
+            ia, ib, ic = phase_currents.py_func(z[0], z[1])
+            T_m = 0.5 * (tq0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *mu))
             thm, wm, thl, wl = _transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
                                                   FSJ, FDJ, J_l, C_l, backlash, dt)
         ok = ((np.abs(ia) < I_DIVERGED) & (np.abs(ib) < I_DIVERGED) & (np.abs(ic) < I_DIVERGED)
@@ -263,6 +256,7 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
         th_m, w_m = np.where(keep, thm, th_m), np.where(keep, wm, w_m)
         th_l, w_l = np.where(keep, thl, th_l), np.where(keep, wl, w_l)
         i_a, i_b, i_c = np.where(keep, ia, i_a), np.where(keep, ib, i_b), np.where(keep, ic, i_c)
+        z_all = tuple(np.where(keep, new, old) for new, old in zip(z, z_all))
         integ = [np.where(keep, new, old) for new, old in zip((e0, e1, e2, e3), integ)]
     status = np.where(alive, np.where(tripped, STATUS_TRIPPED, 0), STATUS_DIVERGED).astype(np.int64)
     if store:
@@ -278,7 +272,8 @@ def weighted_sse_numpy(P, CP, theta_ref, T_load, n_sub, i_target, weights):
     ----------
     P, CP : ndarray
         Shared ``(N_P,)`` and per-candidate ``(n_pop, N_CP)`` parameters, as
-        :func:`emaphm.models.layout.pack_population` returns them.
+        :func:`emaphm.models.layout.pack_population` returns them for ``n_sub``
+        (ValueError for a population packed for another step).
     theta_ref, T_load : ndarray (n,)
         Position command [rad] and load torque [N m] at the control instants.
     n_sub : int

@@ -14,8 +14,9 @@ vectoriser turns the loop over candidates into packed AVX2/AVX-512 code:
   loops and the outputs are written by short copy loops after them;
 * **no branches that stay branches**: the scalar physics functions
   (:func:`~emaphm.models.controller.control_step` with its PI steps,
-  :func:`~emaphm.models.inverter.modulate`,
-  :func:`~emaphm.models.pmsm.phase_step`, :func:`~emaphm.models.pmsm.torque`,
+  :func:`~emaphm.models.inverter.modulate`, the winding circuit's
+  :func:`~emaphm.models.pmsm.winding_input`, :func:`~emaphm.models.pmsm.winding_step`,
+  :func:`~emaphm.models.pmsm.phase_currents`, :func:`~emaphm.models.pmsm.torque_loops`,
   :func:`~emaphm.models.mechanics.transmission_step` with Borello's
   :func:`~emaphm.models.mechanics.friction_step`) are reused as they are, their
   own code recompiled for Numba-IR inlining (``inline="always"``) with IEEE
@@ -27,7 +28,9 @@ vectoriser turns the loop over candidates into packed AVX2/AVX-512 code:
   with a mask instead of ``continue``;
 * **only scalars cross into the inlined functions**: the lane loops load from
   and store to ``B`` themselves (an array handed to an inlined function leaves
-  an NRT incref/decref pair, two calls, in the loop body);
+  an NRT incref/decref pair, two calls, in the loop body); the 5 x 5 matrices
+  ``Phi, Gamma`` of the winding step travel as tuples of 25 scalars, loaded
+  row by row at constant offsets;
 * **sine and cosine without libm**: :func:`sincos` is fdlibm's (Cody-Waite
   reduction by pi/2 in three rounds, ``__kernel_sin``/``__kernel_cos``
   polynomials, quadrant by selects): within 1 ulp of the correctly rounded
@@ -61,12 +64,13 @@ from . import controller as _controller
 from . import inverter as _inverter
 from . import mechanics as _mechanics
 from . import pmsm as _pmsm
-from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
-                     C_L_A, C_R_A, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_J_L, P_J_M, P_K_T, P_KD,
-                     P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
-                     P_THETA0, P_V_DC)
-from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED
-from .pmsm import COS_2PI_3, SIN_2PI_3, rl_coeffs
+from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
+                     C_GAMMA, C_KP, C_MU_A, C_PHI, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_J_L, P_J_M,
+                     P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
+                     P_T_MAX, P_T_S, P_THETA0, P_V_DC)
+from .monitoring import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED,
+                         _check_step)
+from .pmsm import COS_2PI_3, SIN_2PI_3
 
 #: Compile a function into its caller at Numba IR level. LLVM's inliner leaves the larger
 #: physics functions as calls, and every call returns Numba's status code, whose check is
@@ -77,7 +81,7 @@ inline = njit(nogil=True, inline="always", error_model="numpy")
 #: every ``/`` is an early exit from the lane loop that the vectoriser cannot handle. For a
 #: physical ``P`` no division in the loop has a zero divisor; ``CP[:, C_KP] == 0`` (divides
 #: in the back-calculation) gives inf/nan, so a diverged candidate, where the scalar kernel
-#: raises ZeroDivisionError. The RL coefficients keep the scalar kernel's check.
+#: raises ZeroDivisionError.
 kernel_jit = njit(cache=True, nogil=True, error_model="numpy")
 
 
@@ -118,8 +122,10 @@ pi_step = _inlined(_controller.pi_step, _sat=_sat)
 control_step = _inlined(_controller.control_step, _sat=_sat, pi_step=pi_step, clarke=clarke,
                         park=park, inv_park=inv_park, inv_clarke=inv_clarke)
 modulate = _inlined(_inverter.modulate)
-phase_step = _inlined(_pmsm.phase_step)
-torque = _inlined(_pmsm.torque)
+winding_input = _inlined(_pmsm.winding_input)
+winding_step = _inlined(_pmsm.winding_step)
+phase_currents = _inlined(_pmsm.phase_currents)
+torque_loops = _inlined(_pmsm.torque_loops)
 friction_step = _inlined(_mechanics.friction_step)
 transmission_step = _inlined(_mechanics.transmission_step, friction_step=friction_step)
 
@@ -196,19 +202,22 @@ def sincos(x):
 
 # ---- rows of the scratch array B[block, row, lane] -------------------------------------
 
-# per-candidate parameters
+# per-candidate parameters; the winding step's Phi and Gamma row by row (25 rows each)
 (R_KP, R_FSJ, R_FDJ, R_BACKLASH, R_C0A, R_C0B, R_C0C, R_ECC, R_ECCPH,
- R_AA, R_AB, R_AC, R_HA, R_HB, R_HC) = range(15)
-# committed state (start of the control period); R_TRIP, R_ALIVE: 1.0 or 0.0
-(R_THM, R_WM, R_THL, R_WL, R_IA, R_IB, R_IC, R_E0, R_E1, R_E2, R_E3, R_TRIP, R_FIT,
- R_ALIVE) = range(15, 29)
+ R_MUA, R_MUB, R_MUC) = range(12)
+R_PHI = 12
+R_GAM = R_PHI + 25
+# committed state (start of the control period): the winding circuit's z = [y, f] with
+# i_abc = Q y alongside; R_TRIP, R_ALIVE: 1.0 or 0.0
+(R_THM, R_WM, R_THL, R_WL, R_IA, R_IB, R_IC, R_Z0, R_Z1, R_Z2, R_Z3, R_Z4,
+ R_E0, R_E1, R_E2, R_E3, R_TRIP, R_FIT, R_ALIVE) = range(R_GAM + 25, R_GAM + 44)
 # working state (during the control period), in the same order as the committed rows
-(W_THM, W_WM, W_THL, W_WL, W_IA, W_IB, W_IC, W_E0, W_E1, W_E2, W_E3, W_TRIP,
- W_FIT) = range(29, 42)
+(W_THM, W_WM, W_THL, W_WL, W_IA, W_IB, W_IC, W_Z0, W_Z1, W_Z2, W_Z3, W_Z4,
+ W_E0, W_E1, W_E2, W_E3, W_TRIP, W_FIT) = range(R_ALIVE + 1, R_ALIVE + 19)
 # per-period intermediates: leg voltages, sines and cosines, torque at the control instant
-(R_UA, R_UB, R_UC, R_SE, R_CE, R_SG, R_CG, R_TQ) = range(42, 50)
-N_ROWS = 50
-N_STATE = 13      # rows R_THM..R_FIT and W_THM..W_FIT
+(R_UA, R_UB, R_UC, R_SE, R_CE, R_SG, R_CG, R_TQ) = range(W_FIT + 1, W_FIT + 9)
+N_ROWS = R_TQ + 1
+N_STATE = 18      # rows R_THM..R_FIT and W_THM..W_FIT
 
 
 @inline
@@ -276,23 +285,29 @@ def _control(thm, wm, ia, ib, ic, s_e, c_e, trip, fit, i0, i1, i2, i3, Kp, perio
 
 
 @inline
-def _plant(thm, wm, thl, wl, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c,
-           c0_a, c0_b, c0_c, ecc, a_a, a_b, a_c, h_a, h_b, h_c, FSJ, FDJ, backlash, mech):
-    """One sub-step of the plant of one candidate: back-EMF, phase currents, transmission.
+def _plant(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c,
+           c0, ecc, mu, Phi, Gam, FSJ, FDJ, backlash, mech):
+    """One sub-step of the plant of one candidate: back-EMF, winding circuit, transmission.
 
-    ``mech = (T_l, J_m, C_m, J_l, C_l, dt)``. Returns ``(theta_m, omega_m, theta_l,
-    omega_l, i_a, i_b, i_c, torque at the start)``.
+    ``c0, mu``: per-phase tuples; ``Phi, Gam``: tuples of the 25 entries of the winding
+    step; ``mech = (T_l, J_m, C_m, J_l, C_l, dt)``. Returns ``(theta_m, omega_m, theta_l,
+    omega_l, z0..z4, i_a, i_b, i_c, torque at the start)``. (At most 30 arguments: past
+    that CPython passes them as ``*args``, which Numba's inliner refuses.)
     """
     T_l, J_m, C_m, J_l, C_l, dt = mech
+    c0_a, c0_b, c0_c = c0
+    mu_a, mu_b, mu_c = mu
     ca, cb, cc = _back_emf(s_e, c_e, s_g, c_g, c0_a, c0_b, c0_c, ecc)
-    tq = torque(ia, ib, ic, ca, cb, cc)
-    ja, jb, jc, _ = phase_step(ia, ib, ic, u_a, u_b, u_c, ca * wm, cb * wm, cc * wm,
-                               a_a, a_b, a_c, h_a, h_b, h_c)
+    tq = torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c)
+    w0, w1, w2, w3, w4 = winding_input(u_a, u_b, u_c, ca * wm, cb * wm, cc * wm,
+                                       mu_a, mu_b, mu_c)
+    z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4, Phi, Gam)
+    ja, jb, jc = phase_currents(z0, z1)
     # the mechanics see the step's mean torque (trapezoid), as in the scalar kernel
-    T_m = 0.5 * (tq + torque(ja, jb, jc, ca, cb, cc))
+    T_m = 0.5 * (tq + torque_loops(ja, jb, jc, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c))
     thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m, FSJ, FDJ,
                                          J_l, C_l, backlash, dt)
-    return thm, wm, thl, wl, ja, jb, jc, tq
+    return thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc, tq
 
 
 # The stages loop over blocks and lanes; the lane loop is the one that vectorises. Its body
@@ -329,19 +344,41 @@ def _plant_stage(B, first, mech):
     """One sub-step of every lane (vector); the first also keeps the torque for the traces."""
     for b in range(B.shape[0]):
         for l in range(LANES):
-            thm, wm, thl, wl, ia, ib, ic, tq = _plant(
+            # the winding step's matrices, row-major, as tuples of scalars
+            Phi = (B[b, R_PHI + 0, l], B[b, R_PHI + 1, l], B[b, R_PHI + 2, l], B[b, R_PHI + 3, l],
+                   B[b, R_PHI + 4, l], B[b, R_PHI + 5, l], B[b, R_PHI + 6, l], B[b, R_PHI + 7, l],
+                   B[b, R_PHI + 8, l], B[b, R_PHI + 9, l], B[b, R_PHI + 10, l],
+                   B[b, R_PHI + 11, l], B[b, R_PHI + 12, l], B[b, R_PHI + 13, l],
+                   B[b, R_PHI + 14, l], B[b, R_PHI + 15, l], B[b, R_PHI + 16, l],
+                   B[b, R_PHI + 17, l], B[b, R_PHI + 18, l], B[b, R_PHI + 19, l],
+                   B[b, R_PHI + 20, l], B[b, R_PHI + 21, l], B[b, R_PHI + 22, l],
+                   B[b, R_PHI + 23, l], B[b, R_PHI + 24, l])
+            Gam = (B[b, R_GAM + 0, l], B[b, R_GAM + 1, l], B[b, R_GAM + 2, l], B[b, R_GAM + 3, l],
+                   B[b, R_GAM + 4, l], B[b, R_GAM + 5, l], B[b, R_GAM + 6, l], B[b, R_GAM + 7, l],
+                   B[b, R_GAM + 8, l], B[b, R_GAM + 9, l], B[b, R_GAM + 10, l],
+                   B[b, R_GAM + 11, l], B[b, R_GAM + 12, l], B[b, R_GAM + 13, l],
+                   B[b, R_GAM + 14, l], B[b, R_GAM + 15, l], B[b, R_GAM + 16, l],
+                   B[b, R_GAM + 17, l], B[b, R_GAM + 18, l], B[b, R_GAM + 19, l],
+                   B[b, R_GAM + 20, l], B[b, R_GAM + 21, l], B[b, R_GAM + 22, l],
+                   B[b, R_GAM + 23, l], B[b, R_GAM + 24, l])
+            thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, tq = _plant(
                 B[b, W_THM, l], B[b, W_WM, l], B[b, W_THL, l], B[b, W_WL, l],
+                B[b, W_Z0, l], B[b, W_Z1, l], B[b, W_Z2, l], B[b, W_Z3, l], B[b, W_Z4, l],
                 B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
                 B[b, R_SE, l], B[b, R_CE, l], B[b, R_SG, l], B[b, R_CG, l],
                 B[b, R_UA, l], B[b, R_UB, l], B[b, R_UC, l],
-                B[b, R_C0A, l], B[b, R_C0B, l], B[b, R_C0C, l], B[b, R_ECC, l],
-                B[b, R_AA, l], B[b, R_AB, l], B[b, R_AC, l],
-                B[b, R_HA, l], B[b, R_HB, l], B[b, R_HC, l],
+                (B[b, R_C0A, l], B[b, R_C0B, l], B[b, R_C0C, l]), B[b, R_ECC, l],
+                (B[b, R_MUA, l], B[b, R_MUB, l], B[b, R_MUC, l]), Phi, Gam,
                 B[b, R_FSJ, l], B[b, R_FDJ, l], B[b, R_BACKLASH, l], mech)
             B[b, W_THM, l] = thm
             B[b, W_WM, l] = wm
             B[b, W_THL, l] = thl
             B[b, W_WL, l] = wl
+            B[b, W_Z0, l] = z0
+            B[b, W_Z1, l] = z1
+            B[b, W_Z2, l] = z2
+            B[b, W_Z3, l] = z3
+            B[b, W_Z4, l] = z4
             B[b, W_IA, l] = ia
             B[b, W_IB, l] = ib
             B[b, W_IC, l] = ic
@@ -399,7 +436,9 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     ``i_target, weights (n, 3)`` or ``(0, 3)`` for no fitness; ``out_i
     (n_pop, n, 3)``, ``out_theta, out_omega, out_torque (n_pop, n)`` or
     zero-sized for no traces; ``fitness, status (n_pop,)`` written in place.
+    ``P, CP`` must be packed for ``n_sub`` (ValueError otherwise).
     """
+    _check_step(P, n_sub)
     n_pop = CP.shape[0]
     n = theta_ref.shape[0]
     store = out_i.shape[0] == n_pop and n_pop > 0
@@ -435,9 +474,10 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             B[b, R_ECC, l] = CP[j, C_ECC]
             B[b, R_ECCPH, l] = CP[j, C_ECC_PHASE]
             for ph in range(3):
-                a, h = rl_coeffs(CP[j, C_R_A + ph], CP[j, C_L_A + ph], dt)
-                B[b, R_AA + ph, l] = a
-                B[b, R_HA + ph, l] = h
+                B[b, R_MUA + ph, l] = CP[j, C_MU_A + ph]
+            for e in range(25):
+                B[b, R_PHI + e, l] = CP[j, C_PHI + e]
+                B[b, R_GAM + e, l] = CP[j, C_GAMMA + e]
             B[b, R_THM, l] = theta0
             B[b, R_THL, l] = theta0
             B[b, W_THM, l] = theta0

@@ -24,6 +24,7 @@ the back-EMF and star point held over it.
 import math
 
 from ._jit import jit
+from .windings import Q as _Q
 
 TWO_PI_3 = 2.0 * math.pi / 3.0
 
@@ -86,3 +87,68 @@ def phase_step(i_a, i_b, i_c, v_a, v_b, v_c, e_a, e_b, e_c,
 def torque(i_a, i_b, i_c, c_a, c_b, c_c):
     """Electromagnetic torque T_m = sum_j c_j i_j [N m] (Eq. 6)."""
     return c_a * i_a + c_b * i_b + c_c * i_c
+
+
+# ---- the winding circuit of emaphm.models.windings, stepped exactly ----------------------
+#
+# The monitoring model advances the reduced winding system ``L_r dz/dt = -R_r z + w`` of
+# :mod:`emaphm.models.windings` (``z = [y_alpha, y_beta, f_a, f_b, f_c]``, phase currents
+# ``i_abc = Q y``, fault-loop currents ``f``) with its exact step for inputs held over the
+# step, ``z' = Phi z + Gamma w`` (:func:`emaphm.models.windings.zoh`). With
+# ``sigma = 1, mu = 0`` (the paper's fault model) the loops stay at zero and this is the
+# three RL branches above with the star point solved exactly instead of held.
+
+#: Entries of ``windings.Q`` (i_abc = Q y): phase a has no beta part.
+QA_AL = float(_Q[0, 0])
+QB_AL = float(_Q[1, 0])
+QB_BE = float(_Q[1, 1])
+QC_AL = float(_Q[2, 0])
+QC_BE = float(_Q[2, 1])
+
+
+@jit
+def winding_input(u_a, u_b, u_c, e_a, e_b, e_c, mu_a, mu_b, mu_c):
+    """Input ``w = [Q^T (u - e), mu_j e_j]`` [V] of the reduced winding system.
+
+    ``u_*`` leg voltages [V] (the star point drops out), ``e_* = c_* omega_m`` back-EMFs
+    [V], ``mu_*`` shorted fractions [-]: the shorted turns carry ``mu_j e_j``, which
+    drives the fault loop.
+    """
+    d_a = u_a - e_a
+    d_b = u_b - e_b
+    d_c = u_c - e_c
+    return (QA_AL * d_a + QB_AL * d_b + QC_AL * d_c, QB_BE * d_b + QC_BE * d_c,
+            mu_a * e_a, mu_b * e_b, mu_c * e_c)
+
+
+@jit
+def phase_currents(y_al, y_be):
+    """Phase currents ``i_abc = Q y`` [A] from the zero-sum coordinates ``y`` [A]."""
+    return QA_AL * y_al, QB_AL * y_al + QB_BE * y_be, QC_AL * y_al + QC_BE * y_be
+
+
+@jit
+def winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4, Phi, Gam):
+    """Exact step ``z' = Phi z + Gamma w`` of the reduced winding system.
+
+    ``z`` [A] state, ``w`` [V] input held over the step (:func:`winding_input`),
+    ``Phi`` [-] and ``Gam`` [A/V] the 25 entries of the 5 x 5 matrices row by row
+    (tuples, or arrays of candidates' columns), from :func:`emaphm.models.windings.zoh`.
+    """
+    return ((Phi[0] * z0 + Phi[1] * z1 + Phi[2] * z2 + Phi[3] * z3 + Phi[4] * z4)
+            + (Gam[0] * w0 + Gam[1] * w1 + Gam[2] * w2 + Gam[3] * w3 + Gam[4] * w4),
+            (Phi[5] * z0 + Phi[6] * z1 + Phi[7] * z2 + Phi[8] * z3 + Phi[9] * z4)
+            + (Gam[5] * w0 + Gam[6] * w1 + Gam[7] * w2 + Gam[8] * w3 + Gam[9] * w4),
+            (Phi[10] * z0 + Phi[11] * z1 + Phi[12] * z2 + Phi[13] * z3 + Phi[14] * z4)
+            + (Gam[10] * w0 + Gam[11] * w1 + Gam[12] * w2 + Gam[13] * w3 + Gam[14] * w4),
+            (Phi[15] * z0 + Phi[16] * z1 + Phi[17] * z2 + Phi[18] * z3 + Phi[19] * z4)
+            + (Gam[15] * w0 + Gam[16] * w1 + Gam[17] * w2 + Gam[18] * w3 + Gam[19] * w4),
+            (Phi[20] * z0 + Phi[21] * z1 + Phi[22] * z2 + Phi[23] * z3 + Phi[24] * z4)
+            + (Gam[20] * w0 + Gam[21] * w1 + Gam[22] * w2 + Gam[23] * w3 + Gam[24] * w4))
+
+
+@jit
+def torque_loops(i_a, i_b, i_c, f_a, f_b, f_c, c_a, c_b, c_c, mu_a, mu_b, mu_c):
+    """Torque with fault loops ``T_m = sum_j c_j (i_j - mu_j f_j)`` [N m]: the loop's
+    MMF opposes the phase's (equal to :func:`torque` without loops, ``f = 0``)."""
+    return c_a * (i_a - mu_a * f_a) + c_b * (i_b - mu_b * f_b) + c_c * (i_c - mu_c * f_c)
