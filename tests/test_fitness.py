@@ -348,3 +348,49 @@ def test_noise_floor_is_measured_on_the_recorded_samples():
     f_slow = Eq4Objective.from_trace(slow).noise_floor()
     assert f_slow == pytest.approx(f_full, rel=0.5)
     assert f_full > 0
+
+
+# ----------------------------------------------------------------------------- refusals
+
+def _measured(trace, i_abc, model=None):
+    from emaphm.traces import Trace
+
+    meta = {k: v for k, v in trace.meta.items() if k != "model"}
+    if model:
+        meta["model"] = model
+    return Trace(t=trace.t, theta_ref=trace.theta_ref, theta_m=trace.theta_m,
+                 omega_m=trace.omega_m, i_abc=i_abc, meta=meta)
+
+
+@pytest.mark.parametrize("case, words", [
+    ("dead", r"phase current i_a is constant \(0.013 A"),
+    ("zero", r"phase current i_a is constant \(0 A"),
+    ("clipped", "phase current i_c is clipped at"),
+    ("noiseless", "carry no measurement noise at all"),
+])
+def test_undiagnosable_currents_are_refused_with_the_reason(rm_friction_high, case, words):
+    from emaphm.fitness import check_diagnosable
+    from emaphm.traces import TraceError
+
+    i = np.array(rm_friction_high.i_abc, copy=True)
+    if case == "dead":                  # (one dead channel alone fails the star-sum check)
+        i[:] = [0.013, -0.01, -0.003]
+    elif case == "zero":
+        i[:] = 0.0
+    elif case == "clipped":
+        lim = 0.5 * np.abs(i[:, 2]).max()
+        i[:, 2] = np.clip(i[:, 2], -lim, lim)
+        i[:, 0] = -(i[:, 1] + i[:, 2])  # a drive with two sensors: i_a from the star sum
+    tr = _measured(rm_friction_high, i)
+    if case == "noiseless":
+        wt = 2 * np.pi * 10 * rm_friction_high.t[:, None]
+        i = np.sin(wt - np.array([0.0, 2.0, 4.0]) * np.pi / 3)
+        i = np.round(i, 1)                       # a coarse, noise-free staircase
+        i[:, 2] = -(i[:, 0] + i[:, 1])
+        tr = _measured(rm_friction_high, i)
+    with pytest.raises(TraceError, match=words):
+        check_diagnosable(tr)
+    with pytest.raises(TraceError, match=words):
+        Eq4Objective.from_trace(tr)
+    # the untouched recording passes
+    check_diagnosable(rm_friction_high)

@@ -47,7 +47,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .faults import K_NOMINAL
-from .fitness import effective_samples, eq4_weights, white_noise_sigma
+from .fitness import MIN_NOISE, effective_samples, eq4_weights, white_noise_sigma
 from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
 from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
@@ -73,11 +73,6 @@ CORRELATION_LIMIT = 0.95
 #: A trace whose calibrated fit stays above this many times its noise floor (Eq. 4 of
 #: white noise) does not look like a healthy unit the model describes.
 HEALTHY_FIT_LIMIT = 4.0
-
-
-#: Current noise [A rms] below which a trace is taken as noise-free (no sensor, or a dead
-#: channel): a recorded current carries at least its ADC's quantisation noise.
-MIN_NOISE = 1e-4
 
 
 class CalibrationError(ValueError):

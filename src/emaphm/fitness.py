@@ -31,7 +31,7 @@ from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
 
 __all__ = ["eq4_weights", "equivalent_current", "white_noise_sigma", "Eq4Objective",
-           "FITNESS_MODES", "trace_fault_model", "effective_samples"]
+           "FITNESS_MODES", "trace_fault_model", "effective_samples", "check_diagnosable"]
 
 FITNESS_MODES = ("phases", "equivalent")
 
@@ -45,6 +45,46 @@ def trace_fault_model(trace: Trace) -> str:
     if isinstance(fm, str) and fm:
         return check_fault_model(fm)
     return "paper" if meta.get("model") in ("reference", "monitoring") else "physical"
+
+
+#: A phase current whose peak-to-peak is below this [A] is dead or disconnected.
+DEAD_CHANNEL_A = 1e-3
+#: Share of samples at a channel's extreme value that marks a clipped (saturated) sensor.
+CLIPPED_SHARE = 0.005
+#: Current noise [A rms] below which a recorded trace is taken as noise-free: a current
+#: through an ADC carries at least its quantisation noise (0.2 mA for 16 bits over +-20 A).
+MIN_NOISE = 1e-4
+
+
+def check_diagnosable(trace: Trace) -> None:
+    """Refuse currents no diagnosis can read (:class:`TraceError` naming the reason).
+
+    A phase current that is constant (a dead or disconnected sensor), clipped (a share
+    :data:`CLIPPED_SHARE` or more of its samples at its largest or smallest value, above
+    0.5 A: a saturated sensor or ADC range), or a recorded trace (no ``model`` in its
+    metadata) whose noise floor is zero (:func:`white_noise_sigma` exactly 0 on every
+    phase: a synthetic or post-processed file).
+    """
+    i = np.asarray(trace.i_abc, dtype=float)
+    n = i.shape[0]
+    for j, ph in enumerate("abc"):
+        x = i[:, j]
+        span = float(np.ptp(x)) if n else 0.0
+        if span < DEAD_CHANNEL_A:
+            raise TraceError(f"phase current i_{ph} is constant ({float(x[0]) if n else 0.0:.4g} A "
+                             "throughout): a dead or disconnected current sensor cannot be "
+                             "diagnosed; check the channel and record again")
+        for edge in (x.max(), x.min()):
+            share = float(np.mean(x == edge))
+            if abs(edge) > 0.5 and share >= CLIPPED_SHARE and np.sum(x == edge) >= 5:
+                raise TraceError(f"phase current i_{ph} is clipped at {edge:.4g} A ({100 * share:.1f}% "
+                                 "of the samples sit on that value): the sensor or the ADC range "
+                                 "saturates; widen the range and record again")
+    meta = trace.meta if isinstance(trace.meta, dict) else {}
+    if meta.get("model") is None and n > 3 and np.all(white_noise_sigma(i) == 0.0):
+        raise TraceError("the phase currents carry no measurement noise at all, which no recorded "
+                         "trace does: the file looks synthetic or post-processed; export the raw "
+                         "samples")
 
 
 def eq4_weights(i_meas: np.ndarray, dT: float) -> np.ndarray:
@@ -150,6 +190,7 @@ class Eq4Objective:
         if n < 16:
             raise TraceError(f"trace lasts {trace.duration:.3g} s, fewer than 16 control periods of "
                              f"{T_s:g} s; record at least one full diagnostic profile (0.5 s)")
+        check_diagnosable(trace)
         t_model = np.arange(n) * T_s
         on_grid = resample(trace, t0 + t_model)
         if load_torque is None:

@@ -22,7 +22,7 @@ from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination,
 from .optim.local import compass_search
 from .params import ActuatorParams
 from .search import default_search, to_k
-from .traces import Trace, validate
+from .traces import Trace, TraceError, validate
 
 __all__ = ["Identification", "identify", "parse_budget"]
 
@@ -325,6 +325,11 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         if runs[-1].fun < best.fun:
             best = runs[-1]
     z, fit, history, res = best.z, best.fun, best.history, best.res
+    if not np.isfinite(fit):
+        raise TraceError("no fault vector reproduces this trace: every candidate of the monitoring "
+                         "model diverged (infinite fitness); the trace's command or load "
+                         "(metadata) or the parameters (--params) do not describe a working "
+                         "actuator")
     k_raw = np.clip(to_k(res.x, search)[0], 0.0, 1.0)
     k = np.clip(to_k(z, search)[0], 0.0, 1.0)
     elapsed = time.perf_counter() - t0
