@@ -383,9 +383,9 @@ def test_undiagnosable_currents_are_refused_with_the_reason(rm_friction_high, ca
         i[:, 0] = -(i[:, 1] + i[:, 2])  # a drive with two sensors: i_a from the star sum
     tr = _measured(rm_friction_high, i)
     if case == "noiseless":
-        wt = 2 * np.pi * 10 * rm_friction_high.t[:, None]
-        i = np.sin(wt - np.array([0.0, 2.0, 4.0]) * np.pi / 3)
-        i = np.round(i, 1)                       # a coarse, noise-free staircase
+        # piecewise-linear, noise-free currents (triangles): a synthetic file
+        ph = (10 * rm_friction_high.t[:, None] - np.array([0.0, 1 / 3, 0.0])) % 1.0
+        i = 2.0 * (2.0 * np.abs(2.0 * ph - 1.0) - 1.0)
         i[:, 2] = -(i[:, 0] + i[:, 1])
         tr = _measured(rm_friction_high, i)
     with pytest.raises(TraceError, match=words):
