@@ -62,8 +62,8 @@ def check_diagnosable(trace: Trace) -> None:
     A phase current that is constant (a dead or disconnected sensor), clipped (a share
     :data:`CLIPPED_SHARE` or more of its samples at its largest or smallest value, above
     0.5 A: a saturated sensor or ADC range), or a recorded trace (no ``model`` in its
-    metadata) whose noise floor is zero (:func:`white_noise_sigma` exactly 0 on every
-    phase: a synthetic or post-processed file).
+    metadata) whose noise floor is zero (:func:`white_noise_sigma` below 1e-9 A, round-off,
+    on every phase: a synthetic or post-processed file).
     """
     i = np.asarray(trace.i_abc, dtype=float)
     n = i.shape[0]
@@ -81,7 +81,7 @@ def check_diagnosable(trace: Trace) -> None:
                                  "of the samples sit on that value): the sensor or the ADC range "
                                  "saturates; widen the range and record again")
     meta = trace.meta if isinstance(trace.meta, dict) else {}
-    if meta.get("model") is None and n > 3 and np.all(white_noise_sigma(i) == 0.0):
+    if meta.get("model") is None and n > 3 and np.all(white_noise_sigma(i) < 1e-9):
         raise TraceError("the phase currents carry no measurement noise at all, which no recorded "
                          "trace does: the file looks synthetic or post-processed; export the raw "
                          "samples")
