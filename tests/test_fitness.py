@@ -384,8 +384,9 @@ def test_undiagnosable_currents_are_refused_with_the_reason(rm_friction_high, ca
     tr = _measured(rm_friction_high, i)
     if case == "noiseless":
         # piecewise-linear, noise-free currents (triangles): a synthetic file
-        ph = (10 * rm_friction_high.t[:, None] - np.array([0.0, 1 / 3, 2 / 3])) % 1.0
+        ph = (rm_friction_high.t[:, None] * np.array([10.0, 7.0, 1.0])) % 1.0
         i = 2.0 * (2.0 * np.abs(2.0 * ph - 1.0) - 1.0)
+        i[:, 2] = -(i[:, 0] + i[:, 1])
         tr = _measured(rm_friction_high, i)
     with pytest.raises(TraceError, match=words):
         check_diagnosable(tr)
