@@ -245,3 +245,43 @@ def test_physical_fault_model_reads_a_shorted_fraction_with_its_own_threshold():
     assert d.to_dict()["fault_model"] == "physical"
     with pytest.raises(ValueError, match="unknown fault model"):
         diagnose(k, fault_model="electrical")
+
+
+# ----------------------------------------------------------------------------- verdicts
+
+def test_a_fit_far_above_what_the_model_reaches_is_unexplained_not_faulty():
+    from emaphm.fitness import misfit_limit, misfit_p_value
+
+    k = K_NOMINAL.copy()
+    k[0] = 0.5                                     # friction would be named
+    lim = misfit_limit()
+    assert 2.0 < lim < 4.0                         # 2.70 with the tuned lognormal
+    ok = diagnose(k, fit_ratio=0.9 * lim)
+    assert ok.verdict == "faulty" and ok.modes == ("friction",) and ok.unexplained is None
+    bad = diagnose(k, fit_ratio=1.2 * lim)
+    assert bad.verdict == "unexplained" and not bad.healthy and bad.faults == ()
+    assert bad.unexplained.reason == "misfit"
+    assert bad.unexplained.p_value == pytest.approx(misfit_p_value(1.2 * lim))
+    assert bad.unexplained.p_value < 1e-4 < misfit_p_value(0.9 * lim)
+    assert "emaphm calibrate" in bad.unexplained.hint
+    assert [f.mode for f in bad.suspected] == ["friction"]
+    d = bad.to_dict()
+    assert d["verdict"] == "unexplained" and d["healthy"] is False and d["faults"] == []
+    assert set(d["unexplained"]) == {"reason", "statistic", "p_value", "hint"}
+    # healthy stays a boolean true only for the healthy verdict
+    h = diagnose(K_NOMINAL, fit_ratio=1.3)
+    assert h.verdict == "healthy" and h.to_dict()["healthy"] is True
+    assert misfit_p_value(float("inf")) == 0.0 and misfit_p_value(1.0) > 0.9
+
+
+def test_a_balanced_change_on_all_three_phases_is_a_calibration_mismatch():
+    k = K_NOMINAL.copy()
+    k[2:5] = [0.06, 0.08, 0.07]
+    d = diagnose(k, fault_model="physical")
+    assert d.verdict == "unexplained" and d.unexplained.reason == "balanced-phases"
+    assert d.unexplained.p_value is None and "calibrate" in d.unexplained.hint
+    assert {f.phase for f in d.suspected} == {"A", "B", "C"}
+    # one phase clearly dominant: a real short circuit, named
+    k[2:5] = [0.2, 0.03, 0.03]
+    d = diagnose(k, fault_model="physical")
+    assert d.verdict == "faulty" and {f.phase for f in d.faults} == {"A", "B", "C"}

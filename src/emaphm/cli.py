@@ -209,7 +209,9 @@ def _table(ident, diag) -> str:
     lines.append(f"algorithm {ident.algorithm}, seed {ident.seed}: {ident.evaluations} evaluations, "
                  f"{ident.iterations} iterations in {ident.elapsed_s:.2f} s "
                  f"({ident.evals_per_s:.0f} evals/s, {100 * ident.kernel_s / max(ident.elapsed_s, 1e-12):.0f}% "
-                 f"in the model kernel), stop: {ident.reason}")
+                 f"in the model kernel), stop: {ident.reason}"
+                 + (f"; plus {ident.compile_s:.1f} s compiling the model kernels (first run only)"
+                    if ident.compile_s > 0.5 else ""))
     ratio = ident.fitness / ident.noise_floor if ident.noise_floor > 0 else float("nan")
     lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}"
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
@@ -222,14 +224,22 @@ def _table(ident, diag) -> str:
     if ident.error_pct is not None:
         lines.append(f"identification error (Eq. 9) {ident.error_pct:.2f}%")
     lines.append("")
-    lines.append("verdict: " + ("HEALTHY" if diag.healthy else "FAULTY"))
+    lines.append("verdict: " + diag.verdict.upper())
     for f in diag.faults:
         lines.append(f"  - {f.mode}{' (phase ' + f.phase + ')' if f.phase else ''}: {f.reading}")
+    if diag.unexplained is not None:
+        u = diag.unexplained
+        lines.append(f"  the model does not explain this actuator ({u.reason}"
+                     + (f", p = {u.p_value:.1e}" if u.p_value is not None else "") + f"): {u.hint}")
+        if diag.suspected:
+            lines.append("  components above their thresholds, not a diagnosis: "
+                         + ", ".join(f"{f.mode}{' ' + f.phase if f.phase else ''}"
+                                     for f in diag.suspected))
     return "\n".join(lines)
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from .diagnosis import diagnose
+    from .diagnosis import diagnose, fit_ratio_of
     from .faults import scenario
     from .identify import identify
     from .optim import ALL_ALGORITHMS
@@ -274,7 +284,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                          callback=progress, fault_model=args.fault_model)
     finally:
         progress.close()
-    diag = diagnose(ident.k, params=params, fault_model=ident.fault_model)
+    diag = diagnose(ident.k, params=params, fault_model=ident.fault_model,
+                    fit_ratio=fit_ratio_of(ident))
     if args.json:
         out = {**ident.to_dict(), **diag.to_dict(),
                "scenario": args.scenario or trace.meta.get("scenario"),

@@ -21,10 +21,16 @@ import numpy as np
 
 from .faults import (K_NOMINAL, as_k, backlash_scale, check_fault_model, eccentricity_phase,
                      friction_scale, gain_scale, shorted_fraction)
+from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
 from .params import ActuatorParams, siemens_1fk7060
 
 __all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fault", "Diagnosis",
-           "diagnose", "FAULT_MODES"]
+           "Unexplained", "diagnose", "FAULT_MODES", "VERDICTS", "MISFIT_LOG_MEAN",
+           "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit", "fit_ratio_of"]
+
+VERDICTS = ("healthy", "faulty", "unexplained")
+
+
 
 FAULT_MODES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift")
 
@@ -51,10 +57,19 @@ class Thresholds:
 
 DEFAULT_THRESHOLDS = Thresholds()
 
-#: Thresholds per fault model (k3..k5 mean different things under each): under
-#: ``physical`` a short-circuit component is the shorted fraction of the turns itself.
+#: Thresholds per fault model (k3..k5 mean different things under each; under
+#: ``physical`` a short-circuit component is the shorted fraction of the turns itself).
+#: ``physical``: set on reference-plant traces (Stribeck friction, compliant backlash,
+#: PWM, leakage; the nominal unit) of ``benchmarks/bench_plant.py --tune`` -- 100 healthy
+#: runs, 40 inter-turn shorts, 35 runs of the other modes, on tuning seeds disjoint from
+#: the seeds it reports on: 1.25x the largest deviation of each component in the runs
+#: where it is not at fault, at least 0.015. The plant's compliant contact reads as up
+#: to 0.11 of backlash, and its Stribeck drop and the PWM ripple losses of a fault loop
+#: as up to 0.10 of friction.
 THRESHOLDS_BY_FAULT_MODEL = {"paper": DEFAULT_THRESHOLDS,
-                             "physical": Thresholds(short_circuit=0.02)}
+                             "physical": Thresholds(friction=0.125, backlash=0.143,
+                                                    short_circuit=0.022, eccentricity=0.015,
+                                                    gain_drift=0.015)}
 
 
 @dataclass(frozen=True)
@@ -70,39 +85,83 @@ class Fault:
 
 
 @dataclass(frozen=True)
+class Unexplained:
+    """Why the identified k is not a diagnosis: ``reason`` (``"misfit"``: the best fit is
+    statistically above what the model reaches on an actuator it describes;
+    ``"balanced-phases"``: the same change on all three phases, a calibration mismatch
+    rather than three shorts), the ``statistic`` tested, its ``p_value`` (None where the
+    rule is not a statistical test) and a ``hint`` of what to do."""
+
+    reason: str
+    statistic: float
+    p_value: float | None
+    hint: str
+
+
+@dataclass(frozen=True)
 class Diagnosis:
-    """Health verdict of one identified fault vector."""
+    """Health verdict of one identified fault vector.
+
+    ``verdict`` is ``"healthy"``, ``"faulty"`` (``faults`` names them) or
+    ``"unexplained"`` (``unexplained`` says why; ``faults`` is then empty, and the
+    components above their thresholds are kept in ``suspected``).
+    """
 
     k: np.ndarray
     faults: tuple[Fault, ...]
     thresholds: Thresholds = DEFAULT_THRESHOLDS
     fault_model: str = "paper"
+    unexplained: Unexplained | None = None
+    suspected: tuple[Fault, ...] = ()
+
+    @property
+    def verdict(self) -> str:
+        if self.unexplained is not None:
+            return "unexplained"
+        return "faulty" if self.faults else "healthy"
 
     @property
     def healthy(self) -> bool:
-        return not self.faults
+        return self.verdict == "healthy"
 
     @property
     def modes(self) -> tuple[str, ...]:
         return tuple(f.mode for f in self.faults)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"healthy": self.healthy, "faults": [asdict(f) for f in self.faults],
+        return {"verdict": self.verdict, "healthy": self.healthy,
+                "faults": [asdict(f) for f in self.faults],
+                "unexplained": None if self.unexplained is None else asdict(self.unexplained),
+                "suspected": [asdict(f) for f in self.suspected],
                 "thresholds": asdict(self.thresholds), "fault_model": self.fault_model}
 
     def summary(self) -> str:
+        if self.unexplained is not None:
+            u = self.unexplained
+            return f"unexplained ({u.reason}): {u.hint}"
         if self.healthy:
             return "healthy: no fault above the detection thresholds"
         return "faulty: " + "; ".join(f.reading for f in self.faults)
 
 
+def fit_ratio_of(ident: Any) -> float | None:
+    """An identification's fit over its trace's noise floor (None without a floor)."""
+    floor = getattr(ident, "noise_floor", 0.0)
+    return float(ident.fitness / floor) if floor and floor > 0 else None
+
+
 def diagnose(k, *, thresholds: Thresholds | None = None,
-             params: ActuatorParams | None = None, fault_model: str = "paper") -> Diagnosis:
+             params: ActuatorParams | None = None, fault_model: str = "paper",
+             fit_ratio: float | None = None, misfit_p: float = MISFIT_P) -> Diagnosis:
     """Read the faults out of an identified ``k``.
 
     ``params`` (the healthy actuator, default preset) turns the components into
     physical values for the readings; ``fault_model`` says what k3..k5 mean
     (and picks the default thresholds, :data:`THRESHOLDS_BY_FAULT_MODEL`).
+    ``fit_ratio`` (the identification's Eq. 4 over the trace's noise floor), when
+    given, is tested: a fit whose probability under the fit ratios of explained
+    actuators (:func:`misfit_p_value`) is below ``misfit_p`` makes the verdict
+    ``unexplained``, as does a balanced short circuit on all three phases.
     """
     k = as_k(k)
     check_fault_model(fault_model)
@@ -144,4 +203,25 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
         faults.append(Fault("gain_drift", "k8", float(k[7]), abs(drift) / 0.5,
                             f"proportional gain {100 * (g - 1):+.0f}% (Kp {ctl.Kp * g:.1f} 1/s "
                             f"instead of {ctl.Kp:.1f})"))
+    unexplained = None
+    if fit_ratio is not None:
+        pv = misfit_p_value(float(fit_ratio))
+        if pv < misfit_p:
+            unexplained = Unexplained(
+                "misfit", float(fit_ratio), pv,
+                f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
+                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
+                "differs from its parameters, or has a fault the model lacks; calibrate it on "
+                "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
+                "load the bench applies and the current sensor chain")
+    sc = k[2:5]
+    if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
+        unexplained = Unexplained(
+            "balanced-phases", float(sc.min() / sc.max()), None,
+            "the same change on all three phases is a mismatch of magnet flux, inertia or "
+            "current sensor gain between the unit and its parameters, not three simultaneous "
+            "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
+    if unexplained is not None:
+        return Diagnosis(k=k, faults=(), thresholds=thresholds, fault_model=fault_model,
+                         unexplained=unexplained, suspected=tuple(faults))
     return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model)

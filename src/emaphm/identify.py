@@ -15,8 +15,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .faults import K_LOWER, K_NAMES, K_UPPER, as_k, error_pct
-from .fitness import Eq4Objective
+from .faults import K_LOWER, K_NAMES, K_NOMINAL, K_UPPER, as_k, error_pct
+from .fitness import Eq4Objective, misfit_limit
 from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination, WallClock,
                     get_optimizer, minimize)
 from .optim.local import compass_search
@@ -75,6 +75,9 @@ class Identification:
     describe this actuator). ``evaluations`` and ``polish_s`` count every run;
     ``iterations``, ``history``, ``polish_evaluations`` and ``run_evaluations``
     (its metaheuristic and polish evaluations) are those of the best run.
+    ``fault_model``: the mapping of k3..k5 the monitoring model used; ``compile_s``: the
+    time to compile (or load from the disk cache) the model kernels and run the model
+    once, before ``elapsed_s`` starts.
     """
 
     algorithm: str
@@ -102,6 +105,7 @@ class Identification:
     suspect: bool = False
     run_evaluations: int = 0
     fault_model: str = "paper"
+    compile_s: float = 0.0
 
     @property
     def evals_per_s(self) -> float:
@@ -119,6 +123,7 @@ class Identification:
             "evaluations": int(self.evaluations),
             "iterations": int(self.iterations),
             "elapsed_s": float(self.elapsed_s),
+            "compile_s": float(self.compile_s),
             "kernel_s": float(self.kernel_s),
             "evals_per_s": float(self.evals_per_s),
             "reason": self.reason,
@@ -223,7 +228,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
              budget: Any = None, params: ActuatorParams | None = None,
              options: dict[str, Any] | None = None, n_sub: int = 1, mode: str = "phases",
              polish: bool = True, search: str | None = None, restarts: int | None = None,
-             suspect_ratio: float = 5.0,
+             suspect_ratio: float | None = None,
              callback: Callable[[Any], bool | None] | None = None,
              objective: Eq4Objective | None = None,
              fault_model: str | None = None) -> Identification:
@@ -266,7 +271,11 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         restarts without an explicit ``budget`` and with the polish, none with a
         budget (it caps the evaluations) or with ``polish=False`` (the bare
         algorithm); an explicit number applies in any case, each run with the
-        budget. A result still above the limit is flagged ``suspect``.
+        budget. A result still above the limit is flagged ``suspect``. Default
+        ``suspect_ratio``: the misfit test's limit (:func:`emaphm.fitness.misfit_limit`,
+        the fit ratio an actuator the model describes exceeds with probability
+        :data:`emaphm.fitness.MISFIT_P`), the same test that makes a verdict
+        ``unexplained``.
     callback
         Called with the optimizer state after every iteration; True stops.
     objective
@@ -285,6 +294,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         restarts = DEFAULT_RESTARTS if budget is None and polish else 0
     if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) or restarts < 0:
         raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
+    if suspect_ratio is None:
+        suspect_ratio = misfit_limit()
     if isinstance(suspect_ratio, bool) or not isinstance(suspect_ratio, (int, float)) \
             or not suspect_ratio > 1:
         raise ValueError(f"suspect_ratio must be a number > 1, got {suspect_ratio!r}")
@@ -302,6 +313,10 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     fault_model = objective.model.fault_model
     if search is None:
         search = default_search(fault_model)
+    # compile (or load from the disk cache) the kernels before the clock starts
+    tc = time.perf_counter()
+    objective.model.simulate(K_NOMINAL)
+    compile_s = time.perf_counter() - tc
     k0 = objective.stats.kernel_s
     e0 = objective.stats.diverged
     t0 = time.perf_counter()
@@ -346,7 +361,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         history=history, reason=res.reason, model_trace=model_trace,
         k_true=k_true, error_pct=None if k_true is None else float(error_pct(k, k_true)),
         diverged=objective.stats.diverged - e0,
-        fault_model=fault_model,
+        fault_model=fault_model, compile_s=compile_s,
         options={**(options or {}), "n_sub": n_sub, "mode": mode, "polish": bool(polish),
                  "search": search,
                  "budget": None if budget is None else str(budget)},

@@ -489,7 +489,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     keyword arguments (``algorithm``, ``budget``, ``options``, ``n_runs``,
     ``level``) go to :func:`emaphm.prognosis.uncertainty.identify_with_spread`.
     """
-    from ..diagnosis import diagnose
+    from ..diagnosis import diagnose, fit_ratio_of
     from ..traces import validate
     from .uncertainty import identify_with_spread
 
@@ -498,7 +498,8 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     validate(trace)
     a = identify_with_spread(trace, seed=seed, method=method, params=params, **kwargs)
     ident = a.identification
-    diag = diagnose(a.k, thresholds=thresholds, params=params, fault_model=ident.fault_model)
+    diag = diagnose(a.k, thresholds=thresholds, params=params, fault_model=ident.fault_model,
+                    fit_ratio=fit_ratio_of(ident))
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
              "fault_model": ident.fault_model,
              "parameters": None if params is None else params.to_dict(),

@@ -200,7 +200,7 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
                          n_runs: int = 5, algorithm: str = "pso", budget: Any = None,
                          options: dict | None = None, params: Any = None,
                          objective: Eq4Objective | None = None, error_floor: Any = None,
-                         suspect_ratio: float = 5.0, retries: int = 2,
+                         suspect_ratio: float | None = None, retries: int = 2,
                          **kwargs: Any) -> Assessment:
     """Identify ``k`` of ``trace`` and the interval of each component.
 
@@ -220,7 +220,11 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     ``options``, ``params`` and other keyword arguments go to
     :func:`emaphm.identify.identify`; ``objective`` a prebuilt Eq. 4 objective.
     """
+    from ..fitness import misfit_limit
     from ..identify import identify
+
+    if suspect_ratio is None:
+        suspect_ratio = misfit_limit()
 
     _check(method, level, n_runs, seed)
     floor = np.broadcast_to(np.asarray(IDENTIFICATION_ERROR_P90 if error_floor is None
