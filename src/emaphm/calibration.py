@@ -221,30 +221,81 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     targets = [_target(tr, base, src) for tr, src in zip(traces, sources)]
     t0 = time.perf_counter()
     count = [0]
+    m = sum(t.i_meas.size for t in targets)
+    cache: dict[bytes, list[np.ndarray]] = {}
+
+    def currents(x: np.ndarray, names: list[str]) -> list[np.ndarray] | None:
+        """Model currents of each trace at ``x``, before the sensors' gains and offsets
+        (those act after the model, so their Jacobian columns need no simulation)."""
+        key = np.asarray(x, dtype=float).tobytes() + ",".join(names).encode()
+        if key not in cache:
+            p = apply_deviations(base, dict(zip(names, x)))
+            p = replace(p, sensors=CurrentSensors())
+            out = []
+            for tg in targets:
+                count[0] += 1
+                i = _model_currents(p, tg)
+                if not np.all(np.isfinite(i)):
+                    out = None
+                    break
+                out.append(i)
+            cache.clear()
+            cache[key] = out
+        return cache[key]
+
+    def sensors(x: np.ndarray, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+        s = apply_deviations(base, dict(zip(names, x))).sensors
+        return np.asarray(s.gain), np.asarray(s.offset)
 
     def residual(x: np.ndarray, names: list[str]) -> np.ndarray:
-        p = apply_deviations(base, dict(zip(names, x)))
-        out = []
-        for tg in targets:
-            count[0] += 1
-            i = _model_currents(p, tg)
-            if not np.all(np.isfinite(i)):
-                return np.full(sum(t.i_meas.size for t in targets), 1e6)
-            out.append(((i - tg.i_meas) * tg.sqrt_w).ravel())
-        return np.concatenate(out)
+        cur = currents(x, names)
+        if cur is None:
+            return np.full(m, 1e6)
+        g, o = sensors(x, names)
+        return np.concatenate([((i * g + o - tg.i_meas) * tg.sqrt_w).ravel()
+                               for i, tg in zip(cur, targets)])
 
-    def fit(names: list[str]):
+    def jacobian(x: np.ndarray, names: list[str]) -> np.ndarray:
+        """Forward differences for the physical parameters (one simulation each),
+        exact columns for the sensor gains and offsets."""
+        r0 = residual(x, names)
+        cur = currents(x, names)
+        J = np.zeros((m, len(names)))
+        g0 = np.asarray(base.sensors.gain)
+        for c, n in enumerate(names):
+            if n.startswith("gain_") or n.startswith("offset_"):
+                j = "abc".index(n[-1])
+                col, off = [], 0
+                for i, tg in zip(cur or [np.zeros_like(t.i_meas) for t in targets], targets):
+                    d = np.zeros_like(tg.i_meas)
+                    d[:, j] = (g0[j] * i[:, j] if n.startswith("gain_") else 1.0) * tg.sqrt_w[:, j]
+                    col.append(d.ravel())
+                J[:, c] = np.concatenate(col)
+                continue
+            lo, hi = PARAMETERS[n][0], PARAMETERS[n][1]
+            h = 1e-3 * max(1.0, abs(x[c]))
+            if x[c] + h > hi:
+                h = -h
+            xh = np.array(x, dtype=float)
+            xh[c] += h
+            J[:, c] = (residual(xh, names) - r0) / h
+        currents(x, names)             # leave the cache at x
+        return J
+
+    def fit(names: list[str], x0: np.ndarray):
         lo = np.array([PARAMETERS[n][0] for n in names])
         hi = np.array([PARAMETERS[n][1] for n in names])
-        return least_squares(residual, np.zeros(len(names)), args=(names,), bounds=(lo, hi),
-                             method="trf", diff_step=1e-3, x_scale=np.maximum(hi - lo, 1e-3) / 10,
-                             xtol=1e-8, ftol=1e-10, max_nfev=60)
+        return least_squares(residual, np.clip(x0, lo, hi), jac=jacobian, args=(names,),
+                             bounds=(lo, hi), method="trf",
+                             x_scale=np.maximum(hi - lo, 1e-3) / 10,
+                             xtol=1e-8, ftol=1e-8, max_nfev=60)
 
     names = list(free)
     fixed: list[str] = []
     pairs: list[tuple[str, str, float]] = []
+    x0 = np.zeros(len(names))
     while True:
-        res = fit(names)
+        res = fit(names, x0)
         cov, corr = _covariance(res, targets)
         worst = None
         for a in range(len(names)):
@@ -260,6 +311,7 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         span = lambda j: PARAMETERS[names[j]][1] - PARAMETERS[names[j]][0]  # noqa: E731
         drop = a if math.sqrt(cov[a, a]) / span(a) >= math.sqrt(cov[b, b]) / span(b) else b
         fixed.append(names.pop(drop))
+        x0 = np.delete(res.x, drop)          # the refit starts where the last fit ended
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     dev = dict(zip(names, res.x))
     unit = apply_deviations(base, dev)
