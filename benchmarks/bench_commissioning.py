@@ -18,7 +18,10 @@ unreported load within +-0.1 N m). Per unit:
    0.15 ohm), diagnosed with the calibrated parameters: the right mode alone (the
    right phase for a short), and the Eq. 9 error.
 
-Units use seeds 20000+, apart from every seed used to set a threshold.
+Units use seeds 20000+, apart from every seed used to set a threshold; ``--tune``
+draws units from 30000+ and prints each calibrated parameter's model discrepancy
+(the RMS of estimate minus truth), which :data:`emaphm.calibration.DISCREPANCY`
+adds to the standard errors.
 
 Run: ``python benchmarks/bench_commissioning.py [--units 100] [--workers 2]`` ->
 ``benchmarks/results/commissioning.md`` and ``commissioning.json``.
@@ -42,13 +45,14 @@ import numpy as np  # noqa: E402
 
 RESULTS = Path(__file__).parent / "results"
 UNIT_SEED0 = 20_000
+TUNE_SEED0 = 30_000
 FAULTS = [("friction x2.5", 0, 0.75, "friction", None), ("backlash", 1, 0.75, "backlash", None),
           ("gain drift", 7, 0.25, "gain_drift", None)]
 FAULTS += [(f"short {int(100 * mu)} % {ph}", 2 + j, mu, "short_circuit", ph)
            for mu in (0.1, 0.2, 0.3) for j, ph in enumerate("ABC")]
 
 
-def run_unit(i: int) -> dict:
+def run_unit(task: tuple[int, int]) -> dict:
     from emaphm.calibration import CalibrationError, calibrate
     from emaphm.diagnosis import diagnose, fit_ratio_of
     from emaphm.faults import K_NOMINAL
@@ -57,8 +61,9 @@ def run_unit(i: int) -> dict:
     from emaphm.simulate import DEFAULT_SENSORS, simulate
     from emaphm.units import draw_unit
 
+    i, seed0 = task
     sheet = siemens_1fk7060()
-    unit = draw_unit(sheet, UNIT_SEED0 + i)
+    unit = draw_unit(sheet, seed0 + i)
     healthy = [simulate(unit=unit, sensors=DEFAULT_SENSORS, seed=s, fault_model="physical")
                for s in (1, 2, 3)]
 
@@ -87,7 +92,8 @@ def run_unit(i: int) -> dict:
         truth[f"offset_{ph}"] = dev["sensor_offset"][j]
     out["cal_fixed"] = list(cal.fixed)
     out["cal_covered"] = {n: bool(e["lo95"] <= truth[n] <= e["hi95"]) for n, e in cal.estimates.items()}
-    out["cal_estimates"] = {n: [e["value"], e["se"], truth[n]] for n, e in cal.estimates.items()}
+    out["cal_estimates"] = {n: [e["value"], e["se"], truth[n], e["se_stat"]]
+                            for n, e in cal.estimates.items()}
     i1, d1 = verdict(healthy[2], cal.params)
     out.update(cal_verdict=d1.verdict, cal_fit_ratio=fit_ratio_of(i1),
                cal_faults=[f.mode for f in d1.faults])
@@ -98,6 +104,7 @@ def run_unit(i: int) -> dict:
     i2, d2 = verdict(faulty, cal.params)
     out.update(fault=name, fault_mode=mode, fault_phase=phase, fault_verdict=d2.verdict,
                fault_named=[(f.mode, f.phase) for f in d2.faults], fault_error_pct=i2.error_pct,
+               fault_fit_ratio=fit_ratio_of(i2),
                fault_right=[(f.mode, f.phase) for f in d2.faults] == [(mode, phase)])
     return out
 
@@ -169,13 +176,26 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--units", type=int, default=100)
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--tune", action="store_true",
+                    help="units from the tuning seeds (30000+): print each parameter's model "
+                         "discrepancy (RMS of estimate - truth) for emaphm.calibration")
     args = ap.parse_args()
+    seed0 = TUNE_SEED0 if args.tune else UNIT_SEED0
     _warm()
     t0 = time.perf_counter()
     with ProcessPoolExecutor(args.workers, initializer=_warm) as ex:
-        rows = list(ex.map(run_unit, range(args.units)))
+        rows = list(ex.map(run_unit, [(i, seed0) for i in range(args.units)]))
     wall = time.perf_counter() - t0
     RESULTS.mkdir(exist_ok=True)
+    if args.tune:
+        (RESULTS / "commissioning_tuning.json").write_text(json.dumps(rows, indent=1, default=float))
+        err: dict[str, list[float]] = {}
+        for r in rows:
+            for n, (v, _se, truth, _s) in r.get("cal_estimates", {}).items():
+                err.setdefault(n, []).append(v - truth)
+        print(json.dumps({n: {"rms": float(np.sqrt(np.mean(np.square(e)))), "n": len(e)}
+                          for n, e in err.items()}, indent=1))
+        return
     (RESULTS / "commissioning.json").write_text(json.dumps(rows, indent=1, default=float))
     text = report(rows, wall, args.workers)
     (RESULTS / "commissioning.md").write_text(text)

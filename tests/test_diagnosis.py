@@ -87,10 +87,11 @@ def test_shorts_on_two_phases_are_two_faults():
 
 def test_multiple_fault_vector_gives_the_modes_above_threshold():
     # paper Eq. 8: k = [0.0133, 0.05, 0.003, 0, 0, 0.012, 0.5, 0.35]; with the default
-    # thresholds only backlash (0.05 > 0.04) and the gain (|0.35 - 0.5| > 0.02) stand out
+    # (plant-tuned) thresholds only the gain (|0.35 - 0.5| > 0.015) stands out: the
+    # backlash of 0.05 is inside what the plant's compliant contact reads as backlash
     k = SCENARIOS["multiple"]
     d = diagnose(k)
-    assert d.modes == ("backlash", "gain_drift")
+    assert d.modes == ("gain_drift",)
     above = {"friction": k[0] > DEFAULT_THRESHOLDS.friction,
              "backlash": k[1] > DEFAULT_THRESHOLDS.backlash,
              "short_circuit": k[2:5].max() > DEFAULT_THRESHOLDS.short_circuit,
@@ -193,7 +194,7 @@ def test_gain_drift_threshold_is_two_sided(sign):
 
 
 def test_custom_thresholds_move_the_decision():
-    k = _k(k1=0.1)
+    k = _k(k1=0.15)
     assert diagnose(k).modes == ("friction",)
     assert diagnose(k, thresholds=Thresholds(friction=0.2)).healthy
 

@@ -22,14 +22,21 @@ name           what it scales                                         unit
 Method: SciPy's :func:`~scipy.optimize.least_squares` (trust-region
 reflective, bounded) on the monitoring model's residuals, weighted as in
 Eq. 4 and scaled by each trace's white-noise level, with a finite-difference
-Jacobian. Standard errors come from ``s^2 (J^T J)^-1``, inflated by the
+Jacobian (exact columns for the sensor gains and offsets, which act after the
+model). Standard errors come from ``s^2 (J^T J)^-1``, inflated by the
 residual's integrated autocorrelation time (a misfit that is not white noise
-carries fewer independent samples than it has). Parameters the profile cannot
-separate (a pair with ``|correlation| > CORRELATION_LIMIT``; on the
-diagnostic profile inertia, flux and the sensor gains all scale the current)
-are named, and the less certain one of each pair is kept at its data-sheet
-value and the fit repeated: the others then absorb it, which is what the
-monitoring model needs to reproduce the unit's currents.
+carries fewer independent samples than it has), plus the model discrepancy of
+each parameter measured on plant units (:data:`DISCREPANCY`).
+
+Two kinds of parameters are kept at their data-sheet values, named, and the
+fit repeated without them: those the profile does not *identify* (a typical
+deviation, :data:`TYPICAL`, changes the fit ratio by less than the misfit that
+model error leaves, at least :data:`MIN_EFFECT`: on the diagnostic profile the
+current loop hides the winding resistance and inductance, which would absorb
+model error instead), and the less certain one of a pair the profile cannot
+*separate* (``|correlation| > CORRELATION_LIMIT``: inertia and flux both scale
+the current). The others then absorb them, which is what the monitoring model
+needs to reproduce the unit's currents.
 
 The result is an :class:`~emaphm.params.ActuatorParams` (the unit's, with a
 ``[calibration]`` section holding the date, the sources, each estimate and
@@ -66,6 +73,30 @@ PARAMETERS: dict[str, tuple[float, float, str]] = {
     "load": (-2.0, 2.0, "N m"),
 }
 _NAMES = tuple(PARAMETERS)
+
+#: A typical deviation of each parameter (the width of the production tolerance,
+#: :data:`emaphm.units.DEFAULT_TOLERANCES`), in the parameter's unit.
+TYPICAL: dict[str, float] = {"J": 0.2, "flux": 0.1, "R": 0.25, "L": 0.1, "friction": 0.4,
+                             "viscous": 0.4, "gain_a": 0.06, "gain_b": 0.06, "gain_c": 0.06,
+                             "offset_a": 0.04, "offset_b": 0.04, "offset_c": 0.04, "load": 0.2}
+
+#: A parameter whose typical deviation moves the fit ratio (Eq. 4 over the noise floor)
+#: by less than this -- or less than the fit's own excess over the floor, which is what
+#: model error leaves -- is not identifiable on the profile: left free, it would absorb
+#: model error instead of measuring the unit.
+MIN_EFFECT = 0.1
+
+#: Model discrepancy of each estimate: the RMS of (estimate - truth) over production
+#: units on the reference plant, which has physics the monitoring model lacks
+#: (``benchmarks/bench_commissioning.py --tune``: 60 units on tuning seeds; the sensor
+#: gains and offsets pooled over the phases; R, L and viscous are rarely identifiable,
+#: so theirs rest on 1-2 units). Added in quadrature to the statistical standard error,
+#: which alone covers noise, not model error. The flux and the gains' common mode trade
+#: with the inertia, hence their large values.
+DISCREPANCY: dict[str, float] = {
+    "J": 0.050, "flux": 0.100, "R": 0.061, "L": 0.037, "friction": 0.079, "viscous": 0.54,
+    "gain_a": 0.022, "gain_b": 0.022, "gain_c": 0.022,
+    "offset_a": 0.0022, "offset_b": 0.0022, "offset_c": 0.0022, "load": 0.0029}
 
 #: A pair of estimates more correlated than this is not separable on the profile.
 CORRELATION_LIMIT = 0.95
@@ -156,6 +187,8 @@ class CalibrationResult:
     ``estimates``: name -> ``{"value", "se", "lo95", "hi95", "unit"}`` (deviations from
     the data sheet; parameters kept at the data sheet are absent and listed in
     ``fixed``); ``correlated``: the pairs found not separable, with their correlation;
+    ``weak``: the parameters found not identifiable, with the change of the fit ratio a
+    typical deviation of theirs makes (see :data:`MIN_EFFECT`);
     ``fit_ratio``: per source, the fitted Eq. 4 over the trace's white-noise floor;
     ``fits``: per source, ``(t, measured, model)`` currents on the model grid (for plots).
     """
@@ -164,6 +197,7 @@ class CalibrationResult:
     estimates: dict[str, dict[str, Any]]
     fixed: tuple[str, ...]
     correlated: tuple[tuple[str, str, float], ...]
+    weak: tuple[tuple[str, float], ...]
     fit_ratio: dict[str, float]
     evaluations: int
     elapsed_s: float
@@ -172,6 +206,7 @@ class CalibrationResult:
     def to_dict(self) -> dict[str, Any]:
         return {"estimates": self.estimates, "fixed": list(self.fixed),
                 "correlated": [list(c) for c in self.correlated],
+                "not_identifiable": [list(w) for w in self.weak],
                 "fit_ratio": self.fit_ratio, "evaluations": self.evaluations,
                 "elapsed_s": self.elapsed_s, "calibration": self.params.calibration.date,
                 "parameters": self.params.to_dict()}
@@ -181,12 +216,13 @@ class CalibrationResult:
         for n, e in self.estimates.items():
             lines.append(f"{n:10s} {e['value']:+10.4f} [{e['lo95']:+9.4f}, {e['hi95']:+9.4f}]  "
                          f"{e['unit']}")
-        if self.fixed:
-            lines.append("kept at the data sheet (not separable on this profile): "
-                         + ", ".join(self.fixed))
+        if self.weak:
+            lines.append("not identifiable on this profile (a typical deviation changes the fit "
+                         "less than model error does), kept at the data sheet: "
+                         + ", ".join(f"{n} ({e:.2f})" for n, e in self.weak))
         if self.correlated:
-            lines.append("not separable: " + "; ".join(f"{a} ~ {b} (r = {r:+.3f})"
-                                                        for a, b, r in self.correlated))
+            lines.append("not separable, the less certain kept at the data sheet: "
+                         + "; ".join(f"{a} ~ {b} (r = {r:+.3f})" for a, b, r in self.correlated))
         lines.append("fit / noise floor: " + ", ".join(f"{s} {r:.2f}x"
                                                       for s, r in self.fit_ratio.items()))
         lines.append(f"{self.evaluations} model runs in {self.elapsed_s:.2f} s")
@@ -293,9 +329,23 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     names = list(free)
     fixed: list[str] = []
     pairs: list[tuple[str, str, float]] = []
+    weak: list[tuple[str, float]] = []
     x0 = np.zeros(len(names))
+    floor_r = float(sum(np.sum(tg.w) for tg in targets))    # sum r^2 of white noise alone
     while True:
         res = fit(names, x0)
+        # practical identifiability: what a typical deviation of each parameter does to
+        # the fit ratio, against the misfit model error leaves
+        excess = max(float(res.fun @ res.fun) / floor_r - 1.0, MIN_EFFECT)
+        Jm = np.asarray(res.jac)
+        effect = np.array([float(np.sum(Jm[:, c] ** 2)) * TYPICAL[n] ** 2 / floor_r
+                           for c, n in enumerate(names)])
+        if len(names) > 1 and effect.min() < excess:
+            drop = int(np.argmin(effect))
+            weak.append((names[drop], float(effect[drop])))
+            fixed.append(names.pop(drop))
+            x0 = np.delete(res.x, drop)
+            continue
         cov, corr = _covariance(res, targets)
         worst = None
         for a in range(len(names)):
@@ -333,14 +383,17 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
             "its parameters (--params)")
     estimates = {}
     for n, v, s in zip(names, res.x, se):
-        estimates[n] = {"value": float(v), "se": float(s), "lo95": float(v - 1.96 * s),
-                        "hi95": float(v + 1.96 * s), "unit": PARAMETERS[n][2]}
+        tot = math.hypot(float(s), DISCREPANCY.get(n, 0.0))
+        estimates[n] = {"value": float(v), "se": tot, "lo95": float(v - 1.96 * tot),
+                        "hi95": float(v + 1.96 * tot), "unit": PARAMETERS[n][2],
+                        "se_stat": float(s)}
     calib = Calibration(date=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                         sources=tuple(sources),
                         estimates=tuple((n, e["value"], e["se"]) for n, e in estimates.items()),
                         fixed=tuple(fixed))
     return CalibrationResult(params=replace(unit, calibration=calib), estimates=estimates,
-                             fixed=tuple(fixed), correlated=tuple(pairs), fit_ratio=ratios,
+                             fixed=tuple(fixed), correlated=tuple(pairs), weak=tuple(weak),
+                             fit_ratio=ratios,
                              evaluations=count[0], elapsed_s=elapsed,
                              fits=tuple(fits))
 
