@@ -217,7 +217,7 @@ def _table(ident, diag) -> str:
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
                  + (f" ({ident.restarts} restart{'s' if ident.restarts > 1 else ''})"
                     if ident.restarts else ""))
-    if ident.suspect:
+    if ident.suspect and diag.unexplained is None:
         lines.append("WARNING: the best fit stays far above the trace's noise floor: the search may "
                      "have missed the actuator's k, or the model parameters (--params) do not "
                      "describe this actuator; treat the verdict with care")
