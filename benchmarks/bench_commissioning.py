@@ -42,6 +42,7 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from bench_identification import _warm, machine  # noqa: E402  (shared: warm-up, machine line)
 
 RESULTS = Path(__file__).parent / "results"
 UNIT_SEED0 = 20_000
@@ -110,16 +111,6 @@ def run_unit(task: tuple[int, int]) -> dict:
 
 
 def report(rows: list[dict], wall: float, workers: int) -> str:
-    import platform
-
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     n = len(rows)
     ok = [r for r in rows if "cal_error" not in r]
     cov: dict[str, list[bool]] = {}
@@ -130,7 +121,7 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
     shorts = [r for r in ok if r["fault_mode"] == "short_circuit"]
     now = _dt.datetime.now(_dt.timezone.utc)
     out = [f"## Commissioning production units ({now:%Y-%m-%d %H:%M} UTC)", "",
-           f"Machine: {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}; load "
+           f"Machine: {machine()}; load "
            f"average {os.getloadavg()[0]:.2f} at the end; {n} units (seeds {UNIT_SEED0}+) in "
            f"{wall / 60:.1f} min wall on {workers} workers. Plant traces, physical fault model, "
            "PSO with identify's defaults.", "",
@@ -163,13 +154,6 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
     if miss:
         out += ["", "Faults not named right: " + "; ".join(miss)]
     return "\n".join(x for x in out) + "\n"
-
-
-def _warm() -> None:
-    from emaphm.identify import identify
-    from emaphm.simulate import simulate
-
-    identify(simulate(scenario="nominal", fault_model="physical"), "pso", seed=0, budget=200)
 
 
 def main() -> None:

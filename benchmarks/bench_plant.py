@@ -43,6 +43,7 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from bench_identification import _warm, machine  # noqa: E402  (shared: warm-up, machine line)
 
 RESULTS = Path(__file__).parent / "results"
 MUS = (0.05, 0.10, 0.20, 0.30)
@@ -194,20 +195,10 @@ def suggest(rows: list[dict]) -> dict:
 
 
 def report(summary: dict, wall: float, workers: int) -> str:
-    import platform
-
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     now = _dt.datetime.now(_dt.timezone.utc)
     out = [f"## Plant traces beside twin traces ({now:%Y-%m-%d %H:%M} UTC)", "",
-           f"Machine: {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}; "
+           f"Machine: {machine()}; "
            f"load average {load:.2f} at the end; {wall / 60:.1f} min wall on {workers} workers. "
            "Algorithm: PSO with identify's defaults (polish, restarts), fault model physical; "
            "the monitoring model assumes the data sheet and R_f = 0.15 ohm. Test seeds (0+), "
@@ -247,13 +238,6 @@ def report(summary: dict, wall: float, workers: int) -> str:
         out += ["", "Plant runs not named right: "
                 + "; ".join(f"{c} {n} -> {f}" for c, n, f in p["failures"])]
     return "\n".join(out) + "\n"
-
-
-def _warm() -> None:
-    from emaphm.identify import identify
-    from emaphm.simulate import simulate
-
-    identify(simulate(scenario="nominal", fault_model="physical"), "pso", seed=0, budget=200)
 
 
 def main() -> None:

@@ -54,10 +54,11 @@ from typing import Any, Sequence
 import numpy as np
 
 from .faults import K_NOMINAL
-from .fitness import MIN_NOISE, effective_samples, eq4_weights, white_noise_sigma
+from .fitness import (MIN_NOISE, check_diagnosable, effective_samples, eq4_weights,
+                      on_model_grid, white_noise_sigma)
 from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
-from .profiles import Profile, ProfileError
-from .traces import Trace, TraceError, resample, validate
+from .profiles import Profile
+from .traces import Trace, TraceError, validate
 
 __all__ = ["PARAMETERS", "CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT", "CalibrationError",
            "CalibrationResult", "calibrate", "apply_deviations"]
@@ -143,20 +144,11 @@ class _Target:
 def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
     validate(trace)
     T_s = params.inverter.T_s
-    t0 = float(trace.t[0])
-    n = int(np.floor((float(trace.t[-1]) - t0) / T_s + 1e-9)) + 1
-    if n < 16:
-        raise CalibrationError(f"{source}: the trace lasts {trace.duration:.3g} s, too short to "
-                               "calibrate on; record at least one diagnostic profile (0.5 s)")
-    t_model = np.arange(n) * T_s
-    on = resample(trace, t0 + t_model)
-    load = np.zeros(n)
-    prof = trace.meta.get("profile") if isinstance(trace.meta, dict) else None
-    if isinstance(prof, dict):
-        try:
-            load = Profile.from_dict(prof).load_torque(t_model)
-        except ProfileError:
-            pass
+    try:
+        _, on, load = on_model_grid(trace, T_s)
+        check_diagnosable(trace)
+    except TraceError as exc:
+        raise CalibrationError(f"{source}: {exc}") from None
     i = np.asarray(on.i_abc, dtype=float)
     sigma = white_noise_sigma(np.asarray(trace.i_abc, dtype=float))
     if not np.all(sigma > MIN_NOISE):

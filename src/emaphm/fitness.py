@@ -31,10 +31,30 @@ from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
 
 __all__ = ["eq4_weights", "equivalent_current", "white_noise_sigma", "Eq4Objective",
-           "FITNESS_MODES", "trace_fault_model", "effective_samples", "check_diagnosable",
+           "FITNESS_MODES", "trace_fault_model", "on_model_grid", "effective_samples", "check_diagnosable",
            "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit"]
 
 FITNESS_MODES = ("phases", "equivalent")
+
+
+def on_model_grid(trace: Trace, T_s: float) -> tuple[np.ndarray, Trace, np.ndarray]:
+    """``(t_model, trace on it, load torque)``: the model's grid ``k T_s`` over the trace
+    (from its first sample), the trace resampled onto it, and the load torque of the
+    profile in its metadata (zero for a bench trace). TraceError if shorter than 16 steps."""
+    t0 = float(trace.t[0])
+    n = int(np.floor((float(trace.t[-1]) - t0) / T_s + 1e-9)) + 1
+    if n < 16:
+        raise TraceError(f"trace lasts {trace.duration:.3g} s, fewer than 16 control periods of "
+                         f"{T_s:g} s; record at least one full diagnostic profile (0.5 s)")
+    t_model = np.arange(n) * T_s
+    load = np.zeros(n)
+    prof = trace.meta.get("profile") if isinstance(trace.meta, dict) else None
+    if isinstance(prof, dict):
+        try:
+            load = Profile.from_dict(prof).load_torque(t_model)
+        except ProfileError:
+            pass
+    return t_model, resample(trace, t0 + t_model), load
 
 
 def trace_fault_model(trace: Trace) -> str:
@@ -219,22 +239,11 @@ class Eq4Objective:
         params = params if params is not None else siemens_1fk7060()
         validate(trace, min_rotation=0.0)
         T_s = params.inverter.T_s
-        t0 = float(trace.t[0])
-        n = int(np.floor((float(trace.t[-1]) - t0) / T_s + 1e-9)) + 1
-        if n < 16:
-            raise TraceError(f"trace lasts {trace.duration:.3g} s, fewer than 16 control periods of "
-                             f"{T_s:g} s; record at least one full diagnostic profile (0.5 s)")
+        t_model, on_grid, meta_load = on_model_grid(trace, T_s)
+        n = t_model.size
         check_diagnosable(trace)
-        t_model = np.arange(n) * T_s
-        on_grid = resample(trace, t0 + t_model)
         if load_torque is None:
-            load_torque = np.zeros(n)
-            prof = trace.meta.get("profile") if isinstance(trace.meta, dict) else None
-            if isinstance(prof, dict):
-                try:
-                    load_torque = Profile.from_dict(prof).load_torque(t_model)
-                except ProfileError:
-                    pass
+            load_torque = meta_load
         else:
             load_torque = np.asarray(load_torque, dtype=float)
             if load_torque.shape != (n,):
