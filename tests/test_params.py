@@ -206,3 +206,14 @@ def test_unreadable_files(tmp_path):
     bad.write_text("[motor\nR = ")
     with pytest.raises(ParameterError, match="not valid TOML"):
         load_params(bad)
+
+
+def test_a_parameter_path_that_is_a_folder_or_binary_is_refused_by_name(tmp_path):
+    from emaphm.params import ParameterError, load_params
+
+    with pytest.raises(ParameterError, match=r"parameter file .* is a folder; give a TOML file"):
+        load_params(tmp_path)
+    bad = tmp_path / "bin.toml"
+    bad.write_bytes(b"\xff\xfe\x00binary")
+    with pytest.raises(ParameterError, match=r"parameter file .*bin.toml is not"):
+        load_params(bad)

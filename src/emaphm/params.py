@@ -487,6 +487,23 @@ def siemens_1fk7060() -> ActuatorParams:
     return ActuatorParams(name="siemens-1fk7060-2ac71")
 
 
+def read_toml(path: str | os.PathLike[str], what: str,
+              error: type[Exception] = ValueError) -> dict[str, Any]:
+    """The table of a TOML file; ``error`` naming ``what`` and the path when it cannot be read."""
+    p = Path(path)
+    try:
+        with p.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise error(f"{what} {p} does not exist") from None
+    except IsADirectoryError:
+        raise error(f"{what} {p} is a folder; give a TOML file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"{what} {p} is not valid TOML: {exc}") from None
+    except UnicodeDecodeError:
+        raise error(f"{what} {p} is not a UTF-8 text file; give a TOML file") from None
+
+
 def load_params(path: str | os.PathLike[str], *, partial: bool = False) -> ActuatorParams:
     """Read parameters from a TOML file with sections [motor], [inverter],
     [controller], [transmission], [load] (SI units, per-phase values as lists).
@@ -494,13 +511,7 @@ def load_params(path: str | os.PathLike[str], *, partial: bool = False) -> Actua
     With ``partial=True`` fields left out are taken from :func:`siemens_1fk7060`.
     """
     p = Path(path)
-    try:
-        with p.open("rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ParameterError(f"parameter file {p} does not exist") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"parameter file {p} is not valid TOML: {exc}") from None
+    data = read_toml(p, "parameter file", ParameterError)
     return ActuatorParams.from_dict(data, source=str(p),
                                     defaults=siemens_1fk7060() if partial else None)
 

@@ -34,14 +34,13 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .params import ActuatorParams
+from .params import ActuatorParams, read_toml
 
 __all__ = ["Tolerances", "DEFAULT_TOLERANCES", "Unit", "draw_unit", "nominal_unit",
            "load_tolerances"]
@@ -108,15 +107,7 @@ def load_tolerances(path: str | os.PathLike[str]) -> Tolerances:
     """Tolerances from a TOML file: ``[tolerances]`` with ``name = [lo, hi]`` lines;
     names left out keep the defaults."""
     p = Path(path)
-    try:
-        with p.open("rb") as fh:
-            data = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ValueError(f"tolerance file {p} does not exist") from None
-    except IsADirectoryError:
-        raise ValueError(f"tolerance file {p} is a folder; give a TOML file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"tolerance file {p} is not valid TOML: {exc}") from None
+    data = read_toml(p, "tolerance file")
     return Tolerances.from_dict(data, source=str(p))
 
 
