@@ -26,7 +26,7 @@ the monitoring model lacks (Stribeck friction, a compliant backlash contact, lea
 fault loops resolved with the PWM ripple) and, where stated, production units within
 tolerances. *Twin* traces (the monitoring model's own currents with the same sensor noise)
 are the inverse crime, shown beside for comparison. Sections dated 2026-11-22 (model
-report, paper campaign, prognosis) were measured before the plant existed, on a reference
+report, optimizers, prognosis) were measured before the plant existed, on a reference
 model that shared the monitoring model's equations; their scripts re-run them.
 
 | section | script |
