@@ -315,3 +315,27 @@ def test_equivalent_mode_is_passed_through(mm_gain_low):
     assert ident.fitness == pytest.approx(eq(ident.k)[0], rel=1e-12)
     with pytest.raises(ValueError, match="unknown fitness mode"):
         identify(mm_gain_low, "pso", seed=0, budget=100, mode="bogus")
+
+
+# ----------------------------------------------------------------------------- nuisance
+
+def test_a_resistance_drift_is_searched_beside_k_not_read_as_a_fault():
+    from dataclasses import replace
+
+    from emaphm.params import siemens_1fk7060
+
+    p = siemens_1fk7060()
+    warm = replace(p, motor=replace(p.motor, R=tuple(r * 1.2 for r in p.motor.R),
+                                    c0=tuple(c * 0.97 for c in p.motor.c0)))
+    k = SCENARIOS["turn-short-15pct"]
+    trace = simulate(k, model="monitoring", params=warm, sensors=DEFAULT_SENSORS, seed=2,
+                     fault_model="physical")
+    ident = identify(trace, "pso", seed=0, params=p, nuisance=("R", "flux"))
+    assert set(ident.nuisance) == {"R", "flux"}
+    # on the model's own traces the drift is found (measured R +0.20, flux -0.030)
+    assert ident.nuisance["R"] == pytest.approx(0.2, abs=0.03)
+    assert ident.nuisance["flux"] == pytest.approx(-0.03, abs=0.01)
+    assert ident.k[2] == pytest.approx(0.15, abs=0.01) and ident.error_pct < 1.0
+    assert ident.to_dict()["nuisance"] == ident.nuisance
+    with pytest.raises(ValueError, match="unknown"):
+        identify(trace, "pso", seed=0, nuisance=("J",))

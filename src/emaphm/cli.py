@@ -147,6 +147,22 @@ def _fault_model_option(args: argparse.Namespace) -> str:
     return scenario_fault_model(args.scenario) if args.scenario else "physical"
 
 
+def _nuisance_option(text: str | None) -> tuple[str, ...] | None:
+    """--nuisance R,flux | none -> names (None: identify's default)."""
+    from .search import NUISANCE_RANGE
+
+    if text is None:
+        return None
+    if text.strip().lower() == "none":
+        return ()
+    names = tuple(x.strip() for x in text.split(",") if x.strip())
+    bad = [n for n in names if n not in NUISANCE_RANGE]
+    if bad or len(set(names)) != len(names):
+        raise UsageError(f"--nuisance {text!r}: give none or a comma-separated subset of "
+                         f"{', '.join(NUISANCE_RANGE)} (each once)")
+    return names
+
+
 def _unit_options(args: argparse.Namespace, params) -> dict[str, Any]:
     """--unit-seed, --tolerances and --unreported-load as keyword arguments of simulate()."""
     from .units import load_tolerances
@@ -205,7 +221,10 @@ def _table(ident, diag) -> str:
             row += f" {ident.k_true[i]:8.4f}"
         lines.append(row)
     lines.append("")
-    lines.append(f"fault model {ident.fault_model}")
+    lines.append(f"fault model {ident.fault_model}"
+                 + ("; searched with " + ", ".join(f"{n} {100 * v:+.1f}%"
+                                                   for n, v in ident.nuisance.items())
+                    if ident.nuisance else ""))
     lines.append(f"algorithm {ident.algorithm}, seed {ident.seed}: {ident.evaluations} evaluations, "
                  f"{ident.iterations} iterations in {ident.elapsed_s:.2f} s "
                  f"({ident.evals_per_s:.0f} evals/s, {100 * ident.kernel_s / max(ident.elapsed_s, 1e-12):.0f}% "
@@ -281,7 +300,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         print(f"identifying with {args.algorithm.upper()} (seed {args.seed})", file=sys.stderr)
     try:
         ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
-                         callback=progress, fault_model=args.fault_model)
+                         callback=progress, fault_model=args.fault_model,
+                         nuisance=_nuisance_option(args.nuisance))
     finally:
         progress.close()
     diag = diagnose(ident.k, params=params, fault_model=ident.fault_model,
@@ -403,7 +423,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--plot", help="write measured vs identified currents and convergence (.png)")
     d.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
     d.add_argument("--quiet", action="store_true", help="no progress line")
-    _plant_arguments(d, diagnose=True)
+    d.add_argument("--nuisance", default=None,
+                   help="parameters searched with k so that a drift is not read as a fault: "
+                        "none, R (winding resistance), flux, or R,flux; default R,flux for "
+                        "calibrated --params, none for a data sheet")
     d.set_defaults(func=cmd_diagnose)
 
     cal = sub.add_parser("calibrate", help="estimate a healthy unit's parameters from its traces",

@@ -224,7 +224,8 @@ class Eq4Objective:
     @classmethod
     def from_trace(cls, trace: Trace, params: ActuatorParams | None = None, *, n_sub: int = 1,
                    mode: str = "phases", load_torque: np.ndarray | None = None,
-                   fault_model: str | None = None) -> "Eq4Objective":
+                   fault_model: str | None = None,
+                   nuisance: tuple[str, ...] = ()) -> "Eq4Objective":
         """Fitness against ``trace``: the model replays its command from its first angle.
 
         The load torque is the one of the profile stored in the trace's metadata
@@ -252,7 +253,7 @@ class Eq4Objective:
         load_torque = load_torque + params.load.T_0
         profile = Profile.from_samples(t_model, on_grid.theta_ref, load_torque)
         model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]),
-                                fault_model=fault_model)
+                                fault_model=fault_model, nuisance=tuple(nuisance))
         i = np.asarray(on_grid.i_abc)
         raw = np.asarray(trace.i_abc)
         if not params.sensors.ideal:

@@ -15,13 +15,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .faults import K_LOWER, K_NAMES, K_NOMINAL, K_UPPER, as_k, error_pct
+from .faults import K_NAMES, K_NOMINAL, N_K, as_k, error_pct
 from .fitness import Eq4Objective, misfit_limit
 from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination, WallClock,
                     get_optimizer, minimize)
 from .optim.local import compass_search
 from .params import ActuatorParams
-from .search import default_search, to_k
+from .search import default_search, nuisance_from_unit, to_k
 from .traces import Trace, TraceError, validate
 
 __all__ = ["Identification", "identify", "parse_budget"]
@@ -106,6 +106,7 @@ class Identification:
     run_evaluations: int = 0
     fault_model: str = "paper"
     compile_s: float = 0.0
+    nuisance: dict = field(default_factory=dict)
 
     @property
     def evals_per_s(self) -> float:
@@ -124,6 +125,7 @@ class Identification:
             "iterations": int(self.iterations),
             "elapsed_s": float(self.elapsed_s),
             "compile_s": float(self.compile_s),
+            "nuisance": dict(self.nuisance),
             "kernel_s": float(self.kernel_s),
             "evals_per_s": float(self.evals_per_s),
             "reason": self.reason,
@@ -145,6 +147,10 @@ class Identification:
             d["error_pct_raw"] = self.error_pct_raw
         return d
 
+
+#: Nuisance parameters searched with k by default for a calibrated unit: what drifts most
+#: after a calibration (winding resistance and magnet flux, with temperature).
+DRIFT_NUISANCE = ("R", "flux")
 
 #: Restarts after a fit far above the noise floor, when no budget is given.
 DEFAULT_RESTARTS = 2
@@ -193,8 +199,8 @@ class _Run:
 
 
 def _search(fitness: Callable[[np.ndarray], np.ndarray], optimizer: Any, seed: int,
-            termination: Any, callback: Any, polish: bool, t0: float) -> _Run:
-    box = (K_LOWER, K_UPPER)
+            termination: Any, callback: Any, polish: bool, t0: float, n_var: int = 8) -> _Run:
+    box = (np.zeros(n_var), np.ones(n_var))
     res: OptimizeResult = minimize(fitness, box, optimizer, seed=seed, termination=termination,
                                    callback=callback)
     z, fun, history = res.x, float(res.fun), np.asarray(res.history, dtype=float)
@@ -231,7 +237,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
              suspect_ratio: float | None = None,
              callback: Callable[[Any], bool | None] | None = None,
              objective: Eq4Objective | None = None,
-             fault_model: str | None = None) -> Identification:
+             fault_model: str | None = None,
+             nuisance: tuple[str, ...] | None = None) -> Identification:
     """Identify the fault vector of ``trace``.
 
     Parameters
@@ -284,6 +291,15 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         Mapping of k3..k5 in the monitoring model (:data:`emaphm.faults.FAULT_MODELS`);
         default the trace's own (:func:`emaphm.fitness.trace_fault_model`: its
         metadata's, ``"physical"`` for a bench trace).
+    nuisance
+        Nuisance parameters searched jointly with k (names of
+        :data:`emaphm.search.NUISANCE_RANGE`: ``"R"`` the winding resistance, ``"flux"``
+        the magnet flux, as relative deviations from ``params`` within that range), so
+        that a unit that drifted since its calibration is not read as faulty; reported
+        in ``Identification.nuisance``, never in k. Default: ``("R", "flux")`` when
+        ``params`` carry a calibration (``emaphm calibrate``; the parameters that drift
+        most after it, with the winding's and the magnets' temperature), none for data-sheet
+        parameters (a prebuilt ``objective`` brings its own).
     """
     if algorithm not in ALL_ALGORITHMS:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose one of "
@@ -305,8 +321,13 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     optimizer = get_optimizer(algorithm, **(options or {}))
     validate(trace)
     if objective is None:
+        if nuisance is None:
+            nuisance = DRIFT_NUISANCE if params is not None and params.calibration.date else ()
         objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode,
-                                            fault_model=fault_model)
+                                            fault_model=fault_model, nuisance=tuple(nuisance))
+    elif nuisance is not None and tuple(nuisance) != objective.model.nuisance:
+        raise ValueError(f"nuisance {tuple(nuisance)} differs from the prebuilt objective's "
+                         f"{objective.model.nuisance}")
     elif fault_model is not None and fault_model != objective.model.fault_model:
         raise ValueError(f"fault_model {fault_model!r} differs from the prebuilt objective's "
                          f"{objective.model.fault_model!r}")
@@ -321,11 +342,21 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     e0 = objective.stats.diverged
     t0 = time.perf_counter()
 
+    nu_names = objective.model.nuisance
+    n_var = N_K + len(nu_names)
+
+    def full(Z: np.ndarray) -> np.ndarray:
+        """Search points -> candidate rows [k, nuisance]."""
+        Z = np.atleast_2d(Z)
+        if not nu_names:
+            return to_k(Z, search)
+        return np.hstack([to_k(Z[:, :N_K], search), nuisance_from_unit(Z[:, N_K:], nu_names)])
+
     def fitness(Z: np.ndarray) -> np.ndarray:
-        return objective(to_k(Z, search))
+        return objective(full(Z))
 
     def run(run_seed: int) -> _Run:
-        return _search(fitness, optimizer, run_seed, termination, callback, polish, t0)
+        return _search(fitness, optimizer, run_seed, termination, callback, polish, t0, n_var)
 
     best = run(int(seed))
     runs = [best]
@@ -345,10 +376,11 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
                          "model diverged (infinite fitness); the trace's command or load "
                          "(metadata) or the parameters (--params) do not describe a working "
                          "actuator")
-    k_raw = np.clip(to_k(res.x, search)[0], 0.0, 1.0)
-    k = np.clip(to_k(z, search)[0], 0.0, 1.0)
+    k_raw = np.clip(to_k(np.atleast_2d(res.x)[:, :N_K], search)[0], 0.0, 1.0)
+    k = np.clip(to_k(np.atleast_2d(z)[:, :N_K], search)[0], 0.0, 1.0)
+    nu = full(z)[0, N_K:]
     elapsed = time.perf_counter() - t0
-    pop = objective.model.simulate(k)
+    pop = objective.model.simulate(k, nu)
     model_trace = Trace(t=pop.t + float(trace.t[0]), theta_ref=pop.theta_ref, theta_m=pop.theta_m[0],
                         omega_m=pop.omega_m[0], i_abc=pop.i_abc[0], torque=pop.torque[0],
                         meta={"model": "monitoring", "k": k.tolist(), "identified_from":
@@ -362,6 +394,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         k_true=k_true, error_pct=None if k_true is None else float(error_pct(k, k_true)),
         diverged=objective.stats.diverged - e0,
         fault_model=fault_model, compile_s=compile_s,
+        nuisance={n: float(v) for n, v in zip(nu_names, nu)},
         options={**(options or {}), "n_sub": n_sub, "mode": mode, "polish": bool(polish),
                  "search": search,
                  "budget": None if budget is None else str(budget)},

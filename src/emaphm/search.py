@@ -28,12 +28,27 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search"]
+__all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search",
+           "NUISANCE_RANGE", "nuisance_from_unit"]
 
 SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc")
 
 #: Largest shorted fraction the sparse short-circuit search ``"ecc-xy-sc"`` reaches.
 SC_SEARCH_MAX = 0.6
+
+
+#: Range of each nuisance parameter in the search (relative deviation from the
+#: parameters given, calibrated or data sheet): a winding warmer than at calibration
+#: (up to +30 %, about 75 K) or cooler, and the magnets' flux within +-6 % (temperature).
+NUISANCE_RANGE = {"R": (-0.1, 0.3), "flux": (-0.06, 0.06)}
+
+
+def nuisance_from_unit(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Nuisance values (n_pop, m) from their unit-box coordinates (n_pop, m)."""
+    Z = np.atleast_2d(np.asarray(Z, dtype=float))
+    lo = np.array([NUISANCE_RANGE[n][0] for n in names])
+    hi = np.array([NUISANCE_RANGE[n][1] for n in names])
+    return lo + Z * (hi - lo)
 
 
 def default_search(fault_model: str) -> str:

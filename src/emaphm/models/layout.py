@@ -152,23 +152,40 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     return P, row[None, :]
 
 
+#: Nuisance parameters a candidate may carry beside its k: relative deviations of the
+#: winding resistance (``"R"``, a warmer winding) and of the magnet flux (``"flux"``: the
+#: back-EMF coefficient, so the torque per ampere) from the nominal parameters.
+NUISANCE = ("R", "flux")
+
+
 def pack_population(nominal: ActuatorParams, K: np.ndarray, theta0: float = 0.0,
-                    fault_model: str = "paper", *, n_sub: int = 1) -> tuple[np.ndarray, np.ndarray]:
+                    fault_model: str = "paper", *, n_sub: int = 1,
+                    nuisance: tuple[str, ...] = ()) -> tuple[np.ndarray, np.ndarray]:
     """``(P, CP)`` for a population of fault vectors ``K`` (n_pop, 8) on a healthy actuator.
 
     ``fault_model`` maps k3..k5 (:func:`emaphm.faults.apply_faults`): ``"paper"``
     scales R, L, c0; ``"physical"`` shorts a fraction ``mu`` of the turns across the
-    nominal ``Motor.R_f``. ``n_sub``: sub-steps per control period. Rows of K are not
+    nominal ``Motor.R_f``. ``n_sub``: sub-steps per control period. ``nuisance``:
+    names from :data:`NUISANCE`; ``K`` then has ``8 + len(nuisance)`` columns, the
+    extra ones each candidate's relative deviation of that parameter. Rows of K are not
     range-checked here (the optimizers keep them in the box); use
     :func:`emaphm.faults.as_k` for user input.
     """
     check_fault_model(fault_model)
+    bad = [n for n in nuisance if n not in NUISANCE]
+    if bad:
+        raise ValueError(f"unknown nuisance parameter(s) {bad}; choose from {', '.join(NUISANCE)}")
     K = np.atleast_2d(np.asarray(K, dtype=float))
-    if K.ndim != 2 or K.shape[1] != N_K:
-        raise ValueError(f"population of fault vectors must have shape (n_pop, {N_K}), got {K.shape}")
+    if K.ndim != 2 or K.shape[1] != N_K + len(nuisance):
+        raise ValueError(f"population of fault vectors must have shape (n_pop, {N_K + len(nuisance)})"
+                         f" ({N_K} k and {len(nuisance)} nuisance), got {K.shape}")
+    K, NU = K[:, :N_K], K[:, N_K:]
     P, base = pack(nominal, theta0, fault_model, n_sub=n_sub)
     m = nominal.motor
     CP = np.repeat(base, K.shape[0], axis=0)
+    for j, name in enumerate(nuisance):
+        cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
+        CP[:, cols] *= 1.0 + NU[:, j:j + 1]
     CP[:, C_KP] *= gain_scale(K[:, 7])
     fs = friction_scale(K[:, 0])
     CP[:, C_FSJ] *= fs
@@ -203,4 +220,4 @@ def _population_matrices(R, L, sigma, mu, R_f, dt):
 
 
 __all__ = ["pack", "pack_shared", "pack_population", "winding_step_matrices", "MU_MIN", "N_P",
-           "N_CP", "as_k"]
+           "N_CP", "NUISANCE", "as_k"]

@@ -282,6 +282,11 @@ class MonitoringModel:
         vector lanes (about 5x faster); ``"scalar"``: :func:`_kernel` of this module,
         one candidate after another, the readable batched reference the SIMD kernel is
         tested against. Both compute the same model to round-off.
+    nuisance : tuple of str
+        Nuisance parameters each candidate carries after its 8 k
+        (:data:`emaphm.models.layout.NUISANCE`: relative deviations of the winding
+        resistance ``"R"`` and the magnet flux ``"flux"``); populations then have
+        ``8 + len(nuisance)`` columns.
     """
 
     params: ActuatorParams = field(default_factory=siemens_1fk7060)
@@ -290,6 +295,7 @@ class MonitoringModel:
     theta0: float = 0.0
     kernel: str = "simd"
     fault_model: str = "paper"
+    nuisance: tuple = ()
 
     def __post_init__(self) -> None:
         if isinstance(self.n_sub, bool) or not isinstance(self.n_sub, int) or self.n_sub < 1:
@@ -297,6 +303,13 @@ class MonitoringModel:
         if self.kernel not in ("simd", "scalar"):
             raise ValueError(f"MonitoringModel.kernel must be 'simd' or 'scalar', got {self.kernel!r}")
         check_fault_model(self.fault_model)
+        object.__setattr__(self, "nuisance", tuple(self.nuisance))
+        from .layout import NUISANCE
+
+        bad = [n for n in self.nuisance if n not in NUISANCE]
+        if bad:
+            raise ValueError(f"MonitoringModel.nuisance: unknown {bad}; choose from "
+                             f"{', '.join(NUISANCE)}")
         t = self.profile.grid(self.params.inverter.T_s)
         object.__setattr__(self, "_t", t)
         object.__setattr__(self, "_ref", np.ascontiguousarray(self.profile.theta_ref(t)))
@@ -315,7 +328,8 @@ class MonitoringModel:
     def pack(self, K) -> tuple[np.ndarray, np.ndarray]:
         """``(P, CP)`` of the population ``K`` (n_pop, 8) for this model's kernels
         (:func:`emaphm.models.layout.pack_population` with its fault model and step)."""
-        return pack_population(self.params, K, self.theta0, self.fault_model, n_sub=self.n_sub)
+        return pack_population(self.params, K, self.theta0, self.fault_model, n_sub=self.n_sub,
+                               nuisance=tuple(self.nuisance))
 
     def _run(self, CP, P, i_target, weights, store):
         n_pop, n = CP.shape[0], self._t.size
@@ -338,9 +352,11 @@ class MonitoringModel:
         out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
         return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)
 
-    def simulate(self, k) -> PopulationResult:
-        """Traces of one fault vector (a population of one)."""
-        return self.simulate_population(as_k(k)[None, :])
+    def simulate(self, k, nu=None) -> PopulationResult:
+        """Traces of one fault vector (a population of one), with its nuisance values
+        ``nu`` (default zero: the nominal parameters)."""
+        nu = np.zeros(len(self.nuisance)) if nu is None else np.asarray(nu, dtype=float)
+        return self.simulate_population(np.concatenate([as_k(k), nu])[None, :])
 
     def weighted_sse(self, K, i_target: np.ndarray, weights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``sum_k sum_j weights (i_j - i_target)^2`` per candidate, without storing traces.
