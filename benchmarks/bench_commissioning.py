@@ -15,7 +15,8 @@ unreported load within +-0.1 N m). Per unit:
 3. the healthy trace diagnosed with the calibrated parameters: verdict;
 4. one fault added to the unit (in turn: friction x2.5, backlash at k2 = 0.75, gain
    drift k8 = 0.25, an inter-turn short of 10, 20 or 30 % of phase A, B or C through
-   0.15 ohm), diagnosed with the calibrated parameters: the right mode alone (the
+   0.15 ohm), diagnosed with the calibrated parameters (and so, by default, with the
+   winding resistance and magnet flux searched beside k): the right mode alone (the
    right phase for a short), and the Eq. 9 error.
 
 Units use seeds 20000+, apart from every seed used to set a threshold; ``--tune``

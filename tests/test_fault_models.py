@@ -91,3 +91,16 @@ def test_cli_simulate_records_fault_model_and_unit(tmp_path, capsys):
     assert main(["simulate", "--scenario", "nominal", "--tolerances", "t.toml",
                  "--out", str(out)]) == 2
     assert "--tolerances needs --unit-seed" in capsys.readouterr().err
+
+
+def test_cli_nuisance_option_is_checked(tmp_path, capsys):
+    out = tmp_path / "t.csv"
+    assert main(["simulate", "--scenario", "nominal", "--model", "monitoring", "--seed", "1",
+                 "--out", str(out)]) == 0
+    assert main(["diagnose", str(out), "--nuisance", "J", "--quiet"]) == 2
+    assert "give none or a comma-separated subset of R, flux" in capsys.readouterr().err
+    assert main(["diagnose", str(out), "--nuisance", "R,R", "--quiet"]) == 2
+    assert main(["diagnose", str(out), "--nuisance", "R", "--budget", "400", "--quiet",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert set(d["nuisance"]) == {"R"} and d["verdict"] in ("healthy", "faulty", "unexplained")

@@ -427,6 +427,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="parameters searched with k so that a drift is not read as a fault: "
                         "none, R (winding resistance), flux, or R,flux; default R,flux for "
                         "calibrated --params, none for a data sheet")
+    _plant_arguments(d, diagnose=True)
     d.set_defaults(func=cmd_diagnose)
 
     cal = sub.add_parser("calibrate", help="estimate a healthy unit's parameters from its traces",
