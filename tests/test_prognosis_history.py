@@ -291,3 +291,71 @@ def test_default_db_from_environment(tmp_path, capsys, monkeypatch):
     assert _run(["history", "register", "EMA-E"], capsys)[0] == 0
     assert (tmp_path / "env.sqlite").exists()
     assert hist.DEFAULT_DB == "emaphm-history.sqlite"
+
+
+# ----------------------------------------------------------------------------- calibrations
+
+def test_a_recalibration_is_an_event_and_later_inspections_use_it(tmp_path):
+    import sqlite3
+    from dataclasses import replace
+
+    from emaphm.params import Calibration, siemens_1fk7060
+
+    p = siemens_1fk7060()
+    cal = replace(p, motor=replace(p.motor, J_m=8.0e-4),
+                  calibration=Calibration(date="2026-11-23", sources=("h1.csv",)))
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-C")
+        assert h.calibration("EMA-C") is None
+        h.calibrate("EMA-C", 100.0, cal, sources=["h1.csv"])
+        h.calibrate("EMA-C", 300.0, replace(cal, motor=replace(cal.motor, J_m=9.0e-4)))
+        assert h.calibration("EMA-C", at=50.0) is None
+        t, got = h.calibration("EMA-C", at=200.0)
+        assert t == 100.0 and got == cal
+        assert h.calibration("EMA-C")[1].motor.J_m == 9.0e-4
+        with pytest.raises(HistoryError, match="register"):
+            h.calibrate("EMA-X", 1.0, cal)
+        with pytest.raises(HistoryError, match="finite number"):
+            h.calibrate("EMA-C", float("nan"), cal)
+    # a store of schema 1 (before calibrations) gains the table when opened
+    old = tmp_path / "old.sqlite"
+    with HealthHistory(old) as h:
+        h.register("EMA-O")
+    con = sqlite3.connect(old)
+    con.execute("DROP TABLE calibrations")
+    con.execute("PRAGMA user_version = 1")
+    con.commit()
+    con.close()
+    with HealthHistory(old) as h:
+        assert h.calibration("EMA-O") is None
+        h.calibrate("EMA-O", 1.0, cal)
+        assert h.calibration("EMA-O")[1] == cal
+
+
+def test_cli_history_calibrate_then_add_diagnoses_with_the_calibration(tmp_path, capsys):
+    import json
+
+    from emaphm.cli import main
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+    from emaphm.traces import write_trace
+
+    paths = []
+    for seed, k in ((1, None), (2, None), (3, [0, 0, 0.15, 0, 0, 0, 0.5, 0.5])):
+        tr = simulate(k, model="monitoring", sensors=DEFAULT_SENSORS, seed=seed,
+                      fault_model="physical")
+        paths.append(str(tmp_path / f"t{seed}.csv"))
+        write_trace(tr, paths[-1])
+    db = str(tmp_path / "h.sqlite")
+    assert main(["history", "register", "EMA-7", "--db", db]) == 0
+    assert main(["history", "calibrate", "EMA-7", paths[0], paths[1], "--at", "10",
+                 "--db", db, "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["at"] == 10.0
+    assert main(["history", "calibrate", "EMA-7", str(tmp_path / "none.csv"), "--at", "11",
+                 "--db", db]) == 2
+    assert main(["history", "add", "EMA-7", paths[2], "--at", "20", "--db", db, "--json",
+                 "--quiet", "--budget", "3000"]) == 0
+    ins = json.loads(capsys.readouterr().out)
+    assert ins["extra"]["calibrated_at"] == 10.0
+    assert set(ins["extra"]["nuisance"]) == {"R", "flux"}      # calibrated: drift searched
+    assert ins["fault_model"] == "physical"
+    assert ins["extra"]["parameters"]["calibration"]["sources"] == ["t1.csv", "t2.csv"]

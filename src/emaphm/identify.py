@@ -152,6 +152,12 @@ class Identification:
 #: after a calibration (winding resistance and magnet flux, with temperature).
 DRIFT_NUISANCE = ("R", "flux")
 
+def default_nuisance(params: ActuatorParams | None) -> tuple[str, ...]:
+    """The nuisance parameters searched by default: :data:`DRIFT_NUISANCE` for calibrated
+    parameters, none for a data sheet."""
+    return DRIFT_NUISANCE if params is not None and params.calibration.date else ()
+
+
 #: Restarts after a fit far above the noise floor, when no budget is given.
 DEFAULT_RESTARTS = 2
 
@@ -322,7 +328,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     validate(trace)
     if objective is None:
         if nuisance is None:
-            nuisance = DRIFT_NUISANCE if params is not None and params.calibration.date else ()
+            nuisance = default_nuisance(params)
         objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode,
                                             fault_model=fault_model, nuisance=tuple(nuisance))
     elif nuisance is not None and tuple(nuisance) != objective.model.nuisance:

@@ -68,6 +68,34 @@ def cmd_register(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    from ..calibration import CalibrationError, calibrate
+    from ..params import load_params, siemens_1fk7060
+    from ..traces import read_trace
+    from .history import HealthHistory
+
+    base = load_params(args.params, partial=True) if args.params else siemens_1fk7060()
+    with HealthHistory(_db(args), create=False) as h:
+        h.actuator(args.actuator)                     # cheap checks before the fit
+        traces = []
+        for name in args.traces:
+            if not Path(name).exists():
+                raise _usage(f"trace file {name} does not exist")
+            traces.append(read_trace(name))
+        try:
+            res = calibrate(traces, base, sources=[Path(n).name for n in args.traces])
+        except CalibrationError as exc:
+            raise _usage(str(exc)) from None
+        h.calibrate(args.actuator, args.at, res.params, sources=args.traces)
+    if args.json:
+        print(json.dumps({**res.to_dict(), "actuator": args.actuator, "at": args.at}))
+    else:
+        print(res.summary())
+    print(f"recorded the calibration of {args.actuator} at {args.at:g}: its inspections from "
+          "then on are diagnosed with it", file=sys.stderr)
+    return 0
+
+
 def cmd_list(args: argparse.Namespace) -> int:
     from .history import HealthHistory
 
@@ -372,6 +400,18 @@ def register(subparsers: Any) -> None:
     _db_arg(r)
     r.set_defaults(func=cmd_register)
 
+    c = hs.add_parser("calibrate", help="calibrate an actuator on healthy traces and record it",
+                      description="Run emaphm calibrate on traces of the actuator known to be "
+                                  "healthy and record the result: inspections at or after --at "
+                                  "are diagnosed with these parameters unless --params is given.")
+    c.add_argument("actuator")
+    c.add_argument("traces", nargs="+", help="healthy traces (.csv or .parquet)")
+    c.add_argument("--at", type=_time, required=True, help="time of the calibration")
+    c.add_argument("--params", help="data-sheet parameters TOML (default: the preset)")
+    c.add_argument("--json", action="store_true")
+    _db_arg(c)
+    c.set_defaults(func=cmd_calibrate)
+
     a = hs.add_parser("add", help="diagnose a trace and record it as an inspection")
     a.add_argument("actuator")
     a.add_argument("trace", help="trace file (.csv or .parquet)")
@@ -386,7 +426,8 @@ def register(subparsers: Any) -> None:
     a.add_argument("--spread", choices=SPREAD_METHODS, default="population",
                    help="interval of k: population (free, default), seeds or bootstrap")
     a.add_argument("--runs", type=int, default=5, help="identifications for seeds/bootstrap (default 5)")
-    a.add_argument("--params", help="actuator parameters TOML")
+    a.add_argument("--params", help="actuator parameters TOML (default: the actuator's latest "
+                                    "calibration at that time, else the preset)")
     a.add_argument("--json", action="store_true")
     a.add_argument("--quiet", action="store_true")
     _db_arg(a)

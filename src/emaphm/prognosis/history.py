@@ -21,7 +21,8 @@ Errors are :class:`HistoryError` (a ``ValueError``) with a message that says
 what to do: an unknown actuator (register it first: ``emaphm history register
 ID``), a time that does not move forward, a trace already recorded.
 
-Schema (``PRAGMA user_version = 1``)::
+Schema (``PRAGMA user_version = 2``; a version-1 store gains the calibrations table
+when opened)::
 
     actuators(id TEXT PRIMARY KEY, description TEXT, time_unit TEXT, created_utc TEXT,
               updated_utc TEXT)
@@ -31,6 +32,9 @@ Schema (``PRAGMA user_version = 1``)::
                 fingerprint TEXT, algorithm TEXT, seed INTEGER, fitness REAL,
                 evaluations INTEGER, source TEXT, recorded_utc TEXT, extra TEXT (JSON),
                 UNIQUE(actuator, time))
+    calibrations(id INTEGER PRIMARY KEY, actuator TEXT REFERENCES actuators(id),
+                 time REAL, params TEXT (JSON, ActuatorParams.to_dict), sources TEXT (JSON),
+                 recorded_utc TEXT)
 """
 
 from __future__ import annotations
@@ -55,7 +59,7 @@ __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError
            "TimeOrderError", "DuplicateInspectionError", "Actuator", "Inspection", "HistoryData",
            "HealthHistory", "trace_fingerprint", "inspect", "DEFAULT_DB"]
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 TIME_UNITS = ("h", "cycles")
 
 #: Database used by the CLI when neither ``--db`` nor ``$EMAPHM_HISTORY`` names one.
@@ -93,6 +97,14 @@ CREATE TABLE inspections (
     UNIQUE (actuator, time)
 );
 CREATE INDEX inspections_fingerprint ON inspections(actuator, fingerprint);
+CREATE TABLE calibrations (
+    id INTEGER PRIMARY KEY,
+    actuator TEXT NOT NULL REFERENCES actuators(id),
+    time REAL NOT NULL CHECK (time >= 0),
+    params TEXT NOT NULL,
+    sources TEXT NOT NULL DEFAULT '[]',
+    recorded_utc TEXT NOT NULL
+);
 CREATE TRIGGER inspections_time_forward BEFORE INSERT ON inspections
 WHEN NEW.time <= (SELECT MAX(time) FROM inspections WHERE actuator = NEW.actuator)
 BEGIN
@@ -281,6 +293,13 @@ class HealthHistory:
             except HistoryError:
                 self._con.close()
                 raise
+        elif version == 1:                           # before calibrations were recorded
+            with self._transaction() as con:
+                if con.execute("PRAGMA user_version").fetchone()[0] == 1:
+                    for statement in _statements(_SCHEMA):
+                        if statement.startswith("CREATE TABLE calibrations"):
+                            con.execute(statement)
+                    con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
         elif version > SCHEMA_VERSION:
             self._con.close()
             raise HistoryError(f"{self.path} has schema version {version}, newer than this "
@@ -316,6 +335,39 @@ class HealthHistory:
     def integrity_check(self) -> str:
         """SQLite's ``PRAGMA integrity_check`` (``"ok"`` when sound)."""
         return str(self._con.execute("PRAGMA integrity_check").fetchone()[0])
+
+    # ------------------------------------------------------------------ calibrations
+    def calibrate(self, actuator_id: str, time: float, params: Any,
+                  sources: Sequence[str] = ()) -> None:
+        """Record that ``actuator_id`` was (re)calibrated at ``time`` to ``params``
+        (:class:`emaphm.params.ActuatorParams`, e.g. from :func:`emaphm.calibration.calibrate`);
+        its inspections from then on are diagnosed with them by default."""
+        self.actuator(actuator_id)
+        t = float(time)
+        if not (math.isfinite(t) and t >= 0):
+            raise HistoryError(f"calibration time must be a finite number >= 0, got {time!r}")
+        with self._transaction() as con:
+            con.execute("INSERT INTO calibrations (actuator, time, params, sources, recorded_utc) "
+                        "VALUES (?, ?, ?, ?, ?)",
+                        (actuator_id, t, _json(params.to_dict()),
+                         _json([str(s) for s in sources]), _now()))
+
+    def calibration(self, actuator_id: str, at: float | None = None) -> tuple[float, Any] | None:
+        """``(time, params)`` of the latest calibration of ``actuator_id`` at or before
+        ``at`` (the latest of all without ``at``), or None if it was never calibrated."""
+        from ..params import ActuatorParams
+
+        self.actuator(actuator_id)
+        q = "SELECT time, params FROM calibrations WHERE actuator = ?"
+        args: list[Any] = [actuator_id]
+        if at is not None:
+            q += " AND time <= ?"
+            args.append(float(at))
+        row = self._con.execute(q + " ORDER BY time DESC, id DESC LIMIT 1", args).fetchone()
+        if row is None:
+            return None
+        return float(row[0]), ActuatorParams.from_dict(json.loads(row[1]),
+                                                       source=f"calibration of {actuator_id}")
 
     # ------------------------------------------------------------------ actuators
     def register(self, actuator_id: str, *, description: str = "", time_unit: str = "h") -> Actuator:
@@ -496,12 +548,19 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     fp = trace_fingerprint(trace)
     history.check_next(actuator_id, at, fp)
     validate(trace)
+    calibrated_at = None
+    if params is None:                 # the actuator's own calibration, where it has one
+        cal = history.calibration(actuator_id, at)
+        if cal is not None:
+            calibrated_at, params = cal
     a = identify_with_spread(trace, seed=seed, method=method, params=params, **kwargs)
     ident = a.identification
     diag = diagnose(a.k, thresholds=thresholds, params=params, fault_model=ident.fault_model,
                     fit_ratio=fit_ratio_of(ident))
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
              "fault_model": ident.fault_model,
+             "calibrated_at": calibrated_at,
+             "nuisance": dict(ident.nuisance),
              "parameters": None if params is None else params.to_dict(),
              "k_true": None if ident.k_true is None else ident.k_true.tolist(),
              "interval_details": {k: v for k, v in a.interval.details.items()

@@ -152,9 +152,10 @@ class _Recorder:
         return np.concatenate(self.K), np.concatenate(self.f)
 
 
-def _residual(objective: Any, k: np.ndarray) -> np.ndarray:
-    """Weighted residual sqrt(w) (model - measured) at ``k`` on the model grid (n, c)."""
-    pop = objective.model.simulate(k)
+def _residual(objective: Any, k: np.ndarray, nu: Any = None) -> np.ndarray:
+    """Weighted residual sqrt(w) (model - measured) at ``k`` (and nuisance values ``nu``)
+    on the model grid (n, c)."""
+    pop = objective.model.simulate(k, nu)
     i = np.asarray(pop.i_abc[0], dtype=float)
     target, weights = np.asarray(objective.target), np.asarray(objective.weights)
     if target.shape[1] == 1:          # "equivalent" fitness mode
@@ -221,7 +222,7 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     :func:`emaphm.identify.identify`; ``objective`` a prebuilt Eq. 4 objective.
     """
     from ..fitness import misfit_limit
-    from ..identify import identify
+    from ..identify import default_nuisance, identify
 
     if suspect_ratio is None:
         suspect_ratio = misfit_limit()
@@ -232,9 +233,12 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     if np.any(~np.isfinite(floor)) or np.any(floor < 0):
         raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
     t0 = time.perf_counter()
+    nu = kwargs.pop("nuisance", None)
+    nu = default_nuisance(params) if nu is None else tuple(nu)
     base = objective if objective is not None else Eq4Objective.from_trace(
         trace, params, n_sub=kwargs.get("n_sub", 1), mode=kwargs.get("mode", "phases"),
-        fault_model=kwargs.get("fault_model"))
+        fault_model=kwargs.get("fault_model"),
+        nuisance=nu)
     rec = _Recorder(base)
     run_seeds = [int(s.generate_state(1)[0] % (2 ** 31))
                  for s in np.random.SeedSequence(int(seed)).spawn(n_runs + 1)]
@@ -254,9 +258,10 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
     if method == "seeds":
         runs = [r for r in runs if r.fitness <= limit] or runs
     K, f = rec.points()
+    K = K[:, :8]                       # the intervals are of k (nuisance columns follow it)
     best = min(runs, key=lambda r: r.fitness)
     f_min = float(min(np.min(f[np.isfinite(f)]) if np.isfinite(f).any() else np.inf, best.fitness))
-    res = _residual(base, best.k)
+    res = _residual(base, best.k, [best.nuisance[n] for n in base.model.nuisance] or None)
     n_eff, tau = effective_samples(res)
     details = {"n_eff": n_eff, "tau": tau, "f_min": f_min, "evaluated": int(f.size),
                "chi2_crit": float(stats.chi2.ppf(level, 1)), "f_noise": f_noise,
