@@ -27,7 +27,7 @@ from emaphm.models.plant_mechanics import (contact_torque, plant_step, stribeck_
                                            stribeck_torque)
 from emaphm.models.pmsm import back_emf_coeffs
 from emaphm.models.reference import _run, electrical_step, run_reference
-from emaphm.params import Plant, siemens_1fk7060
+from emaphm.params import siemens_1fk7060
 from emaphm.profiles import diagnostic, step
 
 PARAMS = siemens_1fk7060()

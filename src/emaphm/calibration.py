@@ -293,16 +293,15 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         for c, n in enumerate(names):
             if n.startswith("gain_") or n.startswith("offset_"):
                 j = "abc".index(n[-1])
-                col, off = [], 0
+                col = []
                 for i, tg in zip(cur or [np.zeros_like(t.i_meas) for t in targets], targets):
                     d = np.zeros_like(tg.i_meas)
                     d[:, j] = (g0[j] * i[:, j] if n.startswith("gain_") else 1.0) * tg.sqrt_w[:, j]
                     col.append(d.ravel())
                 J[:, c] = np.concatenate(col)
                 continue
-            lo, hi = PARAMETERS[n][0], PARAMETERS[n][1]
             h = 1e-3 * max(1.0, abs(x[c]))
-            if x[c] + h > hi:
+            if x[c] + h > PARAMETERS[n][1]:
                 h = -h
             xh = np.array(x, dtype=float)
             xh[c] += h
