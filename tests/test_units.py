@@ -76,3 +76,41 @@ def test_sensor_gain_and_offset_act_per_phase():
     assert np.array_equal(same, i)
     with pytest.raises(ValueError, match="Sensors.gain"):
         Sensors(gain=(1.0, 1.0))
+
+
+def test_a_faster_recording_through_an_anti_alias_filter():
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+
+    s = Sensors(current_noise=0.02, current_lsb=DEFAULT_SENSORS.current_lsb, f_sample=20000.0,
+                aa_order=2, aa_cutoff=4000.0)
+    tr = simulate(scenario="friction-high", model="monitoring", sensors=s, seed=5)
+    assert np.median(np.diff(tr.t)) == pytest.approx(5e-5)
+    assert tr.t[-1] <= 0.5 and tr.meta["sensors"]["aa_cutoff"] == 4000.0
+    # the filter makes the noise band-limited: neighbouring noise samples correlate
+    clean = simulate(scenario="friction-high", model="monitoring",
+                     sensors=Sensors(f_sample=20000.0, aa_order=2, aa_cutoff=4000.0))
+    n = tr.i_abc - clean.i_abc
+    rho = np.corrcoef(n[:-1, 0], n[1:, 0])[0, 1]
+    assert rho > 0.5
+    with pytest.raises(ValueError, match="aa_cutoff"):
+        Sensors(f_sample=20000.0, aa_order=2, aa_cutoff=12000.0)
+    with pytest.raises(ValueError, match="f_sample"):
+        Sensors(f_sample=-1.0)
+
+
+def test_band_limited_noise_is_not_read_as_misfit():
+    # 20 kHz through a 2nd-order 4 kHz anti-alias filter: the noise floor is measured on
+    # the model grid, where the band-limited noise is nearly white (before: 7x the floor,
+    # flagged and restarted); measured ratio 1.06, error 0.67 %
+    from emaphm.diagnosis import diagnose, fit_ratio_of
+    from emaphm.identify import identify
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+
+    s = Sensors(current_noise=0.02, current_lsb=DEFAULT_SENSORS.current_lsb, f_sample=20000.0,
+                aa_order=2, aa_cutoff=4000.0)
+    tr = simulate(scenario="friction-high", model="monitoring", sensors=s, seed=5)
+    ident = identify(tr, "pso", seed=0)
+    assert ident.restarts == 0 and fit_ratio_of(ident) < 1.5
+    assert ident.error_pct < 1.0
+    d = diagnose(ident.k, fault_model=ident.fault_model, fit_ratio=fit_ratio_of(ident))
+    assert d.verdict == "faulty" and d.modes == ("friction",)

@@ -117,6 +117,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         sensors = DEFAULT_SENSORS if args.seed is not None else Sensors()
     else:
         sensors = Sensors(current_noise=args.noise, current_lsb=DEFAULT_SENSORS.current_lsb)
+    if args.f_sample is not None or args.aa_cutoff is not None:
+        from dataclasses import replace
+
+        sensors = replace(sensors, f_sample=args.f_sample or 0.0,
+                          aa_order=args.aa_order if args.aa_cutoff else 0,
+                          aa_cutoff=args.aa_cutoff or 0.0)
     if sensors.current_noise > 0 and args.seed is None:
         raise UsageError("sensor noise needs --seed S (randomness always flows from an explicit seed)")
     t0 = time.perf_counter()
@@ -403,6 +409,11 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_seed, help="seed of the sensor noise (enables realistic sensors)")
     s.add_argument("--noise", type=float, help="current noise in A rms (default 0.02 with --seed, else 0)")
     s.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
+    s.add_argument("--f-sample", type=float, default=None,
+                   help="record at this rate [Hz] (default: the control instants, 8 kHz)")
+    s.add_argument("--aa-cutoff", type=float, default=None,
+                   help="anti-alias low-pass cut-off [Hz] before the ADC (needs --f-sample)")
+    s.add_argument("--aa-order", type=int, default=2, help="anti-alias Butterworth order (default 2)")
     _plant_arguments(s)
     s.set_defaults(func=cmd_simulate)
 

@@ -255,13 +255,17 @@ class Eq4Objective:
         model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]),
                                 fault_model=fault_model, nuisance=tuple(nuisance))
         i = np.asarray(on_grid.i_abc)
-        raw = np.asarray(trace.i_abc)
+        # the noise is measured on the coarser of the recorded and the model grid: a slow
+        # bench trace's own samples (resampling interpolates between them and would hide
+        # the noise), or, for a trace recorded faster than the model through an anti-alias
+        # filter, the model grid, where the comparison happens and the band-limited noise
+        # is nearly white (at the recording rate its second differences cancel it)
+        raw = np.asarray(trace.i_abc) if float(np.median(np.diff(trace.t))) >= 0.999 * T_s \
+            else i
         if not params.sensors.ideal:
             i = params.sensors.correct(i)
             raw = params.sensors.correct(raw)
         target = equivalent_current(i)[:, None] if mode == "equivalent" else i
-        # the noise is measured on the samples as recorded: resampling a slower trace
-        # onto the model grid interpolates between them and would hide it
         raw = equivalent_current(raw)[:, None] if mode == "equivalent" else raw
         return cls(model, np.ascontiguousarray(target), np.ascontiguousarray(eq4_weights(target, T_s)),
                    mode, noise_sigma=white_noise_sigma(raw))

@@ -120,7 +120,8 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
                          "the physical range; check the parameters (e.g. the current loop gains "
                          "against the inductance)")
     rng = np.random.default_rng(seed) if seed is not None else None
-    theta_m, i_abc = sensors.apply(out["theta_m"], out["i_abc"], rng)
+    t_rec, rec = sensors.record(out["t"], {k: out[k] for k in ("theta_ref", "theta_m", "omega_m",
+                                                                "i_abc", "torque")}, rng)
     meta = {
         "model": model,
         "k": kk.tolist(),
@@ -137,5 +138,5 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     }
     if model == "reference":
         meta["unit"] = unit.to_dict()
-    return Trace(t=out["t"], theta_ref=out["theta_ref"], theta_m=theta_m, omega_m=out["omega_m"],
-                 i_abc=i_abc, torque=out["torque"], meta=meta)
+    return Trace(t=t_rec, theta_ref=rec["theta_ref"], theta_m=rec["theta_m"], omega_m=rec["omega_m"],
+                 i_abc=rec["i_abc"], torque=rec["torque"], meta=meta)
