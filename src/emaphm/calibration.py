@@ -54,8 +54,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from .faults import K_NOMINAL
-from .fitness import (MIN_NOISE, check_diagnosable, effective_samples, eq4_weights,
-                      on_model_grid, white_noise_sigma)
+from .fitness import (MIN_NOISE, aligned_currents, check_diagnosable, effective_samples,
+                      eq4_weights, on_model_grid, white_noise_sigma)
 from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
 from .profiles import Profile
 from .traces import Trace, TraceError, validate
@@ -121,9 +121,8 @@ def apply_deviations(params: ActuatorParams, dev: dict[str, float]) -> ActuatorP
     trans = replace(tr, FSJ=tr.FSJ * (1 + d["friction"]), FDJ=tr.FDJ * (1 + d["friction"]))
     load = replace(ld, J_l=ld.J_l * (1 + d["J"]), T_0=ld.T_0 + d["load"])
     s = params.sensors
-    sensors = CurrentSensors(
-        gain=tuple(g * (1 + d[f"gain_{p}"]) for g, p in zip(s.gain, "abc")),
-        offset=tuple(o + d[f"offset_{p}"] for o, p in zip(s.offset, "abc")))
+    sensors = replace(s, gain=tuple(g * (1 + d[f"gain_{p}"]) for g, p in zip(s.gain, "abc")),
+                      offset=tuple(o + d[f"offset_{p}"] for o, p in zip(s.offset, "abc")))
     return replace(params, motor=motor, transmission=trans, load=load, sensors=sensors)
 
 
@@ -145,11 +144,11 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
     validate(trace)
     T_s = params.inverter.T_s
     try:
-        _, on, load = on_model_grid(trace, T_s)
+        t_model, on, load = on_model_grid(trace, T_s)
         check_diagnosable(trace)
     except TraceError as exc:
         raise CalibrationError(f"{source}: {exc}") from None
-    i = np.asarray(on.i_abc, dtype=float)
+    i = aligned_currents(trace, t_model, params.sensors.lag())
     sigma = white_noise_sigma(np.asarray(trace.i_abc, dtype=float))
     if not np.all(sigma > MIN_NOISE):
         raise CalibrationError(f"{source}: the phase currents carry no measurement noise (a "
@@ -258,7 +257,7 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         key = np.asarray(x, dtype=float).tobytes() + ",".join(names).encode()
         if key not in cache:
             p = apply_deviations(base, dict(zip(names, x)))
-            p = replace(p, sensors=CurrentSensors())
+            p = replace(p, sensors=CurrentSensors())      # applied below, after the model
             out = []
             for tg in targets:
                 count[0] += 1

@@ -31,7 +31,7 @@ from .profiles import Profile, ProfileError
 from .traces import Trace, TraceError, resample, validate
 
 __all__ = ["eq4_weights", "equivalent_current", "white_noise_sigma", "Eq4Objective",
-           "FITNESS_MODES", "trace_fault_model", "on_model_grid", "effective_samples", "check_diagnosable",
+           "FITNESS_MODES", "trace_fault_model", "on_model_grid", "aligned_currents", "effective_samples", "check_diagnosable",
            "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit"]
 
 FITNESS_MODES = ("phases", "equivalent")
@@ -55,6 +55,14 @@ def on_model_grid(trace: Trace, T_s: float) -> tuple[np.ndarray, Trace, np.ndarr
         except ProfileError:
             pass
     return t_model, resample(trace, t0 + t_model), load
+
+
+def aligned_currents(trace: Trace, t_model: np.ndarray, lag: float = 0.0) -> np.ndarray:
+    """The trace's phase currents on the model grid, read ``lag`` [s] later: a declared
+    anti-alias filter and sample delay (:meth:`emaphm.params.CurrentSensors.lag`) make
+    the recorded currents trail the drive's by that much."""
+    t = float(trace.t[0]) + t_model + lag
+    return np.stack([np.interp(t, trace.t, trace.i_abc[:, j]) for j in range(3)], axis=1)
 
 
 def trace_fault_model(trace: Trace) -> str:
@@ -254,7 +262,7 @@ class Eq4Objective:
         profile = Profile.from_samples(t_model, on_grid.theta_ref, load_torque)
         model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]),
                                 fault_model=fault_model, nuisance=tuple(nuisance))
-        i = np.asarray(on_grid.i_abc)
+        i = aligned_currents(trace, t_model, params.sensors.lag())
         # the noise is measured on the coarser of the recorded and the model grid: a slow
         # bench trace's own samples (resampling interpolates between them and would hide
         # the noise), or, for a trace recorded faster than the model through an anti-alias

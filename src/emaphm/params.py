@@ -41,6 +41,11 @@ field                      unit                meaning
 ``Plant.omega_s``          rad/s               Stribeck velocity of the dry friction
 ``Plant.K_c``              N m/rad             backlash contact stiffness
 ``Plant.D_c``              N m s/rad           backlash contact damping
+``CurrentSensors.gain``    --                  per-phase current sensor gain (calibrated)
+``CurrentSensors.offset``  A                   per-phase current sensor offset (calibrated)
+``CurrentSensors.aa_*``    --, Hz              declared anti-alias filter order, cut-off
+``CurrentSensors.delay``   s                   declared sample delay of the currents
+``Load.T_0``               N m                 constant load the trace does not report
 =========================  ==================  =====================================
 
 ``[plant]`` holds physics that only the reference plant has (the monitoring
@@ -133,6 +138,9 @@ _UNITS: dict[str, str] = {
     "T_0": "N m",
     "gain": "-, per phase",
     "offset": "A, per phase",
+    "aa_order": "-, integer 0..8",
+    "aa_cutoff": "Hz",
+    "delay": "s",
     "date": "ISO date",
     "sources": "file names",
     "estimates": "[name, value, standard error]",
@@ -320,20 +328,46 @@ class CurrentSensors:
     """Known gains and offsets of the recording's current sensors (a calibration finds them).
 
     A measured phase current is ``gain_j * i_j + offset_j``; diagnosis divides it back.
+    A known anti-alias filter (Butterworth of order ``aa_order`` at ``aa_cutoff``) and a
+    sample ``delay`` make the recorded currents lag the drive's; diagnosis aligns them
+    by that lag (:meth:`lag`, the filter's group delay at low frequency plus the delay).
     """
 
     gain: Phase3 = (1.0, 1.0, 1.0)
     offset: Phase3 = (0.0, 0.0, 0.0)
+    aa_order: int = 0
+    aa_cutoff: float = 0.0
+    delay: float = 0.0
 
     def __post_init__(self) -> None:
         o = "CurrentSensors"
+        if isinstance(self.aa_order, bool) or not isinstance(self.aa_order, int) \
+                or not 0 <= self.aa_order <= 8:
+            raise ParameterError(f"{o}.aa_order [-, integer 0..8] must be 0 (no filter) to 8, "
+                                 f"got {self.aa_order!r}")
+        object.__setattr__(self, "aa_cutoff", _check(o, "aa_cutoff", self.aa_cutoff, lo=0.0,
+                                                     strict_lo=self.aa_order > 0, hi=1e6))
+        object.__setattr__(self, "delay", _check(o, "delay", self.delay, lo=0.0,
+                                                 strict_lo=False, hi=0.01))
         object.__setattr__(self, "gain", _phase3(o, "gain", self.gain, lo=0.5, hi=2.0))
         object.__setattr__(self, "offset", _phase3(o, "offset", self.offset, lo=-5.0,
                                                     strict_lo=False, hi=5.0))
 
     @property
     def ideal(self) -> bool:
-        return self.gain == (1.0, 1.0, 1.0) and self.offset == (0.0, 0.0, 0.0)
+        return (self.gain == (1.0, 1.0, 1.0) and self.offset == (0.0, 0.0, 0.0)
+                and self.lag() == 0.0)
+
+    def lag(self) -> float:
+        """Lag [s] of the recorded currents behind the true ones at low frequency: the
+        anti-alias filter's group delay at DC (``a_1/a_0`` of its denominator, e.g.
+        ``sqrt(2)/(2 pi f_c)`` for a 2nd-order Butterworth) plus the sample delay."""
+        if not self.aa_order:
+            return float(self.delay)
+        from scipy.signal import butter
+
+        _, a = butter(self.aa_order, 2.0 * math.pi * self.aa_cutoff, analog=True)
+        return float(a[-2] / a[-1]) + float(self.delay)
 
     def correct(self, i_abc):
         """The true currents of measured ones ``i_abc (n, 3)`` (a new array)."""
@@ -396,7 +430,8 @@ _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
 #: Sections and fields added after files were first written: a file without them takes
 #: the defaults (a healthy winding, the default plant physics, ideal sensors, no calibration).
 _OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
-_OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"}}
+_OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
+                    "sensors": {"aa_order", "aa_cutoff", "delay"}}
 
 
 @dataclass(frozen=True)
