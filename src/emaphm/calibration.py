@@ -55,7 +55,7 @@ import numpy as np
 
 from .faults import K_NOMINAL
 from .fitness import (MIN_NOISE, aligned_currents, check_diagnosable, effective_samples,
-                      eq4_weights, on_model_grid, white_noise_sigma)
+                      eq4_weights, noise_samples, on_model_grid, white_noise_sigma)
 from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
 from .profiles import Profile
 from .traces import Trace, TraceError, validate
@@ -149,7 +149,7 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
     except TraceError as exc:
         raise CalibrationError(f"{source}: {exc}") from None
     i = aligned_currents(trace, t_model, params.sensors.lag())
-    sigma = white_noise_sigma(np.asarray(trace.i_abc, dtype=float))
+    sigma = white_noise_sigma(noise_samples(trace, i, T_s))
     if not np.all(sigma > MIN_NOISE):
         raise CalibrationError(f"{source}: the phase currents carry no measurement noise (a "
                                "simulated trace without sensors, or a dead channel); calibrate "

@@ -65,6 +65,18 @@ def aligned_currents(trace: Trace, t_model: np.ndarray, lag: float = 0.0) -> np.
     return np.stack([np.interp(t, trace.t, trace.i_abc[:, j]) for j in range(3)], axis=1)
 
 
+def noise_samples(trace: Trace, i_model: np.ndarray, T_s: float) -> np.ndarray:
+    """The currents to measure the noise on: those of the coarser of the recorded and the
+    model grid. A slow bench trace's own samples (resampling interpolates between them and
+    would hide the noise); for a trace recorded faster than the model through an
+    anti-alias filter, ``i_model`` on the model grid, where the comparison happens and the
+    band-limited noise is nearly white (at the recording rate second differences cancel
+    it)."""
+    if float(np.median(np.diff(trace.t))) >= 0.999 * T_s:
+        return np.asarray(trace.i_abc, dtype=float)
+    return np.asarray(i_model, dtype=float)
+
+
 def trace_fault_model(trace: Trace) -> str:
     """The fault model to diagnose ``trace`` with: the one its metadata names; ``"paper"``
     for a trace simulated by emaphm before fault models existed (metadata with a
@@ -263,13 +275,7 @@ class Eq4Objective:
         model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]),
                                 fault_model=fault_model, nuisance=tuple(nuisance))
         i = aligned_currents(trace, t_model, params.sensors.lag())
-        # the noise is measured on the coarser of the recorded and the model grid: a slow
-        # bench trace's own samples (resampling interpolates between them and would hide
-        # the noise), or, for a trace recorded faster than the model through an anti-alias
-        # filter, the model grid, where the comparison happens and the band-limited noise
-        # is nearly white (at the recording rate its second differences cancel it)
-        raw = np.asarray(trace.i_abc) if float(np.median(np.diff(trace.t))) >= 0.999 * T_s \
-            else i
+        raw = noise_samples(trace, i, T_s)
         if not params.sensors.ideal:
             i = params.sensors.correct(i)
             raw = params.sensors.correct(raw)
