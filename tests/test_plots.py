@@ -104,18 +104,49 @@ def test_plot_identification_reads_only(faulty, ident, tmp_path, monkeypatch):
     path = tmp_path / "ident.png"
     fig = plot_identification(faulty, ident, path=path)
     assert isinstance(fig, Figure)
-    assert len(fig.axes) == 4
+    assert len(fig.axes) == 5
     # measured and model currents come from the trace and the Identification as they are
     for j, ax in enumerate(fig.axes[:3]):
         np.testing.assert_array_equal(ax.lines[0].get_ydata(), faulty.i_abc[:, j])
         np.testing.assert_array_equal(ax.lines[1].get_ydata(), ident.model_trace.i_abc[:, j])
-    np.testing.assert_array_equal(fig.axes[3].lines[0].get_ydata(), ident.history)
-    assert fig.axes[3].get_yscale() == "log"
+        assert ax.lines[1].get_linestyle() == "--"          # the model does not hide the data
+    # the residual panel: measured - model of each phase, on the same grid here
+    res = fig.axes[3]
+    assert len(res.lines) == 3 and res.get_ylabel() == "measured - model [A]"
+    for j in range(3):
+        np.testing.assert_allclose(res.lines[j].get_ydata(),
+                                   faulty.i_abc[:, j] - ident.model_trace.i_abc[:, j], atol=1e-12)
+    conv = fig.axes[4]
+    np.testing.assert_array_equal(conv.lines[0].get_ydata(), ident.history)
+    assert conv.get_yscale() == "log"
+    assert conv.get_legend() is not None
     title = fig._suptitle.get_text()
     assert "PSO seed 0" in title and f"{ident.evaluations} evaluations" in title
     assert "(Eq. 9)" in title
     _assert_png(path)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ident.png"]
+
+
+def test_plot_identification_marks_the_polish_and_the_noise_floor(tmp_path):
+    from emaphm.simulate import DEFAULT_SENSORS
+
+    tr = simulate(scenario="friction-high", model="monitoring", sensors=DEFAULT_SENSORS, seed=1)
+    ident = identify(tr, "pso", seed=0, options={"pop_size": 20})
+    assert ident.polish_evaluations > 0 and ident.noise_floor > 0
+    fig = plot_identification(tr, ident)
+    conv = fig.axes[4]
+    # the curve, the end of the metaheuristic (vertical), the noise floor (horizontal)
+    assert len(conv.lines) == 3
+    assert conv.lines[1].get_xdata()[0] == pytest.approx(ident.iterations + 0.5)
+    assert conv.lines[2].get_ydata()[0] == pytest.approx(ident.noise_floor)
+    labels = [t.get_text() for t in conv.get_legend().get_texts()]
+    assert "noise floor of the trace" in labels and any("polish" in x for x in labels)
+    # the noise band of the residual panel: +-2 sigma of the trace's noise (20 mA)
+    (band,) = fig.axes[3].patches
+    y = np.asarray(band.get_path().transformed(band.get_patch_transform()).vertices)[:, 1] \
+        if not hasattr(band, "get_xy") or isinstance(band.get_xy(), tuple) \
+        else np.asarray(band.get_xy())[:, 1]
+    assert 0.03 < y.max() < 0.06 and y.min() == pytest.approx(-y.max())
 
 
 # ----------------------------------------------------------------------------- save_figure

@@ -84,30 +84,56 @@ def plot_trace(trace: "Trace", overlay: "Trace | None" = None, *,
 
 def plot_identification(measured: "Trace", ident: "Identification", *,
                         path: str | os.PathLike[str] | None = None) -> "Figure":
-    """Measured vs identified phase currents and the convergence curve."""
+    """Measured vs identified phase currents, their residual, and the convergence curve.
+
+    Panels: each phase current, measured (grey) under the monitoring model at the
+    identified k (dashed); the residual measured - model of the three phases with the
+    band of +-2 sigma of the trace's white noise (a fit at the noise floor stays inside);
+    the best fitness per iteration, the polish's polls after a dotted line, and the
+    trace's noise floor (the fitness a perfect model would reach) as a dashed line.
+    """
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=(11, 9), layout="constrained")
-    gs = fig.add_gridspec(4, 1, height_ratios=[1, 1, 1, 1.1])
+    from .fitness import white_noise_sigma
+
+    fig = Figure(figsize=(11, 11), layout="constrained")
+    gs = fig.add_gridspec(5, 1, height_ratios=[1, 1, 1, 0.9, 1.1])
     model = ident.model_trace
     first = None
     for j, name in enumerate(_PHASES):
         a = fig.add_subplot(gs[j, 0], sharex=first)
         first = first or a
-        a.plot(measured.t, measured.i_abc[:, j], color="0.55", lw=1.6, label="measured")
-        a.plot(model.t, model.i_abc[:, j], color=f"C{j + 1}", lw=0.8, label="monitoring model at k")
+        a.plot(measured.t, measured.i_abc[:, j], color="0.45", lw=1.0, label="measured")
+        a.plot(model.t, model.i_abc[:, j], color=f"C{j + 1}", lw=1.0, ls="--",
+               label="monitoring model at k")
         a.set_ylabel(f"{name} [A]")
-        a.legend(loc="upper right", fontsize=8)
-    a.set_xlabel("time [s]")
-    c = fig.add_subplot(gs[3, 0])
+        a.legend(loc="upper right", fontsize=7, framealpha=0.8)
+    r = fig.add_subplot(gs[3, 0], sharex=first)
+    for j, name in enumerate(_PHASES):
+        res = measured.i_abc[:, j] - np.interp(measured.t, model.t, model.i_abc[:, j])
+        r.plot(measured.t, res, color=f"C{j + 1}", lw=0.5, label=name)
+    sigma = float(np.max(white_noise_sigma(np.asarray(measured.i_abc, dtype=float))))
+    if sigma > 0:
+        r.axhspan(-2 * sigma, 2 * sigma, color="0.85", zorder=0, label="+-2 sigma of the noise")
+    r.set_ylabel("measured - model [A]")
+    r.set_xlabel("time [s]")
+    r.legend(loc="upper right", fontsize=7, ncol=4, framealpha=0.8)
+    c = fig.add_subplot(gs[4, 0])
     it = np.arange(1, ident.history.size + 1)
-    c.semilogy(it, ident.history, color="C0")
-    c.set_xlabel("iteration")
+    c.semilogy(it, ident.history, color="C0", label="best fitness")
+    if ident.polish_evaluations and ident.iterations < ident.history.size:
+        c.axvline(ident.iterations + 0.5, color="0.3", ls=":", lw=1.0,
+                  label=f"{ident.algorithm.upper()} ends, polish polls after")
+    if ident.noise_floor > 0:
+        c.axhline(ident.noise_floor, color="C3", ls="--", lw=1.0,
+                  label="noise floor of the trace")
+    c.set_xlabel("iteration (then polish poll)")
     c.set_ylabel("best fitness (Eq. 4)")
     c.grid(True, which="both", alpha=0.3)
+    c.legend(loc="upper right", fontsize=7, framealpha=0.8)
     title = (f"{ident.algorithm.upper()} seed {ident.seed}: k = {np.round(ident.k, 3).tolist()}, "
              f"{ident.evaluations} evaluations in {ident.elapsed_s:.2f} s")
     if ident.error_pct is not None:
