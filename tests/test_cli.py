@@ -357,3 +357,21 @@ def test_existing_output_is_kept_on_failure(workdir, capsys):
     _fails(["simulate", "--k", "0,0,0", "--out", str(out)], capsys, workdir,
            "fault vector needs 8 components")
     assert out.read_text() == "precious"
+
+
+def test_the_cli_starts_without_the_heavy_modules():
+    # `emaphm --help` and `emaphm scenarios` build the parser only: no SciPy optimizer,
+    # Matplotlib, Numba kernel or trend model is imported for that (checked by module,
+    # not by a clock)
+    import subprocess
+    import sys
+
+    code = ("import sys, emaphm.cli as c; c.build_parser(); "
+            "print('\\n'.join(sorted(sys.modules)))")
+    mods = set(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              check=True).stdout.split())
+    heavy = {"scipy.optimize", "scipy.stats", "matplotlib", "numba", "emaphm.models.monitoring",
+             "emaphm.models.monitoring_simd", "emaphm.prognosis.trends",
+             "emaphm.prognosis.uncertainty", "emaphm.campaign.runner", "emaphm.identify"}
+    assert not (heavy & mods), sorted(heavy & mods)
+    assert "emaphm.prognosis.cli" in mods and "emaphm.campaign.cli" in mods

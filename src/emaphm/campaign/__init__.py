@@ -20,14 +20,50 @@ cli                ``emaphm campaign`` and ``emaphm report``
 See ``docs/campaigns.md``.
 """
 
-from .executors import DaskExecutor, LocalExecutor, SerialExecutor, make_executor
-from .report import write_report
-from .runner import (CampaignInterrupted, CampaignSummary, ProgressLine, execute_run, replay,
-                     run_campaign)
-from .spec import (AlgorithmSpec, CampaignSpec, Run, ScenarioSpec, SpecError, available_algorithms,
-                   paper_spec)
-from .store import (CampaignStore, IncompatibleStoreError, RunResult, SpecMismatchError,
-                    StoreError)
+import importlib as _importlib
+
+#: Public name -> the submodule that defines it; imported on first use (PEP 562), so
+#: that importing one submodule (e.g. the CLI's) does not load every other one.
+_EXPORTS = {
+    "DaskExecutor": "executors",
+    "LocalExecutor": "executors",
+    "SerialExecutor": "executors",
+    "make_executor": "executors",
+    "write_report": "report",
+    "CampaignInterrupted": "runner",
+    "CampaignSummary": "runner",
+    "ProgressLine": "runner",
+    "execute_run": "runner",
+    "replay": "runner",
+    "run_campaign": "runner",
+    "AlgorithmSpec": "spec",
+    "CampaignSpec": "spec",
+    "Run": "spec",
+    "ScenarioSpec": "spec",
+    "SpecError": "spec",
+    "available_algorithms": "spec",
+    "paper_spec": "spec",
+    "CampaignStore": "store",
+    "IncompatibleStoreError": "store",
+    "RunResult": "store",
+    "SpecMismatchError": "store",
+    "StoreError": "store",
+}
+
+
+def __getattr__(name: str):
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = getattr(_importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __all__ = [
     "AlgorithmSpec",

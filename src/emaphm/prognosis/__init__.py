@@ -19,17 +19,64 @@ failure threshold:
 Data flows down that list; plots only read results.
 """
 
-from .history import (Actuator, DuplicateInspectionError, HealthHistory, HistoryData, HistoryError,
-                      Inspection, TimeOrderError, UnknownActuatorError, inspect, trace_fingerprint)
-from .metrics import (alpha_lambda, coverage, cumulative_relative_accuracy, prognostic_horizon,
-                      relative_accuracy, rul_error)
-from .simulator import (DEGRADATION_SCENARIOS, DegradationLaw, DegradationScenario,
-                        degradation_scenario, inspection_times, simulate_degradation,
-                        synthetic_k_history)
-from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
-from .trends import (Prognosis, RULPrediction, RULTrack, TrendFit, fit_trend, predict_rul, prognose,
-                     rul_track)
-from .uncertainty import Assessment, KInterval, identify_with_spread
+import importlib as _importlib
+
+#: Public name -> the submodule that defines it; imported on first use (PEP 562), so
+#: that importing one submodule (e.g. the CLI's) does not load every other one.
+_EXPORTS = {
+    "Actuator": "history",
+    "DuplicateInspectionError": "history",
+    "HealthHistory": "history",
+    "HistoryData": "history",
+    "HistoryError": "history",
+    "Inspection": "history",
+    "TimeOrderError": "history",
+    "UnknownActuatorError": "history",
+    "inspect": "history",
+    "trace_fingerprint": "history",
+    "alpha_lambda": "metrics",
+    "coverage": "metrics",
+    "cumulative_relative_accuracy": "metrics",
+    "prognostic_horizon": "metrics",
+    "relative_accuracy": "metrics",
+    "rul_error": "metrics",
+    "DEGRADATION_SCENARIOS": "simulator",
+    "DegradationLaw": "simulator",
+    "DegradationScenario": "simulator",
+    "degradation_scenario": "simulator",
+    "inspection_times": "simulator",
+    "simulate_degradation": "simulator",
+    "synthetic_k_history": "simulator",
+    "DEFAULT_FAILURE_THRESHOLDS": "thresholds",
+    "INDICATORS": "thresholds",
+    "FailureThresholds": "thresholds",
+    "Prognosis": "trends",
+    "RULPrediction": "trends",
+    "RULTrack": "trends",
+    "TrendFit": "trends",
+    "fit_trend": "trends",
+    "predict_rul": "trends",
+    "prognose": "trends",
+    "rul_track": "trends",
+    "Assessment": "uncertainty",
+    "KInterval": "uncertainty",
+    "identify_with_spread": "uncertainty",
+}
+
+
+def __getattr__(name: str):
+    try:
+        module = _EXPORTS[name]
+    except KeyError:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    value = getattr(_importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))
+
 
 __all__ = [
     "HealthHistory", "HistoryData", "Inspection", "Actuator", "inspect", "trace_fingerprint",

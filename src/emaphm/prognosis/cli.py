@@ -386,8 +386,7 @@ def register(subparsers: Any) -> None:
     """Add ``history``, ``prognose`` and ``demo-degradation`` to the ``emaphm`` parser."""
     from .simulator import DEGRADATION_SCENARIOS
     from .thresholds import INDICATORS
-    from .trends import SELECTION_RULES
-    from .uncertainty import SPREAD_METHODS
+    from .choices import SELECTION_RULES, SPREAD_METHODS
 
     hp = subparsers.add_parser("history", help="health history of actuators: register, add, show")
     hs = hp.add_subparsers(dest="history_command", required=True)

@@ -65,7 +65,7 @@ TREND_MODELS = ("linear", "exponential", "quadratic")
 _N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3}
 #: The models fitted by default.
 DEFAULT_MODELS = TREND_MODELS
-SELECTION_RULES = ("aicc", "average")
+from .choices import SELECTION_RULES  # noqa: E402  (the CLI reads it without SciPy)
 
 #: Least number of inspections for a trend with an uncertainty (two parameters + one dof).
 MIN_INSPECTIONS = 3

@@ -65,7 +65,7 @@ __all__ = ["SPREAD_METHODS", "KInterval", "Assessment", "identify_with_spread",
            "population_interval", "effective_samples",
            "IDENTIFICATION_ERROR_P90"]
 
-SPREAD_METHODS = ("population", "seeds", "bootstrap")
+from .choices import SPREAD_METHODS  # noqa: E402  (the CLI reads it without SciPy)
 
 #: 90th percentile of the per-component identification error |k_i - k_true,i| (see the
 #: module docstring; benchmarks/results/prognosis.md), rounded up, the three phases given
