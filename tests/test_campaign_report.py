@@ -130,6 +130,16 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
     assert set(comp) == set(ALGOS)
     assert float(comp["gwo"][4]) == 2630.7                    # paper_time_s, typo corrected
 
+    # every cell of a numeric column parses as a plain number (no "np.float64(...)")
+    for name in ("table3_single_faults.csv", "table4_multiple_faults.csv", "per_scenario.csv",
+                 "paper_comparison.csv"):
+        rows = _read_csv(out / name)
+        for r in rows[1:]:
+            for cell in r:
+                if cell and not cell.replace("-", "").replace("_", "").isalpha():
+                    float(cell)
+                assert "np." not in cell, (name, cell)
+
     md = (out / "report.md").read_text()
     assert "| **Total** |" in md and "2530.7 s, is a typo" in md
     assert "## Multiple faults (layout of the paper's Table 4)" in md

@@ -240,6 +240,7 @@ def _csv(path: Path, header: list[str], rows: list[list[Any]]) -> Path:
         w = csv.writer(fh)
         w.writerow(header)
         for r in rows:
+            r = [x.item() if isinstance(x, np.generic) else x for x in r]   # plain numbers
             w.writerow(["" if (isinstance(x, float) and not np.isfinite(x)) else
                         (repr(x) if isinstance(x, float) else x) for x in r])
     os.replace(tmp, path)
