@@ -217,3 +217,16 @@ def test_a_parameter_path_that_is_a_folder_or_binary_is_refused_by_name(tmp_path
     bad.write_bytes(b"\xff\xfe\x00binary")
     with pytest.raises(ParameterError, match=r"parameter file .*bin.toml is not"):
         load_params(bad)
+
+
+def test_saved_parameters_carry_each_fields_unit_as_a_comment(tmp_path):
+    from emaphm.params import load_params, save_params, siemens_1fk7060
+
+    p = tmp_path / "m.toml"
+    save_params(siemens_1fk7060(), p)
+    lines = p.read_text().splitlines()
+    for key, unit in (("R", "ohm"), ("J_m", "kg m^2"), ("Kp", "1/s"), ("K_c", "N m/rad"),
+                      ("offset", "A, per phase")):
+        i = next(n for n, line in enumerate(lines) if line.startswith(f"{key} = "))
+        assert lines[i - 1] == f"# {key} [{unit}]"
+    assert load_params(p) == siemens_1fk7060()          # the comments read back as nothing

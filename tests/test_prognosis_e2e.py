@@ -122,13 +122,17 @@ def test_spread_methods(run):
 
 
 def test_demo_degradation_cli_synthetic(capsys, tmp_path):
+    out = tmp_path / "new" / "figures"          # created where missing
     rc = main(["demo-degradation", "--scenario", "gain-drift", "--synthetic", "--inspections", "10",
-               "--json", "--plot-dir", str(tmp_path)])
+               "--json", "--plot-dir", str(out)])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d[0]["coverage_from_midlife"] >= 0.8
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["gain-drift-alpha-lambda.png",
-                                                        "gain-drift-prognosis.png"]
+    assert sorted(p.name for p in out.iterdir()) == ["gain-drift-alpha-lambda.png",
+                                                   "gain-drift-prognosis.png"]
     assert main(["demo-degradation", "--scenario", "rust"]) == 2
+    (tmp_path / "afile").write_text("x")
+    assert main(["demo-degradation", "--synthetic", "--plot-dir", str(tmp_path / "afile")]) == 2
+    assert "is a file, not a folder" in capsys.readouterr().err
 
 
 def test_example_script_runs(tmp_path):

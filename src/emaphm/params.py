@@ -551,13 +551,26 @@ def load_params(path: str | os.PathLike[str], *, partial: bool = False) -> Actua
                                     defaults=siemens_1fk7060() if partial else None)
 
 
+def _with_units(lines: list[str]) -> list[str]:
+    """TOML lines with each field's unit as a comment above it (``# R [ohm]``)."""
+    out = ["# emaphm actuator parameters, SI units; the unit of each field is in the comment",
+           "# above it. Per-phase values are lists (a, b, c)."]
+    for line in lines:
+        key = line.split("=", 1)[0].strip() if "=" in line and not line.startswith(" ") else ""
+        if key in _UNITS:
+            out.append(f"# {key} [{_UNITS[key]}]")
+        out.append(line)
+    return out
+
+
 def save_params(params: ActuatorParams, path: str | os.PathLike[str]) -> Path:
     """Write parameters as TOML (atomically: a temporary file, then a rename)."""
     p = Path(path)
     tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
+    text = "\n".join(_with_units(tomli_w.dumps(params.to_dict()).splitlines())) + "\n"
     try:
         with tmp.open("wb") as fh:
-            tomli_w.dump(params.to_dict(), fh)
+            fh.write(text.encode("utf-8"))
         os.replace(tmp, p)
     finally:
         tmp.unlink(missing_ok=True)

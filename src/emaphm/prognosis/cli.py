@@ -266,8 +266,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
     if args.inspections < 3:
         raise _usage("--inspections must be at least 3 (a trend needs three points)")
     plot_dir = Path(args.plot_dir) if args.plot_dir else None
-    if plot_dir is not None and not plot_dir.is_dir():
-        raise _usage(f"--plot-dir {plot_dir} is not a folder; create it first")
+    if plot_dir is not None:                 # created where missing, as report --out is
+        if plot_dir.exists() and not plot_dir.is_dir():
+            raise _usage(f"--plot-dir {plot_dir} is a file, not a folder; give a folder")
+        try:
+            plot_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise _usage(f"--plot-dir {plot_dir} cannot be created ({exc.strerror}); give a "
+                         "folder you can write to") from None
     results = []
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(args.db) if args.db else Path(tmp) / "demo.sqlite"
