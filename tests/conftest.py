@@ -2,16 +2,23 @@
 
 Hypothesis runs under the ``emaphm`` profile unless ``HYPOTHESIS_PROFILE``
 names another: no deadline (the first call of a Numba function compiles it),
-derandomised (the same examples on every run, so a failure reproduces), and
-no example database (tests write nothing into the repository).
+derandomised (the same examples on every run, so a failure reproduces), no
+example database, and its home folder in a temporary directory (tests write
+nothing into the repository).
 """
 
 from __future__ import annotations
 
 import os
+import tempfile
 
 import pytest
 from hypothesis import HealthCheck, settings
+from hypothesis.configuration import set_hypothesis_home_dir
+
+# Hypothesis keeps caches (constants, unicode data) in its home folder, ./.hypothesis by
+# default: put it in a temporary folder so that the suite writes nothing into the tree
+set_hypothesis_home_dir(tempfile.mkdtemp(prefix="emaphm-hypothesis-"))
 
 settings.register_profile(
     "emaphm",
