@@ -359,3 +359,37 @@ def test_cli_history_calibrate_then_add_diagnoses_with_the_calibration(tmp_path,
     assert set(ins["extra"]["nuisance"]) == {"R", "flux"}      # calibrated: drift searched
     assert ins["fault_model"] == "physical"
     assert ins["extra"]["parameters"]["calibration"]["sources"] == ["t1.csv", "t2.csv"]
+
+
+def test_history_plot_colours_each_component_by_its_own_verdict(tmp_path):
+    from matplotlib.colors import to_rgba
+
+    from emaphm.diagnosis import diagnose
+    from emaphm.prognosis.plots import component_status, plot_history
+
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-P")
+        ks = [[0.0, 0.01, 0, 0, 0, 0.0, 0.5, 0.5], [0.5, 0.01, 0, 0, 0, 0.0, 0.8, 0.5],
+              [0.6, 0.02, 0, 0, 0, 0.2, 0.3, 0.5]]
+        for t, k in zip((10.0, 20.0, 30.0), ks):
+            d = diagnose(k, fit_ratio=10.0 if t == 30.0 else 1.2).to_dict()
+            h.add("EMA-P", t, k, diagnosis=d)
+        data = h.data("EMA-P")
+    st = component_status(data)
+    assert list(st[:, 0]) == ["healthy", "faulty", "unexplained"]       # friction
+    assert list(st[:2, 1]) == ["healthy", "healthy"]                    # backlash never named
+    fig = plot_history(data)
+    axes = fig.axes
+
+    def points(ax, color):
+        return [tuple(line.get_xdata()) for line in ax.lines
+                if line.get_marker() == "o" and line.get_mfc() != "none"
+                and to_rgba(line.get_color()) == to_rgba(color)]
+
+    assert points(axes[0], "C2") == [(10.0,)] and points(axes[0], "C3") == [(20.0,)]
+    assert points(axes[0], "0.5") == [(30.0,)]
+    assert points(axes[1], "C3") == []                     # backlash 0.01 is not painted faulty
+    # k7 without eccentricity: hollow points, no trend line
+    hollow = [line for line in axes[6].lines if line.get_mfc() == "none"]
+    assert len(hollow) == 1 and tuple(hollow[0].get_xdata()) == (10.0, 20.0, 30.0)
+    assert all(ax.get_ylabel().startswith("k") for ax in axes)

@@ -37,19 +37,33 @@ def _unit(unit: str) -> str:
 
 def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
                  path: str | os.PathLike[str] | None = None) -> "Figure":
-    """Each component of k over the inspections, with its interval and failure threshold."""
+    """Each component of k over the inspections, with its interval and failure threshold.
+
+    A point is red where that inspection named a fault on *that* component, green where
+    it did not, grey where the verdict was ``unexplained`` (no fault named). The
+    eccentricity phase k7 means nothing without eccentricity: its points are drawn
+    hollow, without a line, where k6 is below its detection threshold.
+    """
     fig = _figure(11, 9)
     axes = fig.subplots(4, 2, sharex=True).ravel()
     t = data.times
     thr = {INDICATOR_COMPONENT[n]: thresholds.for_indicator(n) for n in INDICATOR_COMPONENT}
+    status = component_status(data)
     for j, ax in enumerate(axes):
         if data.n:
             err = np.vstack([data.K[:, j] - data.K_lo[:, j], data.K_hi[:, j] - data.K[:, j]])
-            healthy = np.array([i.healthy is not False for i in data.inspections])
-            ax.errorbar(t, data.K[:, j], yerr=np.clip(err, 0, None), fmt="-", color="C0", lw=1.0,
-                        ecolor="0.6", capsize=2)
-            ax.plot(t[healthy], data.K[healthy, j], "o", color="C2", ms=4, label="healthy")
-            ax.plot(t[~healthy], data.K[~healthy, j], "o", color="C3", ms=4, label="faulty")
+            show = np.ones(data.n, dtype=bool)
+            if j == 6:                       # the phase of an eccentricity that is not there
+                show = status[:, 5] == "faulty"
+                ax.plot(t[~show], data.K[~show, j], "o", mfc="none", color="0.6", ms=4,
+                        label="no eccentricity: phase meaningless")
+            if show.any():
+                ax.errorbar(t[show], data.K[show, j], yerr=np.clip(err[:, show], 0, None), fmt="-",
+                            color="C0", lw=1.0, ecolor="0.6", capsize=2)
+            for state, color in (("healthy", "C2"), ("faulty", "C3"), ("unexplained", "0.5")):
+                sel = show & (status[:, j] == state)
+                if sel.any():
+                    ax.plot(t[sel], data.K[sel, j], "o", color=color, ms=4, label=state)
         if j in thr:
             if j == 7:
                 for y in (0.5 - thr[j], 0.5 + thr[j]):
@@ -57,16 +71,36 @@ def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT
             else:
                 ax.axhline(thr[j], color="C3", ls="--", lw=1.0, label="failure threshold")
         ax.set_title(f"k{j + 1}: {K_LABELS[j]}", fontsize=9)
+        ax.set_ylabel(f"k{j + 1} [-]")
         ax.grid(True, alpha=0.3)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=6, loc="best")
     for ax in axes[-2:]:
         ax.set_xlabel(f"time [{_unit(data.actuator.time_unit)}]")
-    axes[0].legend(fontsize=7, loc="upper left")
     fig.suptitle(f"health history of {data.actuator.id}"
                  + (f" ({data.actuator.description})" if data.actuator.description else "")
                  + f": {data.n} inspections", fontsize=10)
     if path is not None:
         save_figure(fig, path)
     return fig
+
+
+def component_status(data: "HistoryData") -> np.ndarray:
+    """``(n_inspections, 8)`` of ``"healthy"``, ``"faulty"`` or ``"unexplained"``: whether
+    each inspection named a fault on each component of k (its diagnosis' ``component``
+    fields, e.g. ``"k3"`` or ``"k6,k7"``)."""
+    out = np.full((data.n, 8), "healthy", dtype=object)
+    for i, ins in enumerate(data.inspections):
+        diag = ins.diagnosis or {}
+        if diag.get("verdict") == "unexplained":
+            out[i, :] = "unexplained"
+            continue
+        for f in diag.get("faults", []):
+            for comp in str(f.get("component", "")).split(","):
+                comp = comp.strip()
+                if comp.startswith("k") and comp[1:].isdigit() and 1 <= int(comp[1:]) <= 8:
+                    out[i, int(comp[1:]) - 1] = "faulty"
+    return out
 
 
 def _interesting(prog: "Prognosis", n: int = 3) -> list[str]:
