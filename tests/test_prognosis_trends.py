@@ -267,3 +267,26 @@ def test_interval_holds_true_rul_from_midlife_and_error_falls(name):
     assert err[-1] < 0.25 * err[0], err                      # falls over the life
     assert mid[-1] < 0.75 * mid[0], err                      # and from mid-life to the end
     assert np.all(np.diff(mid) <= 0.15 * mid[0]), err        # never climbing much on the way
+
+
+def test_the_rul_figure_says_no_growth_and_does_not_stretch_for_it():
+    from emaphm.prognosis.plots import _interesting, plot_prognosis
+    from emaphm.prognosis.trends import prognose as _prognose
+
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 500.0, 8)
+    K = np.tile([0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5], (t.size, 1))
+    K[:, 0] = 0.0008 * t + rng.normal(0, 0.005, t.size)          # friction grows
+    K[:, 1] = 0.01 + rng.normal(0, 0.003, t.size)                 # backlash does not
+    prog = _prognose(t, K, seed=0)
+    span = t[-1] - t[0]
+    assert not prog.predictions["friction"].no_growth(span)
+    assert prog.predictions["backlash"].no_growth(span)
+    assert "backlash" not in _interesting(prog) and _interesting(prog)[0] == "friction"
+    fig = plot_prognosis(prog, indicators=["friction", "backlash"])
+    grow, flat = fig.axes
+    assert flat.get_title() == "backlash: no growth"
+    assert any("no growth" in x.get_text() for x in flat.texts)
+    assert flat.get_xlim()[1] <= t[-1] + 0.6 * span               # not stretched to 1e5 h
+    assert not [ln for ln in flat.lines if ln.get_marker() == "D"]  # no median drawn
+    assert grow.get_title().startswith("friction: RUL median")

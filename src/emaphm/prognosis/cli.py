@@ -207,8 +207,9 @@ def _prognosis_table(prog: Any) -> str:
     for name, p in prog.predictions.items():
         top = max(p.weights, key=p.weights.get)
         model = f"{top} ({p.weights[top]:.2f})"
-        far = 10.0 * max(float(prog.times[-1] - prog.times[0]), 1e-9)
-        if (not math.isfinite(p.median) and p.p_reach < 0.5) or p.median > far:
+        span = float(prog.times[-1] - prog.times[0])
+        far = 10.0 * max(span, 1e-9)
+        if p.no_growth(span):
             rul, iv = "no growth", f"P(within {far:.0f} {unit}) {p.p_fail_within(far):.2f}"
         else:
             rul = _fmt_time(p.median, unit)

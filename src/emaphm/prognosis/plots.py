@@ -104,10 +104,14 @@ def component_status(data: "HistoryData") -> np.ndarray:
 
 
 def _interesting(prog: "Prognosis", n: int = 3) -> list[str]:
-    """The indicators whose threshold is nearest: finite median first, then most likely."""
+    """The indicators whose threshold is nearest, growing ones only (at least one):
+    finite median first, then most likely."""
+    span = float(prog.times[-1] - prog.times[0])
     preds = list(prog.predictions.values())
-    preds.sort(key=lambda p: (not math.isfinite(p.median), p.median, -p.p_reach))
-    return [p.indicator for p in preds[:n]]
+    preds.sort(key=lambda p: (p.no_growth(span), not math.isfinite(p.median), p.median,
+                              -p.p_reach))
+    growing = [p for p in preds if not p.no_growth(span)]
+    return [p.indicator for p in (growing or preds[:1])[:n]]
 
 
 def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None,
@@ -133,7 +137,10 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
     span = max(float(t[-1] - t[0]), 1e-9)
     for ax, name in zip(axes, names):
         p = prog.predictions[name]
-        if horizon is None:
+        flat = p.no_growth(span)
+        if horizon is None and flat:          # nothing to reach: do not stretch the axis
+            h = 0.5 * span
+        elif horizon is None:
             ends = [x for x in (p.hi, p.median) if math.isfinite(x)]
             h = min(max(ends) * 1.15 if ends else 0.5 * span, 1.5 * span)
             if eol_true and name in eol_true:
@@ -147,18 +154,23 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
         ax.plot(t, series[name], "o", color="k", ms=4, label="identified")
         ax.axhline(p.threshold, color="C3", ls="--", lw=1.0, label="failure threshold")
         ax.axvline(p.t_now, color="0.5", lw=0.8)
-        if math.isfinite(p.lo):
+        if flat:
+            ax.text(0.99, 0.95, f"no growth: P(reaching the threshold within "
+                    f"{10 * span:.0f} {_unit(prog.time_unit)}) = {p.p_fail_within(10 * span):.2f}",
+                    transform=ax.transAxes, ha="right", va="top", fontsize=8, color="C3")
+        elif math.isfinite(p.lo):
             x0 = p.t_now + p.lo
             x1 = p.t_now + p.hi if math.isfinite(p.hi) else grid[-1]
             ax.plot([x0, x1], [p.threshold, p.threshold], color="C1", lw=6, alpha=0.6,
                     solid_capstyle="butt", label=f"RUL {p.level:.0%} interval")
-        if math.isfinite(p.median):
+        if math.isfinite(p.median) and not flat:
             ax.plot([p.t_now + p.median], [p.threshold], "D", color="C1", ms=7, label="median")
         if eol_true and name in eol_true:
             ax.axvline(eol_true[name], color="C3", lw=1.0, ls=":", label="true end of life")
         med = f"{p.median:.0f}" if math.isfinite(p.median) else "not reached"
         hi_txt = f"{p.hi:.0f}" if math.isfinite(p.hi) else "inf"
-        ax.set_title(f"{name}: RUL median {med} [{p.lo:.0f}, {hi_txt}] {_unit(prog.time_unit)}",
+        ax.set_title(f"{name}: no growth" if flat else
+                     f"{name}: RUL median {med} [{p.lo:.0f}, {hi_txt}] {_unit(prog.time_unit)}",
                      fontsize=9)
         top = max(p.threshold * 1.25, float(np.nanmax(series[name])) * 1.1)
         ax.set_ylim(min(0.0, float(np.nanmin(series[name])) - 0.01), top)

@@ -363,6 +363,14 @@ class RULPrediction:
         """Share of draws whose trend ever reaches the threshold."""
         return float(np.mean(np.isfinite(self.samples)))
 
+    def no_growth(self, span: float) -> bool:
+        """True when this indicator is not growing towards its threshold on the time scale
+        of a history spanning ``span``: no finite median and under half the draws ever
+        reach it, or a median beyond ten times the span. Tables and figures then say
+        "no growth" instead of quoting a remaining life."""
+        return bool((not math.isfinite(self.median) and self.p_reach < 0.5)
+                    or self.median > 10.0 * max(float(span), 1e-9))
+
     def p_fail_within(self, horizon: float) -> float:
         """Probability that the threshold is reached within ``horizon`` from ``t_now``."""
         return float(np.mean(self.samples <= horizon))
