@@ -230,3 +230,36 @@ def test_saved_parameters_carry_each_fields_unit_as_a_comment(tmp_path):
         i = next(n for n, line in enumerate(lines) if line.startswith(f"{key} = "))
         assert lines[i - 1] == f"# {key} [{unit}]"
     assert load_params(p) == siemens_1fk7060()          # the comments read back as nothing
+
+
+def test_outputs_go_through_one_atomic_writer_that_does_not_follow_a_planted_link(tmp_path):
+    import os
+
+    from emaphm._files import atomic_write_text
+    from emaphm.params import save_params, siemens_1fk7060
+
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    # the predictable temporary names the writers used before: a planted symlink there
+    # is never written through
+    for name in (f".m.toml.tmp-{os.getpid()}", ".m.toml.tmp"):
+        (tmp_path / name).symlink_to(victim)
+    out = save_params(siemens_1fk7060(), tmp_path / "m.toml")
+    assert victim.read_text() == "keep me" and out.read_text().startswith("# emaphm")
+    # a failure leaves the old file and no temporary file
+    p = tmp_path / "t.txt"
+    atomic_write_text(p, "one")
+    before = sorted(x.name for x in tmp_path.iterdir())
+
+    class Boom(Exception):
+        pass
+
+    from emaphm._files import atomic_write
+
+    def half(fh):
+        fh.write(b"half")
+        raise Boom
+
+    with pytest.raises(Boom):
+        atomic_write(p, half)
+    assert p.read_text() == "one" and sorted(x.name for x in tmp_path.iterdir()) == before

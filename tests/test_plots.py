@@ -170,9 +170,8 @@ def test_failed_save_leaves_no_temp_file_and_keeps_the_old_file(faulty, tmp_path
     (tmp_path / "y.png").write_bytes(b"old")
 
     class Broken(Figure):
-        def savefig(self, fname, **kw):
-            with open(fname, "wb") as fh:
-                fh.write(b"half a figure")
+        def savefig(self, fname, **kw):            # save_figure hands over an open file
+            fname.write(b"half a figure")
             raise RuntimeError("disk full")
 
     with pytest.raises(RuntimeError, match="disk full"):

@@ -566,12 +566,7 @@ def _with_units(lines: list[str]) -> list[str]:
 def save_params(params: ActuatorParams, path: str | os.PathLike[str]) -> Path:
     """Write parameters as TOML (atomically: a temporary file, then a rename)."""
     p = Path(path)
-    tmp = p.with_name(f".{p.name}.tmp-{os.getpid()}")
     text = "\n".join(_with_units(tomli_w.dumps(params.to_dict()).splitlines())) + "\n"
-    try:
-        with tmp.open("wb") as fh:
-            fh.write(text.encode("utf-8"))
-        os.replace(tmp, p)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return p
+    from ._files import atomic_write_text
+
+    return atomic_write_text(p, text)

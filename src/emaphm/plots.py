@@ -35,13 +35,10 @@ def save_figure(fig: "Figure", path: str | os.PathLike[str], dpi: int = 120) -> 
     p = Path(path)
     if not p.parent.exists():
         raise FileNotFoundError(f"cannot write {p}: folder {p.parent} does not exist; create it first")
-    tmp = p.with_name(f".{p.stem}.tmp-{os.getpid()}{p.suffix}")
-    try:
-        fig.savefig(tmp, dpi=dpi)
-        os.replace(tmp, p)
-    finally:
-        tmp.unlink(missing_ok=True)
-    return p
+    from ._files import atomic_write
+
+    fmt = p.suffix[1:].lower() or "png"
+    return atomic_write(p, lambda fh: fig.savefig(fh, dpi=dpi, format=fmt))
 
 
 def _label(trace: "Trace", default: str) -> str:

@@ -38,7 +38,6 @@ import json
 import math
 import os
 import re
-import secrets
 import warnings
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -46,6 +45,8 @@ from pathlib import Path
 from typing import IO, Any
 
 import numpy as np
+
+from ._files import atomic_write
 
 __all__ = [
     "COLUMNS",
@@ -838,36 +839,8 @@ def _suffix(path: Path) -> str:
 
 
 def _atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> None:
-    """Write ``path`` through a temporary sibling file and :func:`os.replace`.
-
-    On any failure the temporary file is removed and an existing file at ``path`` is
-    left untouched.
-    """
-    directory = path.parent
-    tmp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    try:  # make the rename itself durable where the platform allows it
-        dir_fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(dir_fd)
-    except OSError:
-        pass
-    finally:
-        os.close(dir_fd)
+    """:func:`emaphm._files.atomic_write` (kept under this name for the trace writers)."""
+    atomic_write(path, write)
 
 
 def _csv_chunks(trace: Trace, rows_per_chunk: int = 8192) -> Iterator[bytes]:

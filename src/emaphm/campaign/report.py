@@ -32,6 +32,7 @@ recomputes it over DE, PSO and GWO only, as the paper does.
 from __future__ import annotations
 
 import csv
+import io
 import math
 import os
 import warnings
@@ -41,6 +42,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
+from .._files import atomic_write_text
 from .store import CampaignStore, RunResult
 
 __all__ = ["PAPER_TOTALS", "PAPER_TABLE3", "Cell", "performance_coefficient", "summarize",
@@ -235,16 +237,14 @@ def _wide(rows: list[dict[str, Any]], algorithms: Sequence[str], bold_best: bool
 
 
 def _csv(path: Path, header: list[str], rows: list[list[Any]]) -> Path:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    with open(tmp, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        for r in rows:
-            r = [x.item() if isinstance(x, np.generic) else x for x in r]   # plain numbers
-            w.writerow(["" if (isinstance(x, float) and not np.isfinite(x)) else
-                        (repr(x) if isinstance(x, float) else x) for x in r])
-    os.replace(tmp, path)
-    return path
+    buf = io.StringIO(newline="")
+    w = csv.writer(buf)
+    w.writerow(header)
+    for r in rows:
+        r = [x.item() if isinstance(x, np.generic) else x for x in r]   # plain numbers
+        w.writerow(["" if (isinstance(x, float) and not np.isfinite(x)) else
+                    (repr(x) if isinstance(x, float) else x) for x in r])
+    return atomic_write_text(path, buf.getvalue())
 
 
 def _wide_csv_header(algorithms: Sequence[str]) -> list[str]:
@@ -500,9 +500,6 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
             written.append(p)
             md.append(f"![convergence]({p.name})\n")
 
-    report = out / "report.md"
-    tmp = report.with_name(f".report.md.tmp-{os.getpid()}")
-    tmp.write_text("\n".join(md), encoding="utf-8")
-    os.replace(tmp, report)
+    report = atomic_write_text(out / "report.md", "\n".join(md))
     written.insert(0, report)
     return written
