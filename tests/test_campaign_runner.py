@@ -345,3 +345,49 @@ def test_an_unreachable_scheduler_fails_before_the_store_is_written(tmp_path, mo
     rc = main(["campaign", "--scenarios", "friction-low", "--algorithms", "pso", "--runs", "1",
                "--store", str(store), "--scheduler", "tcp://127.0.0.1:1", "--quiet"])
     assert rc == 2 and not store.exists()
+
+
+# ----------------------------------------------------------------------------- no orphans
+def _processes_with(marker: str) -> list[int]:
+    """Pids of the live processes whose environment carries ``marker`` (Linux /proc)."""
+    out = []
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/environ", "rb") as fh:
+                env = fh.read()
+            with open(f"/proc/{d}/stat") as fh:
+                state = fh.read().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if marker.encode() in env and state != "Z":
+            out.append(int(d))
+    return out
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_killed_campaign_takes_its_workers_with_it(tmp_path):
+    import uuid
+
+    spec_file = tmp_path / "small.toml"
+    spec_file.write_text(SPEC_TOML)
+    store = tmp_path / "orphans.sqlite"
+    marker = f"EMAPHM_ORPHAN_CHECK=1-{uuid.uuid4().hex}"
+    key, value = marker.split("=", 1)
+    proc = subprocess.Popen([sys.executable, "-m", "emaphm.cli", "campaign", "--spec",
+                             str(spec_file), "--store", str(store), "--workers", "2", "--quiet"],
+                            cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, start_new_session=True, env={**os.environ, key: value})
+    try:
+        wait_rows(proc, store, 1)
+        assert len(_processes_with(marker)) >= 3            # the campaign and its 2 workers
+        os.kill(proc.pid, signal.SIGKILL)                   # no handler of the parent runs
+        proc.wait(30)
+        t0 = time.monotonic()
+        while _processes_with(marker) and time.monotonic() - t0 < 5.0:
+            time.sleep(0.1)
+        left = _processes_with(marker)
+    finally:
+        reap(proc)
+    assert left == [], f"processes of the killed campaign still alive 5 s later: {left}"

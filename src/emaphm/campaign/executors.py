@@ -32,6 +32,9 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import sys
+import threading
+import time
 from concurrent.futures.process import BrokenProcessPool
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any, Callable, Iterable, Iterator, Protocol
@@ -47,8 +50,6 @@ def warm_up() -> float:
     global _WARM
     if _WARM:
         return 0.0
-    import time
-
     from emaphm.identify import identify
     from emaphm.simulate import simulate
 
@@ -59,8 +60,34 @@ def warm_up() -> float:
     return time.perf_counter() - t0
 
 
-def _init_worker() -> None:
-    """Process-pool initializer: leave Ctrl-C to the parent, then warm up."""
+def _exit_with_parent(parent: int, period_s: float = 0.5) -> None:
+    """End this worker when its parent process dies, even by SIGKILL (which no handler of
+    the parent sees): on Linux the kernel's parent-death signal, everywhere a daemon
+    thread that notices the worker being re-parented."""
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            libc.prctl(1, signal.SIGKILL, 0, 0, 0)        # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+    if os.getppid() != parent:                             # it died before we got here
+        os._exit(1)
+
+    def watch() -> None:
+        while True:
+            time.sleep(period_s)
+            if os.getppid() != parent:
+                os._exit(1)
+
+    threading.Thread(target=watch, name="emaphm-parent-watch", daemon=True).start()
+
+
+def _init_worker(parent: int | None = None) -> None:
+    """Process-pool initializer: exit with the parent, leave Ctrl-C to it, then warm up."""
+    if parent is not None:
+        _exit_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     warm_up()
 
@@ -121,7 +148,7 @@ class LocalExecutor:
         def new_pool() -> ProcessPoolExecutor:
             return ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
                                        mp_context=multiprocessing.get_context(self.mp_context),
-                                       initializer=_init_worker)
+                                       initializer=_init_worker, initargs=(os.getpid(),))
 
         pool = new_pool()
         # Keep at most two runs per worker queued: pending work stays in the parent,
