@@ -209,3 +209,25 @@ def test_readonly_store_refuses_writes(store_path):
             st.commit(fake_result(spec.runs_list()[6]))
     with CampaignStore.open(store_path) as st:
         assert len(st.keys()) == 5
+
+
+def test_a_damaged_store_is_refused_unchanged_with_the_way_out(tmp_path):
+    import random
+
+    from emaphm.campaign import CampaignSpec, CampaignStore, IncompatibleStoreError
+
+    p = tmp_path / "s.sqlite"
+    spec = CampaignSpec(scenarios=("friction-low",), algorithms=("pso",), runs=2)
+    with CampaignStore.open(p, spec):
+        pass
+    data = bytearray(p.read_bytes())
+    rnd = random.Random(0)
+    for i in range(200, len(data)):                      # keep the header, scramble the rest
+        data[i] = rnd.randrange(256)
+    p.write_bytes(bytes(data))
+    before = p.read_bytes()
+    for kw in ({}, {"readonly": True}):
+        with pytest.raises(IncompatibleStoreError, match="damaged|cannot be read") as err:
+            CampaignStore.open(p, **kw)
+        assert "it was not changed" in str(err.value)
+    assert p.read_bytes() == before

@@ -393,3 +393,21 @@ def test_history_plot_colours_each_component_by_its_own_verdict(tmp_path):
     hollow = [line for line in axes[6].lines if line.get_mfc() == "none"]
     assert len(hollow) == 1 and tuple(hollow[0].get_xdata()) == (10.0, 20.0, 30.0)
     assert all(ax.get_ylabel().startswith("k") for ax in axes)
+
+
+def test_a_damaged_history_is_refused_unchanged(tmp_path):
+    import random
+
+    p = tmp_path / "h.sqlite"
+    with HealthHistory(p) as h:
+        h.register("EMA-D")
+        h.add("EMA-D", 1.0, [0, 0, 0, 0, 0, 0, 0.5, 0.5])
+    data = bytearray(p.read_bytes())
+    rnd = random.Random(1)
+    for i in range(200, len(data)):
+        data[i] = rnd.randrange(256)
+    p.write_bytes(bytes(data))
+    before = p.read_bytes()
+    with pytest.raises(HistoryError, match="damaged|not an emaphm health history"):
+        HealthHistory(p, create=False)
+    assert p.read_bytes() == before

@@ -297,8 +297,13 @@ class CampaignStore:
         elif not p.parent.exists():
             raise FileNotFoundError(f"cannot create {p}: folder {p.parent} does not exist; create it first")
 
-        conn = _connect(p, readonly=readonly and exists)
         try:
+            conn = _connect(p, readonly=readonly and exists)
+        except sqlite3.DatabaseError as exc:
+            raise IncompatibleStoreError(_damaged(p, str(exc))) from None
+        try:
+            if exists:
+                _check_integrity(conn, p)
             meta = _read_meta(conn, p)
             if meta is None:                        # a new (or empty) file: create the store
                 if readonly or spec is None:
@@ -437,6 +442,23 @@ def _connect(p: Path, readonly: bool) -> sqlite3.Connection:
     if not readonly:
         conn.execute("PRAGMA synchronous = FULL")
     return conn
+
+
+def _check_integrity(conn: sqlite3.Connection, p: Path) -> None:
+    """SQLite's ``quick_check`` of an existing store: a damaged file is refused, unchanged,
+    before any run is listed from it."""
+    try:
+        result = str(conn.execute("PRAGMA quick_check").fetchone()[0])
+    except sqlite3.DatabaseError as exc:
+        result = str(exc)
+    if result != "ok":
+        raise IncompatibleStoreError(_damaged(p, f"SQLite quick_check: {result[:200]}"))
+
+
+def _damaged(p: Path, what: str) -> str:
+    return (f"{p} is damaged ({what}); it was not changed and no run is read from it. Restore "
+            "it from a backup, or start a new store with another --store path and run the "
+            "campaign again (every run is reproducible from its seeds).")
 
 
 def _read_meta(conn: sqlite3.Connection, p: Path) -> dict[str, str] | None:

@@ -279,6 +279,16 @@ class HealthHistory:
             raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
                                "give another --db path") from None
         self.journal_mode = str(mode)
+        if version > 0:                # an existing history: refuse a damaged file up front
+            try:
+                check = str(self._con.execute("PRAGMA quick_check").fetchone()[0])
+            except sqlite3.DatabaseError as exc:
+                check = str(exc)
+            if check != "ok":
+                self._con.close()
+                raise HistoryError(f"{self.path} is damaged (SQLite quick_check: {check[:200]}); "
+                                   "it was not changed. Restore it from a backup; nothing is read "
+                                   "from or added to a damaged history")
         if version == 0:
             try:
                 with self._transaction() as con:     # re-read: another process may have won
