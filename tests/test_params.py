@@ -263,3 +263,28 @@ def test_outputs_go_through_one_atomic_writer_that_does_not_follow_a_planted_lin
     with pytest.raises(Boom):
         atomic_write(p, half)
     assert p.read_text() == "one" and sorted(x.name for x in tmp_path.iterdir()) == before
+
+
+@pytest.mark.parametrize("section, changes, words", [
+    ("inverter", {"f_pwm": 1e9}, r"inverter.f_pwm \[Hz\] = 1e\+09 is outside 500 Hz"),
+    ("inverter", {"f_pwm": 10}, "is outside 500 Hz to 100 kHz"),
+    ("motor", {"R": 3150.0}, r"give ohms \(3.15 ohm, not 3150 milliohm\)"),
+    ("motor", {"L": 22.0}, r"give henries \(22 mH = 0.022\)"),
+    ("motor", {"L": 1e-6}, "electrical time constant L/R of phase a"),
+])
+def test_implausible_parameter_files_are_refused_with_the_unit_slip(tmp_path, section, changes,
+                                                                     words):
+    from emaphm.params import ParameterError, load_params, save_params, siemens_1fk7060
+
+    p = tmp_path / "bad.toml"
+    save_params(siemens_1fk7060(), p)
+    text = p.read_text()
+    import tomllib
+
+    import tomli_w
+
+    data = tomllib.loads(text)
+    data[section].update(changes)
+    p.write_text(tomli_w.dumps(data))
+    with pytest.raises(ParameterError, match=words):
+        load_params(p)

@@ -87,6 +87,7 @@ __all__ = [
     "siemens_1fk7060",
     "load_params",
     "save_params",
+    "check_plausible",
 ]
 
 
@@ -504,7 +505,39 @@ class ActuatorParams:
             kw = {n: given[n] for n in given}
             parts[sec] = replace(base, **kw) if base is not None else klass(**kw)
         name = data.get("name", defaults.name if defaults is not None else "custom")
-        return cls(name=str(name), **parts)
+        params = cls(name=str(name), **parts)
+        check_plausible(params, source=source)
+        return params
+
+
+def check_plausible(params: ActuatorParams, *, source: str = "parameters") -> None:
+    """Refuse healthy parameters no servo actuator has, with the likely unit slip named.
+
+    Each field is checked on its own at construction; this checks them together, on
+    parameters a user gives (files, specs), not on faulty ones (a 99 % short is allowed
+    to have an implausible phase). ParameterError names the field and the fix.
+    """
+    m, inv = params.motor, params.inverter
+    where = f"{source}:"
+    if not 500.0 <= inv.f_pwm <= 100e3:
+        raise ParameterError(f"{where} inverter.f_pwm [Hz] = {inv.f_pwm:g} is outside 500 Hz to "
+                             "100 kHz, the range of servo drives (8000 = 8 kHz; the models take "
+                             "one step per PWM period, so 1e9 would ask for 5e8 steps)")
+    for j, ph in enumerate("abc"):
+        R, L = m.R[j], m.L[j]
+        if L > 1.0:
+            raise ParameterError(f"{where} motor.L [H] of phase {ph} = {L:g} H is above 1 H; give "
+                                 "henries (22 mH = 0.022)")
+        if R * m.I_max > inv.V_dc:
+            raise ParameterError(
+                f"{where} motor.R [ohm] of phase {ph} = {R:g} times motor.I_max [A] = {m.I_max:g} "
+                f"is {R * m.I_max:g} V, above inverter.V_dc = {inv.V_dc:g} V: the drive could not "
+                "push its rated current; give ohms (3.15 ohm, not 3150 milliohm)")
+        if L / R < 2.0 * inv.T_s:
+            raise ParameterError(
+                f"{where} the electrical time constant L/R of phase {ph} = {L / R * 1e6:.3g} us is "
+                f"under two PWM periods ({2e6 * inv.T_s:.3g} us): no current loop at "
+                f"{inv.f_pwm:g} Hz controls it; check the units of motor.L [H] and motor.R [ohm]")
 
 
 def siemens_1fk7060() -> ActuatorParams:
