@@ -375,3 +375,25 @@ def test_the_cli_starts_without_the_heavy_modules():
              "emaphm.prognosis.uncertainty", "emaphm.campaign.runner", "emaphm.identify"}
     assert not (heavy & mods), sorted(heavy & mods)
     assert "emaphm.prognosis.cli" in mods and "emaphm.campaign.cli" in mods
+
+
+def test_the_error_boundary_names_the_path_of_an_os_error_and_exits_2(tmp_path, capsys):
+    not_a_folder = tmp_path / "afile"
+    not_a_folder.write_text("x")
+    rc = main(["simulate", "--scenario", "nominal", "--model", "monitoring",
+               "--out", str(not_a_folder / "x.csv")])
+    err = capsys.readouterr().err
+    assert rc == 2 and "Traceback" not in err and str(not_a_folder) in err
+    assert err.count("\n") == 1
+
+
+def test_an_unexpected_exception_is_shown_as_a_bug(monkeypatch, capsys):
+    import emaphm.cli as cli
+
+    def boom(args):
+        raise KeyError("surprise")
+
+    monkeypatch.setattr(cli, "cmd_scenarios", boom)
+    rc = cli.main(["scenarios"])
+    err = capsys.readouterr().err
+    assert rc == 1 and "Traceback" in err and "this is a bug in emaphm" in err

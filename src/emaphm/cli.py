@@ -472,21 +472,45 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    cmd = f"emaphm {args.command}"
     try:
         return args.func(args)
     except UsageError as exc:
-        print(f"emaphm {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{cmd}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except (ValueError, FileNotFoundError) as exc:   # TraceError, ParameterError, FaultVectorError...
-        print(f"emaphm {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{cmd}: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
-        print(f"emaphm {args.command}: interrupted", file=sys.stderr)
+        print(f"{cmd}: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:      # e.g. `emaphm scenarios | head -3`
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
+    # the one error boundary: an expected failure is one line and exit 2, anything else is a
+    # bug, shown with its traceback
+    except OSError as exc:                           # a folder, no permission, a full disk...
+        path = f" {exc.filename}:" if getattr(exc, "filename", None) else ""
+        print(f"{cmd}: error:{path} {exc.strerror or exc}; check the path, that it is a file "
+              "where a file is meant, its permissions and the free space", file=sys.stderr)
+        return EXIT_USAGE
+    except RecursionError:
+        print(f"{cmd}: error: the input is nested too deeply to read (e.g. trace metadata); the "
+              "file is malformed: export it again", file=sys.stderr)
+        return EXIT_USAGE
+    except MemoryError:
+        print(f"{cmd}: error: the input needs more memory than this machine has; use a shorter "
+              "or less finely sampled trace", file=sys.stderr)
+        return EXIT_USAGE
+    except Exception:                                # noqa: BLE001 - a bug: say so, keep the trace
+        import traceback
+
+        traceback.print_exc()
+        print(f"{cmd}: this is a bug in emaphm {__version__}, not a problem with your input: "
+              "please report it to the emaphm maintainers with the command line and the "
+              "traceback above", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":  # pragma: no cover
