@@ -1073,7 +1073,23 @@ def read_trace(
     """
     path = Path(path)
     suffix = _suffix(path)
-    columns, meta = _read_csv(path) if suffix == ".csv" else _read_parquet(path)
+    if path.is_dir():
+        raise TraceError(f"{path} is a folder; give a trace file (.csv or .parquet)")
+    try:
+        columns, meta = _read_csv(path) if suffix == ".csv" else _read_parquet(path)
+    except (TraceError, FileNotFoundError):
+        raise
+    except UnicodeDecodeError as exc:
+        raise TraceError(f"{path}: not a UTF-8 text file (undecodable byte at position "
+                         f"{exc.start}); export the CSV as UTF-8 text") from None
+    except RecursionError:
+        raise TraceError(f"{path}: its metadata is nested too deeply to read; the file is "
+                         "malformed, export it again") from None
+    except (ValueError, TypeError, KeyError, IndexError, OverflowError, OSError) as exc:
+        # a malformed file reaches the parsers' own errors (CSV, JSON, Parquet: pyarrow
+        # reports a corrupt file as an OSError)
+        raise TraceError(f"{path}: cannot be read as a {suffix[1:]} trace ({type(exc).__name__}: "
+                         f"{str(exc)[:200]}); check that it is an emaphm or bench export") from None
     try:
         trace = Trace.from_columns(columns, meta=meta)
     except TraceError as exc:
