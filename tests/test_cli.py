@@ -397,3 +397,19 @@ def test_an_unexpected_exception_is_shown_as_a_bug(monkeypatch, capsys):
     rc = cli.main(["scenarios"])
     err = capsys.readouterr().err
     assert rc == 1 and "Traceback" in err and "this is a bug in emaphm" in err
+
+
+@pytest.mark.parametrize("args, words", [
+    (["diagnose", "--scenario", "nominal", "--budget", "99999999999999999999999"],
+     "above 1e+08 evaluations"),
+    (["diagnose", "--scenario", "nominal", "--budget", "100000s"], "above a day"),
+    (["simulate", "--scenario", "nominal", "--noise", "1e6", "--seed", "1", "--out", "x.csv"],
+     "outside 0 to 1 A"),
+])
+def test_options_out_of_any_plausible_range_are_refused(args, words, capsys, tmp_path,
+                                                        monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []

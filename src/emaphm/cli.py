@@ -116,6 +116,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.noise is None:
         sensors = DEFAULT_SENSORS if args.seed is not None else Sensors()
     else:
+        if not 0.0 <= args.noise <= 1.0:
+            raise UsageError(f"--noise {args.noise:g} A rms is outside 0 to 1 A: a current sensor "
+                             "of a servo drive has tens of milliamperes (default 0.02)")
         sensors = Sensors(current_noise=args.noise, current_lsb=DEFAULT_SENSORS.current_lsb)
     if args.f_sample is not None or args.aa_cutoff is not None:
         from dataclasses import replace

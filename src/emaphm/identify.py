@@ -27,10 +27,17 @@ from .traces import Trace, TraceError, validate
 __all__ = ["Identification", "identify", "parse_budget"]
 
 
+#: Largest budget accepted: 1e8 evaluations (hours of CPU) or a day of wall clock; a larger
+#: one is a typo, not a plan.
+MAX_BUDGET_EVALUATIONS = 100_000_000
+MAX_BUDGET_SECONDS = 86_400.0
+
+
 def parse_budget(budget: Any) -> Termination | None:
     """A termination from a budget: ``None`` (the algorithm's paper default), an
     int (objective evaluations), a string ``"5000"`` / ``"5000evals"`` /
-    ``"30s"`` (wall-clock seconds), or a :class:`emaphm.optim.Termination`."""
+    ``"30s"`` (wall-clock seconds), or a :class:`emaphm.optim.Termination`. At most
+    :data:`MAX_BUDGET_EVALUATIONS` evaluations or :data:`MAX_BUDGET_SECONDS` seconds."""
     if budget is None:
         return None
     if isinstance(budget, bool):
@@ -38,6 +45,9 @@ def parse_budget(budget: Any) -> Termination | None:
     if isinstance(budget, (int, np.integer)):
         if budget <= 0:
             raise ValueError(f"budget must be a positive number of evaluations, got {budget}")
+        if budget > MAX_BUDGET_EVALUATIONS:
+            raise ValueError(f"budget {budget} is above {MAX_BUDGET_EVALUATIONS:.0e} evaluations "
+                             "(hours of CPU); give fewer, or seconds (e.g. 600s)")
         return MaxEvaluations(int(budget))
     if isinstance(budget, str):
         m = re.fullmatch(r"\s*(\d+(?:\.\d*)?)\s*(s|evals?)?\s*", budget)
@@ -48,10 +58,13 @@ def parse_budget(budget: Any) -> Termination | None:
         if value <= 0:
             raise ValueError(f"budget must be positive, got {budget!r}")
         if unit == "s":
+            if value > MAX_BUDGET_SECONDS:
+                raise ValueError(f"budget {budget!r} is above a day ({MAX_BUDGET_SECONDS:g} s); "
+                                 "give at most 86400s")
             return WallClock(value)
         if value != int(value):
             raise ValueError(f"a budget in evaluations must be a whole number, got {budget!r}")
-        return MaxEvaluations(int(value))
+        return parse_budget(int(value))
     if hasattr(budget, "check"):
         return budget
     raise ValueError(f"budget must be evaluations (int), seconds ('30s') or a Termination, got {budget!r}")
