@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Literal, Sequence
 
 import numpy as np
@@ -99,7 +100,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
                 and abs(unreported_load) <= 5.0):
             raise ValueError(f"unreported_load [N m] must be a number within +-5, "
                              f"got {unreported_load!r}")
-        unit = Unit(**{**(unit or nominal_unit(params)).__dict__, "load": float(unreported_load)})
+        unit = replace(unit or nominal_unit(params), load=float(unreported_load))
     if unit is not None and model != "reference":
         raise ValueError("a production unit (unit, unit_seed, unreported_load) is what the "
                          "plant plays: use model='reference'")

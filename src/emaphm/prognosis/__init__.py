@@ -19,7 +19,7 @@ failure threshold:
 Data flows down that list; plots only read results.
 """
 
-import importlib as _importlib
+from .._lazy import lazy_exports
 
 #: Public name -> the submodule that defines it; imported on first use (PEP 562), so
 #: that importing one submodule (e.g. the CLI's) does not load every other one.
@@ -64,19 +64,7 @@ _EXPORTS = {
 }
 
 
-def __getattr__(name: str):
-    try:
-        module = _EXPORTS[name]
-    except KeyError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
-    value = getattr(_importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
-
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
 
 __all__ = [
     "HealthHistory", "HistoryData", "Inspection", "Actuator", "inspect", "trace_fingerprint",
