@@ -15,7 +15,8 @@ from emaphm.faults import (K_NAMES, K_NOMINAL, MAX_SHORTED_FRACTION, N_K, PAPER_
                            as_k, error_pct, scenario, scenario_fault_model)
 from emaphm.models.layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
                                   C_GAMMA, C_KP, C_L_A, C_MU_A, C_PHI, C_R_A, N_CP, P_DT, P_T_S,
-                                  pack, pack_population)
+                                  pack, pack_population, PopulationPacker)
+from emaphm.models import layout as packer_module
 from emaphm.params import siemens_1fk7060
 
 NOMINAL = siemens_1fk7060()
@@ -315,6 +316,47 @@ def test_pack_layout_known_values():
     assert f[C_L_A:C_L_A + 3] == pytest.approx([22e-3, 22e-3 / 4, 22e-3])
     assert f[C_C0_A + 1] == pytest.approx(NOMINAL.motor.c0[1] / 2)
     assert f[C_ECC] == 0.2 and f[C_ECC_PHASE] == pytest.approx(math.pi)
+
+
+@given(arrays(np.float64, st.tuples(st.integers(1, 12), st.just(N_K)), elements=unit),
+       st.sampled_from(["paper", "physical"]), st.integers(0, 2**31 - 1))
+def test_population_packer_rows_equal_uncached_packing(K, fault_model, seed):
+    """A packer reused over populations (its winding cache warm, rows repeated, evicted
+    and recomputed) gives exactly the rows of a fresh packing."""
+    rng = np.random.default_rng(seed)
+    packer = PopulationPacker(NOMINAL, 0.0, fault_model)
+    packer.CACHE_SIZE = 4                                   # force evictions
+    for _ in range(3):
+        K2 = np.vstack([K, K[rng.integers(0, len(K), 3)]])     # repeated windings
+        P, CP = packer(K2)
+        P0, CP0 = pack_population(NOMINAL, K2, 0.0, fault_model)
+        np.testing.assert_array_equal(P, P0)
+        np.testing.assert_array_equal(CP, CP0)
+        assert len(packer._windings) <= 4
+        K = np.clip(K + rng.normal(0.0, 0.05, K.shape), 0.0, 1.0)
+
+
+def test_population_packer_computes_each_winding_once():
+    """A finite-difference batch changes the winding of a few candidates only: the
+    others' step matrices come from the cache."""
+    packer = PopulationPacker(NOMINAL, 0.0, "physical")
+    x = _k(k1=0.3, k3=0.2)
+    K = np.tile(x, (9, 1)) + np.vstack([np.zeros(N_K), 1e-3 * np.eye(N_K)])
+    calls = []
+    real = packer_module._population_matrices
+
+    def spy(R, *a):
+        calls.append(R.shape[0])
+        return real(R, *a)
+
+    packer_module._population_matrices = spy
+    try:
+        packer(K)
+        packer(K)
+    finally:
+        packer_module._population_matrices = real
+    # distinct windings: the centre and the three shorts moved (k3, k4, k5); then none
+    assert calls == [4]
 
 
 def test_pack_population_shape_error():

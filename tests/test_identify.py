@@ -67,7 +67,9 @@ def test_recovers_gain_low_with_defaults(mm_gain_low, objective, algorithm):
     assert ident.error_pct == pytest.approx(error_pct(ident.k, SCENARIOS["gain-low"]))
     assert abs(ident.k[7] - 0.25) < 0.01
     # the identified k is where the objective is smallest: its own fitness, below nominal's
-    assert ident.fitness == pytest.approx(objective(ident.k)[0], rel=1e-12, abs=1e-300)
+    # (to round-off of the noise-free fit: k alone runs in the scalar kernel, the search's
+    # populations in the SIMD one; they agree to ~1e-12 A, so here to ~1e-10 relative)
+    assert ident.fitness == pytest.approx(objective(ident.k)[0], rel=1e-8, abs=1e-300)
     assert ident.fitness < 1e-3 * objective(SCENARIOS["nominal"])[0]
     assert np.all((ident.k >= 0.0) & (ident.k <= 1.0))
     assert ident.reason in ("max_iterations", "stall")

@@ -267,16 +267,23 @@ def test_batched_kernel_equals_python_reference(n_sub, fault_model):
 
 
 def test_population_order_does_not_matter(mm):
+    """A candidate's traces do not depend on where it stands in the population: bit for bit
+    within the SIMD kernel's full blocks, and to round-off for a lone remainder, which runs
+    in the scalar kernel (``SCALAR_TAIL``; the two kernels agree to ~1e-12 A)."""
     rng = np.random.default_rng(3)
-    K = _random_k(rng, 9)
+    K = _random_k(rng, 16)
     perm = rng.permutation(len(K))
     a = mm.simulate_population(K)
     b = mm.simulate_population(K[perm])
     np.testing.assert_array_equal(b.i_abc, a.i_abc[perm])
     np.testing.assert_array_equal(b.theta_m, a.theta_m[perm])
-    # and a candidate alone gives the same traces as in a population
+    # a ninth candidate runs alone in the scalar kernel; a candidate alone too
+    c = mm.simulate_population(K[:9])
+    np.testing.assert_array_equal(c.i_abc[:8], a.i_abc[:8])
+    np.testing.assert_allclose(c.i_abc[8], a.i_abc[8], rtol=0, atol=1e-9)
     solo = mm.simulate(K[4])
-    np.testing.assert_array_equal(solo.i_abc[0], a.i_abc[4])
+    np.testing.assert_allclose(solo.i_abc[0], a.i_abc[4], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(solo.theta_m[0], a.theta_m[4], rtol=0, atol=1e-12)
 
 
 def test_initial_angle(mm):
@@ -527,7 +534,9 @@ def _landscape_minima(mm, kt, target, depth):
         fit, status = mm.weighted_sse(K, target, w)
         assert not np.any(status == STATUS_DIVERGED)  # far points may trip (finite fitness)
         if c == 6 and kt[5] == 0.0:
-            assert np.all(fit == fit[0])             # no eccentricity: the phase is invisible
+            # no eccentricity: the phase is invisible (to round-off: a lone remainder of the
+            # population runs in the scalar kernel, which agrees with the SIMD one to ~1e-12)
+            np.testing.assert_allclose(fit, fit[0], rtol=1e-9, atol=0)
             best.append(None)
             continue
         assert fit.max() > depth * fit.min(), (K_NAMES[c], fit.max() / fit.min())

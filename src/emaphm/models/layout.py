@@ -27,6 +27,8 @@ fault model        winding circuit of a candidate (``s`` = shorted fraction)
 
 from __future__ import annotations
 
+from collections import OrderedDict
+
 import numpy as np
 
 from ..faults import (as_k, backlash_scale, check_fault_model, eccentricity_phase,
@@ -169,42 +171,94 @@ def pack_population(nominal: ActuatorParams, K: np.ndarray, theta0: float = 0.0,
     names from :data:`NUISANCE`; ``K`` then has ``8 + len(nuisance)`` columns, the
     extra ones each candidate's relative deviation of that parameter. Rows of K are not
     range-checked here (the optimizers keep them in the box); use
-    :func:`emaphm.faults.as_k` for user input.
+    :func:`emaphm.faults.as_k` for user input. A model that packs many populations
+    keeps a :class:`PopulationPacker` instead (the same rows, with the shared work done
+    once).
     """
-    check_fault_model(fault_model)
-    bad = [n for n in nuisance if n not in NUISANCE]
-    if bad:
-        raise ValueError(f"unknown nuisance parameter(s) {bad}; choose from {', '.join(NUISANCE)}")
-    K = np.atleast_2d(np.asarray(K, dtype=float))
-    if K.ndim != 2 or K.shape[1] != N_K + len(nuisance):
-        raise ValueError(f"population of fault vectors must have shape (n_pop, {N_K + len(nuisance)})"
-                         f" ({N_K} k and {len(nuisance)} nuisance), got {K.shape}")
-    K, NU = K[:, :N_K], K[:, N_K:]
-    P, base = pack(nominal, theta0, fault_model, n_sub=n_sub)
-    m = nominal.motor
-    CP = np.repeat(base, K.shape[0], axis=0)
-    for j, name in enumerate(nuisance):
-        cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
-        CP[:, cols] *= 1.0 + NU[:, j:j + 1]
-    CP[:, C_KP] *= gain_scale(K[:, 7])
-    fs = friction_scale(K[:, 0])
-    CP[:, C_FSJ] *= fs
-    CP[:, C_FDJ] *= fs
-    CP[:, C_BACKLASH] *= backlash_scale(K[:, 1])
-    s = shorted_fraction(K[:, 2:5])
-    if fault_model == "paper":
-        CP[:, C_R_A:C_R_C + 1] *= 1.0 - s
-        CP[:, C_L_A:C_L_C + 1] *= (1.0 - s) ** 2
-        CP[:, C_C0_A:C_C0_C + 1] *= 1.0 - s
-        sigma, mu = 1.0, np.zeros_like(s)
-    else:
-        CP[:, C_MU_A:C_MU_C + 1] = s
-        sigma, mu = m.L_sigma, s
-    CP[:, C_ECC] = K[:, 5]
-    CP[:, C_ECC_PHASE] = eccentricity_phase(K[:, 6])
-    CP[:, C_PHI:C_GAMMA], CP[:, C_GAMMA:] = _population_matrices(
-        CP[:, C_R_A:C_R_C + 1], CP[:, C_L_A:C_L_C + 1], sigma, mu, np.array(m.R_f), P[P_DT])
-    return P, CP
+    return PopulationPacker(nominal, theta0, fault_model, n_sub=n_sub, nuisance=nuisance)(K)
+
+
+class PopulationPacker:
+    """:func:`pack_population` for one healthy actuator, populations after populations.
+
+    What no fault vector changes is packed once (``P`` and the healthy row), and the
+    winding step matrices of the last :attr:`CACHE_SIZE` distinct windings (a phase's
+    ``R, L, mu``) are kept: the candidates of a finite-difference Jacobian, or of a
+    search closing in, repeat the same few windings, whose exact step (a Cholesky
+    factor and an eigen-decomposition each) is otherwise most of the packing. The rows
+    are bit-identical to an uncached packing's.
+    """
+
+    #: Distinct windings whose step matrices are kept (least recently used dropped).
+    CACHE_SIZE = 256
+
+    def __init__(self, nominal: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper",
+                 *, n_sub: int = 1, nuisance: tuple[str, ...] = ()) -> None:
+        check_fault_model(fault_model)
+        nuisance = tuple(nuisance)
+        bad = [n for n in nuisance if n not in NUISANCE]
+        if bad:
+            raise ValueError(f"unknown nuisance parameter(s) {bad}; choose from {', '.join(NUISANCE)}")
+        self.nominal, self.fault_model, self.nuisance = nominal, fault_model, nuisance
+        self.P, self.base = pack(nominal, theta0, fault_model, n_sub=n_sub)
+        self._sigma = 1.0 if fault_model == "paper" else nominal.motor.L_sigma
+        self._R_f = np.array(nominal.motor.R_f)
+        self._windings: OrderedDict[bytes, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+
+    def __call__(self, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        nuisance = self.nuisance
+        K = np.atleast_2d(np.asarray(K, dtype=float))
+        if K.ndim != 2 or K.shape[1] != N_K + len(nuisance):
+            raise ValueError(f"population of fault vectors must have shape (n_pop, {N_K + len(nuisance)})"
+                             f" ({N_K} k and {len(nuisance)} nuisance), got {K.shape}")
+        K, NU = K[:, :N_K], K[:, N_K:]
+        CP = np.repeat(self.base, K.shape[0], axis=0)
+        for j, name in enumerate(nuisance):
+            cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
+            CP[:, cols] *= 1.0 + NU[:, j:j + 1]
+        CP[:, C_KP] *= gain_scale(K[:, 7])
+        fs = friction_scale(K[:, 0])
+        CP[:, C_FSJ] *= fs
+        CP[:, C_FDJ] *= fs
+        CP[:, C_BACKLASH] *= backlash_scale(K[:, 1])
+        s = shorted_fraction(K[:, 2:5])
+        if self.fault_model == "paper":
+            CP[:, C_R_A:C_R_C + 1] *= 1.0 - s
+            CP[:, C_L_A:C_L_C + 1] *= (1.0 - s) ** 2
+            CP[:, C_C0_A:C_C0_C + 1] *= 1.0 - s
+            mu = np.zeros_like(s)
+        else:
+            CP[:, C_MU_A:C_MU_C + 1] = s
+            mu = s
+        CP[:, C_ECC] = K[:, 5]
+        CP[:, C_ECC_PHASE] = eccentricity_phase(K[:, 6])
+        CP[:, C_PHI:C_GAMMA], CP[:, C_GAMMA:] = self._matrices(
+            CP[:, C_R_A:C_R_C + 1], CP[:, C_L_A:C_L_C + 1], mu)
+        return self.P.copy(), CP
+
+    def _matrices(self, R: np.ndarray, L: np.ndarray, mu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(Phi, Gamma)`` (n, 25) of each row's winding, from the cache where it is."""
+        keys = np.ascontiguousarray(np.hstack([R, L, mu]))
+        rows = [keys[i].tobytes() for i in range(keys.shape[0])]
+        cache = self._windings
+        missing = list(dict.fromkeys(r for r in rows if r not in cache))
+        if missing:
+            first: dict[bytes, int] = {}
+            for i, r in enumerate(rows):
+                first.setdefault(r, i)
+            idx = [first[r] for r in missing]
+            Phi, Gamma = _population_matrices(R[idx], L[idx], self._sigma, mu[idx], self._R_f,
+                                              self.P[P_DT])
+            for i, r in enumerate(missing):
+                cache[r] = (Phi[i], Gamma[i])
+        Phi = np.empty((len(rows), N_Z * N_Z))
+        Gamma = np.empty((len(rows), N_Z * N_Z))
+        for i, r in enumerate(rows):
+            Phi[i], Gamma[i] = cache[r]
+            cache.move_to_end(r)
+        while len(cache) > self.CACHE_SIZE:
+            cache.popitem(last=False)
+        return Phi, Gamma
 
 
 def _population_matrices(R, L, sigma, mu, R_f, dt):
@@ -219,5 +273,5 @@ def _population_matrices(R, L, sigma, mu, R_f, dt):
     return Phi, Gamma
 
 
-__all__ = ["pack", "pack_shared", "pack_population", "winding_step_matrices", "MU_MIN", "N_P",
+__all__ = ["pack", "pack_shared", "pack_population", "PopulationPacker", "winding_step_matrices", "MU_MIN", "N_P",
            "N_CP", "NUISANCE", "as_k"]

@@ -51,7 +51,7 @@ from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_F
                      C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX,
                      P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
                      P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
-                     pack_population)
+                     PopulationPacker)
 from .mechanics import transmission_step
 from .pmsm import (back_emf_coeffs, phase_currents, torque_loops, winding_input,
                    winding_step)
@@ -64,6 +64,13 @@ OMEGA_DIVERGED = 1e5    # rad/s
 STATUS_OK = 0
 STATUS_DIVERGED = 1
 STATUS_TRIPPED = 2
+
+#: Candidates left over after the SIMD kernel's full blocks that :class:`MonitoringModel`
+#: runs in the scalar kernel instead: one alone costs about half a block of vector lanes
+#: (``benchmarks/bench_models.py`` measures both side by side), so a lone remainder (a
+#: least-squares step, a finite-difference Jacobian of 8 plus its centre) is cheaper
+#: outside the lanes.
+SCALAR_TAIL = 1
 
 
 @jit
@@ -314,6 +321,8 @@ class MonitoringModel:
         object.__setattr__(self, "_t", t)
         object.__setattr__(self, "_ref", np.ascontiguousarray(self.profile.theta_ref(t)))
         object.__setattr__(self, "_load", np.ascontiguousarray(self.profile.load_torque(t)))
+        object.__setattr__(self, "_packer", PopulationPacker(
+            self.params, self.theta0, self.fault_model, n_sub=self.n_sub, nuisance=self.nuisance))
 
     @property
     def t(self) -> np.ndarray:
@@ -328,8 +337,7 @@ class MonitoringModel:
     def pack(self, K) -> tuple[np.ndarray, np.ndarray]:
         """``(P, CP)`` of the population ``K`` (n_pop, 8) for this model's kernels
         (:func:`emaphm.models.layout.pack_population` with its fault model and step)."""
-        return pack_population(self.params, K, self.theta0, self.fault_model, n_sub=self.n_sub,
-                               nuisance=tuple(self.nuisance))
+        return self._packer(K)
 
     def _run(self, CP, P, i_target, weights, store):
         n_pop, n = CP.shape[0], self._t.size
@@ -338,11 +346,20 @@ class MonitoringModel:
         outs = [np.zeros(shape) for _ in range(3)]
         fitness = np.zeros(n_pop)
         status = np.zeros(n_pop, dtype=np.int64)
-        kernel = _kernel
-        if self.kernel == "simd":
-            from .monitoring_simd import _kernel as kernel   # imports this module's constants
-        kernel(P, CP, self._ref, self._load, self.n_sub, i_target, weights,
-               out_i, *outs, fitness, status)
+        if self.kernel == "scalar":
+            parts = [(slice(0, n_pop), _kernel)]
+        else:
+            from .monitoring_simd import LANES, _kernel as simd   # imports this module's constants
+            # full blocks of LANES in vector lanes; a remainder of SCALAR_TAIL or fewer
+            # candidates one by one (a block costs about as much as two of them alone)
+            tail = n_pop % LANES
+            split = n_pop - tail if tail <= SCALAR_TAIL else n_pop
+            parts = [(slice(0, split), simd), (slice(split, n_pop), _kernel)]
+        for rows, kernel in parts:
+            if rows.stop > rows.start:
+                kernel(P, CP[rows], self._ref, self._load, self.n_sub, i_target, weights,
+                       out_i[rows] if store else out_i, *(o[rows] if store else o for o in outs),
+                       fitness[rows], status[rows])
         return out_i, outs, fitness, status
 
     def simulate_population(self, K) -> PopulationResult:
