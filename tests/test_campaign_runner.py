@@ -290,7 +290,7 @@ def test_cli_refuses_a_changed_spec_and_leaves_the_store(reference, capsys):
 
 
 @pytest.mark.parametrize("argv, match", [
-    (["--algorithms", "pso,sa"], "unknown algorithm 'sa'; choose one of cmaes, de, gwo, pso, scipy-de"),
+    (["--algorithms", "pso,sa"], "unknown algorithm 'sa'; choose one of cmaes, de, gwo, lsq, pso, scipy-de"),
     (["--scenarios", "gain"], "unknown scenario 'gain'"),
     (["--workers", "2", "--scheduler", "tcp://localhost:1"], "give either --workers"),
     (["--budget", "lots"], "budget 'lots' not understood"),
@@ -391,3 +391,13 @@ def test_a_killed_campaign_takes_its_workers_with_it(tmp_path):
     finally:
         reap(proc)
     assert left == [], f"processes of the killed campaign still alive 5 s later: {left}"
+
+
+def test_a_run_of_the_default_pipeline_is_executed_and_stored():
+    spec = small_spec(runs=1)
+    run = spec.runs_list()[0]
+    import dataclasses
+
+    r = execute_run(dataclasses.replace(run, optimizer="lsq", options=(), budget=None))
+    assert r.status == "ok", r.error_text
+    assert r.optimizer == "lsq" and 0 < r.evaluations < 2000 and r.error_pct < 5.0

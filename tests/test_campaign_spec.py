@@ -162,7 +162,7 @@ def test_run_lookup_by_key():
 # ----------------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("text, match", [
     ('scenarios = ["friction-lo"]', r"unknown scenario 'friction-lo'; choose one of nominal, friction-low"),
-    ('algorithms = ["de", "sa"]', r"unknown algorithm 'sa'; choose one of cmaes, de, gwo, pso, scipy-de"),
+    ('algorithms = ["de", "sa"]', r"unknown algorithm 'sa'; choose one of cmaes, de, gwo, lsq, pso, scipy-de"),
     ('algorithms = ["pso"]\n[options.pso]\npop_size = -1',
      r"algorithm 'pso': PSO: pop_size must be an integer >= "),
     ('algorithms = ["pso"]\n[options.pso]\nswarm = 3', r"algorithm 'pso': bad option .*swarm"),
@@ -207,3 +207,11 @@ def test_options_that_are_not_a_table_are_refused(tmp_path, toml):
     p.write_text('scenarios = ["friction-low"]\n' + toml + "\n")
     with pytest.raises(SpecError, match="must be a table of settings"):
         CampaignSpec.from_toml(p)
+
+
+def test_the_default_pipeline_is_an_algorithm_of_specs_without_options():
+    spec = CampaignSpec(scenarios=("friction-low",), algorithms=("lsq", "pso"), runs=1)
+    assert [a.name for a in spec.algorithms] == ["lsq", "pso"]
+    assert {r.optimizer for r in spec.runs_list()} == {"lsq", "pso"}
+    with pytest.raises(SpecError, match="algorithm 'lsq': lsq takes no options"):
+        CampaignSpec(algorithms=(AlgorithmSpec("lsq", options={"pop_size": 4}),))

@@ -17,6 +17,7 @@ import pytest
 from emaphm.faults import K_NAMES, SCENARIOS, error_pct
 from emaphm.fitness import Eq4Objective
 from emaphm.identify import Identification, identify, parse_budget
+from emaphm.identify import DEFAULT_ALGORITHM
 from emaphm.models.monitoring import MonitoringModel
 from emaphm.optim import ALGORITHMS, MaxEvaluations, MaxIterations, WallClock
 from emaphm.simulate import DEFAULT_SENSORS, simulate
@@ -222,7 +223,7 @@ def test_callback_stops_the_search_with_the_default_polish(mm_gain_low, objectiv
 
 # ----------------------------------------------------------------------------- misuse
 def test_unknown_algorithm_raises(mm_gain_low):
-    with pytest.raises(ValueError, match=r"unknown algorithm 'nelder-mead'; choose one of cmaes, de, gwo, pso, scipy-de"):
+    with pytest.raises(ValueError, match=r"unknown algorithm 'nelder-mead'; choose one of lsq, cmaes, de, gwo, pso, scipy-de"):
         identify(mm_gain_low, "nelder-mead", seed=0)
 
 
@@ -341,3 +342,55 @@ def test_a_resistance_drift_is_searched_beside_k_not_read_as_a_fault():
     assert ident.to_dict()["nuisance"] == ident.nuisance
     with pytest.raises(ValueError, match="unknown"):
         identify(trace, "pso", seed=0, nuisance=("J",))
+
+
+# ----------------------------------------------------------------- the default pipeline (lsq)
+def test_default_pipeline_is_least_squares_and_exact_on_the_models_own_trace(mm_gain_low, objective):
+    """Noise-free twin trace: the fitness is zero at the truth and least squares gets there
+    (measured: Eq. 9 error 4e-7 %, fitness 2e-19 in 363 evaluations from the healthy start)."""
+    ident = identify(mm_gain_low, seed=1, objective=objective)
+    assert ident.algorithm == DEFAULT_ALGORITHM == "lsq"
+    assert ident.error_pct < 1e-4 and ident.fitness < 1e-15
+    assert ident.restarts == 0 and ident.reason == "converged"
+    assert ident.evaluations < 1000                    # the metaheuristics' defaults: ~5,000
+    assert ident.options["search"] == "ecc-xy"         # the paper's fault model
+    assert ident.polish_evaluations > 0 and ident.fitness <= ident.fitness_raw
+    assert np.all(np.diff(ident.history) <= 0.0)
+
+
+def test_default_pipeline_warm_start_and_budget(mm_gain_low, objective):
+    cold = identify(mm_gain_low, seed=1, objective=objective)
+    warm = identify(mm_gain_low, seed=1, objective=objective, start=SCENARIOS["gain-low"])
+    assert warm.error_pct < 1e-4 and warm.evaluations < cold.evaluations    # measured 110 vs 363
+    capped = identify(mm_gain_low, seed=1, objective=objective, budget=100)
+    assert capped.evaluations <= 100 and capped.reason == "max_evaluations"
+    with pytest.raises(ValueError, match="start .* is an option of 'lsq', not of 'pso'"):
+        identify(mm_gain_low, "pso", seed=1, objective=objective, start=SCENARIOS["gain-low"])
+    with pytest.raises(ValueError, match="takes no optimizer options"):
+        identify(mm_gain_low, seed=1, objective=objective, options={"pop_size": 4})
+
+
+def test_default_pipeline_is_deterministic_and_restarts_from_the_sample(monkeypatch):
+    """A noisy trace of several faults: same seed, same result; and a pipeline that accepts
+    no fit takes ``restarts`` further starts from the seeded sample and keeps the best."""
+    import emaphm.identify as identify_module
+
+    trace = simulate(scenario="multiple", model="monitoring", sensors=DEFAULT_SENSORS, seed=3)
+    a = identify(trace, seed=4)
+    b = identify(trace, seed=4)
+    np.testing.assert_array_equal(a.k, b.k)
+    assert a.evaluations == b.evaluations and a.error_pct < 1.0     # measured 0.32 %
+    monkeypatch.setattr(identify_module, "misfit_limit", lambda p=None: 0.0)
+    c = identify(trace, seed=4, restarts=2, suspect_ratio=3.0)
+    assert c.restarts == 2 and c.evaluations > a.evaluations
+    assert c.fitness <= a.fitness * (1 + 1e-6)   # the first start is among them (refined alike)
+
+
+def test_default_pipeline_on_the_physical_fault_model():
+    """A 15 % inter-turn short on phase A, searched with k3..k5 squared (ecc-xy-sq)."""
+    trace = simulate(scenario="turn-short-15pct", model="monitoring", sensors=DEFAULT_SENSORS,
+                     seed=1, fault_model="physical")
+    ident = identify(trace, seed=1)
+    assert ident.fault_model == "physical" and ident.options["search"] == "ecc-xy-sq"
+    assert ident.k[2] == pytest.approx(0.15, abs=0.01) and ident.k[3:5].max() < 0.02
+    assert ident.error_pct < 1.0 and not ident.suspect

@@ -19,7 +19,7 @@ from emaphm.prognosis import (HealthHistory, degradation_scenario, identify_with
                               inspection_times, prognose, simulate_degradation)
 from emaphm.traces import write_trace
 
-FAST = {"budget": 1500, "options": {"pop_size": 30}}
+FAST = {"budget": 1500}            # the default pipeline (lsq) needs a few hundred
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -89,7 +89,7 @@ def test_spread_methods(run):
     res = {}
     for method in ("population", "seeds", "bootstrap"):
         a = identify_with_spread(trace, seed=1, method=method, n_runs=2, budget=600,
-                                 options={"pop_size": 20}, objective=obj)
+                                 options={"pop_size": 20}, objective=obj, algorithm="pso")
         iv = a.interval
         assert np.all(iv.lo <= iv.k) and np.all(iv.k <= iv.hi)
         assert iv.details["n_eff"] > 0 and iv.method == method
@@ -102,7 +102,7 @@ def test_spread_methods(run):
 
     assert res["population"].interval.half_width[0] >= IDENTIFICATION_ERROR_P90[0] - 1e-12
     bare = identify_with_spread(trace, seed=1, budget=600, options={"pop_size": 20},
-                                objective=obj, error_floor=0.0)
+                                objective=obj, error_floor=0.0, algorithm="pso")
     assert bare.interval.half_width[0] < res["population"].interval.half_width[0] + 1e-12
     ks = np.array(res["seeds"].interval.details["k_runs"])
     np.testing.assert_allclose(res["seeds"].k, np.median(ks, axis=0))
@@ -110,7 +110,7 @@ def test_spread_methods(run):
     # an identification far above the trace's noise level is run again with a new seed
     assert 0.3 < res["population"].identification.fitness / obj.noise_floor() < 3.0
     weak = identify_with_spread(trace, seed=1, budget=20, options={"pop_size": 10}, polish=False,
-                                objective=obj, retries=1)
+                                objective=obj, retries=1, algorithm="pso")
     assert weak.interval.details["retries"] == 1 and len(weak.runs) == 1
     assert weak.interval.details["fitness_ratio"] > 5 and weak.interval.details["suspect"]
     with pytest.raises(ValueError, match="suspect_ratio"):

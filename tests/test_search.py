@@ -34,8 +34,9 @@ def test_ecc_xy_round_trip_inside_the_disk():
 
 
 def test_unknown_space_is_refused():
-    assert set(SEARCH_SPACES) == {"ecc-xy", "k", "ecc-xy-sc"}
-    with pytest.raises(ValueError, match="unknown search space 'polar'; choose one of ecc-xy, k, ecc-xy-sc"):
+    assert set(SEARCH_SPACES) == {"ecc-xy", "k", "ecc-xy-sc", "ecc-xy-sq"}
+    with pytest.raises(ValueError, match="unknown search space 'polar'; choose one of ecc-xy, k, "
+                                         "ecc-xy-sc, ecc-xy-sq"):
         to_k(np.zeros((1, 8)), "polar")
 
 
@@ -59,3 +60,24 @@ def test_sparse_short_circuit_space_has_healthy_phases_and_small_shorts():
     k = np.array([[0.2, 0.1, 0.05, 0.0, 0.3, 0.4, 0.3, 0.6]])
     assert to_k(from_k(k, "ecc-xy-sc"), "ecc-xy-sc") == pytest.approx(k)
     assert default_search("physical") == "ecc-xy-sc" and default_search("paper") == "ecc-xy"
+
+
+def test_squared_short_circuit_space_is_linear_in_the_loops_effect():
+    """``ecc-xy-sq``: k = SC_SEARCH_MAX sqrt(z) on k3..k5 (a loop's effect grows as k^2,
+    so linearly in z), ecc-xy elsewhere; a round trip inside the range; and the
+    least-squares pipeline uses it only under the physical fault model."""
+    from emaphm.search import SC_SEARCH_MAX, least_squares_search, nuisance_from_unit, nuisance_to_unit
+
+    z = np.full((1, 8), 0.5)
+    z[0, 2:5] = [0.0, 0.25, 1.0]
+    k = to_k(z, "ecc-xy-sq")[0]
+    assert k[2:5] == pytest.approx([0.0, 0.5 * SC_SEARCH_MAX, SC_SEARCH_MAX])
+    np.testing.assert_array_equal(np.delete(k, [2, 3, 4]), np.delete(to_k(z)[0], [2, 3, 4]))
+    kk = np.array([[0.2, 0.1, 0.05, 0.0, 0.3, 0.4, 0.3, 0.6]])
+    assert to_k(from_k(kk, "ecc-xy-sq"), "ecc-xy-sq") == pytest.approx(kk)
+    assert least_squares_search("physical") == "ecc-xy-sq"
+    assert least_squares_search("paper") == "ecc-xy"
+    nu = np.array([[0.0, 0.0], [0.3, -0.06]])
+    u = nuisance_to_unit(nu, ("R", "flux"))
+    assert u == pytest.approx(np.array([[0.25, 0.5], [1.0, 0.0]]))
+    assert nuisance_from_unit(u, ("R", "flux")) == pytest.approx(nu)

@@ -269,17 +269,16 @@ def _table(ident, diag) -> str:
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .diagnosis import diagnose, fit_ratio_of
     from .faults import scenario
-    from .identify import identify
-    from .optim import ALL_ALGORITHMS
+    from .identify import ALGORITHM_NAMES, identify
     from .plots import plot_identification
     from .simulate import DEFAULT_SENSORS, simulate
     from .traces import read_trace
 
     if (args.trace is None) == (args.scenario is None):
         raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
-    if args.algorithm not in ALL_ALGORITHMS:
+    if args.algorithm not in ALGORITHM_NAMES:
         raise UsageError(f"unknown algorithm {args.algorithm!r}; choose one of "
-                         f"{', '.join(sorted(ALL_ALGORITHMS))}")
+                         f"{', '.join(ALGORITHM_NAMES)}")
     budget = budget_option(args.budget)
     plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
     params = _load_params(args.params)
@@ -427,8 +426,10 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("diagnose", help="identify the faults of a trace")
     d.add_argument("trace", nargs="?", help="trace file (.csv or .parquet)")
     d.add_argument("--scenario", help="simulate this scenario on the reference model and diagnose it")
-    d.add_argument("--algorithm", default="pso",
-                   help="pso (default), de, gwo, or the baselines scipy-de and cmaes")
+    d.add_argument("--algorithm", default="lsq",
+                   help="lsq (default: batched least squares from the healthy start and a "
+                        "seeded sample), the paper's pso, de, gwo, or the baselines scipy-de "
+                        "and cmaes")
     d.add_argument("--seed", type=_seed, default=0, help="seed of the optimizer (and of the sensor noise)")
     d.add_argument("--budget", help="evaluations (e.g. 5000) or wall-clock seconds (e.g. 10s); "
                                     "default: the paper's stopping rules")

@@ -298,6 +298,24 @@ class Eq4Objective:
         sigma = white_noise_sigma(self.target) if self.noise_sigma is None else self.noise_sigma
         return float(np.sum(self.weights * np.asarray(sigma) ** 2))
 
+    def residuals(self, K: np.ndarray) -> np.ndarray:
+        """The weighted residuals ``sqrt(weights) (i_model - target)`` of each candidate,
+        flattened: (n_pop, n * 3) (or (n_pop, n) in ``"equivalent"`` mode), so that a row's
+        sum of squares is its Eq. 4 fitness. A diverged candidate's row is ``inf``."""
+        K = np.atleast_2d(np.asarray(K, dtype=float))
+        t0 = time.perf_counter()
+        pop = self.model.simulate_population(K)
+        i = equivalent_current(pop.i_abc)[..., None] if self.mode == "equivalent" else pop.i_abc
+        R = (np.sqrt(self.weights)[None] * (i - self.target[None])).reshape(K.shape[0], -1)
+        diverged = pop.status == STATUS_DIVERGED
+        R[diverged] = np.inf
+        s = self.stats
+        s.kernel_s += time.perf_counter() - t0
+        s.calls += 1
+        s.evaluations += K.shape[0]
+        s.diverged += int(np.count_nonzero(diverged))
+        return R
+
     def __call__(self, K: np.ndarray) -> np.ndarray:
         K = np.atleast_2d(np.asarray(K, dtype=float))
         t0 = time.perf_counter()

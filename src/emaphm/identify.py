@@ -21,11 +21,34 @@ from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination,
                     get_optimizer, minimize)
 from .optim.local import compass_search
 from .params import ActuatorParams
-from .search import default_search, nuisance_from_unit, to_k
+from .search import (default_search, from_k, least_squares_search, nuisance_from_unit,
+                     nuisance_to_unit, to_k)
 from .traces import Trace, TraceError, validate
 
-__all__ = ["Identification", "identify", "parse_budget"]
+__all__ = ["Identification", "identify", "parse_budget", "DEFAULT_ALGORITHM", "ALGORITHM_NAMES"]
 
+
+#: The default identification pipeline (:func:`identify` without an algorithm): a
+#: space-filling sample and batched least squares from the best starts, see
+#: :func:`identify`. The paper's metaheuristics stay selectable by name.
+DEFAULT_ALGORITHM = "lsq"
+
+#: Every name :func:`identify` accepts: the default pipeline and the optimizers of
+#: :data:`emaphm.optim.ALL_ALGORITHMS`.
+ALGORITHM_NAMES: tuple[str, ...] = (DEFAULT_ALGORITHM, *sorted(ALL_ALGORITHMS))
+
+#: Space-filling sample (scrambled Sobol points, seeded) from which the least-squares
+#: pipeline takes its further starts, when the nominal start is not good enough.
+LSQ_SAMPLE = 64
+
+#: Further starts the least-squares pipeline may take after the first (without a budget).
+LSQ_RESTARTS = 3
+
+#: A start of the least-squares pipeline is good enough when its fit ratio is below the
+#: misfit test's limit at this false-alarm probability (about 1.8): most fits of an
+#: actuator the model describes are (a stricter limit than the verdict's, so that a fit
+#: the verdict would accept is still checked against another start).
+LSQ_ACCEPT_P = 0.05
 
 #: Largest budget accepted: 1e8 evaluations (hours of CPU) or a day of wall clock; a larger
 #: one is a typo, not a plan.
@@ -177,6 +200,10 @@ DEFAULT_RESTARTS = 2
 #: Largest number of evaluations the polish may spend (it usually needs 150-500).
 POLISH_MAX_EVALUATIONS = 2000
 
+#: The least-squares pipeline's polish: a finer, shorter compass search (it starts at a
+#: least-squares minimum, step 0.02 of the box down to 1e-3).
+POLISH_LSQ_EVALUATIONS = 200
+
 
 def _terms(termination: Any) -> list[Any]:
     if termination is None:
@@ -249,7 +276,61 @@ def _k_true(trace: Trace) -> np.ndarray | None:
         return None
 
 
-def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
+def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndarray], search: str,
+                   nu_names: tuple[str, ...], fault_model: str, start: np.ndarray | None, seed: int,
+                   termination: Any, callback: Any, polish: bool, floor: float,
+                   restarts: int) -> tuple[_Run, int]:
+    """The default pipeline (see :func:`identify`): ``(run, starts taken)``."""
+    from scipy.stats import qmc
+
+    from .optim.lsq import multistart_least_squares
+
+    n_var = N_K + len(nu_names)
+    nu0 = nuisance_to_unit(np.zeros((1, len(nu_names))), nu_names) if nu_names else np.zeros((1, 0))
+
+    def point(k: np.ndarray, nu_unit: np.ndarray) -> np.ndarray:
+        return np.clip(np.hstack([from_k(k[None, :], search), nu_unit.reshape(1, -1)])[0], 0.0, 1.0)
+
+    def starts():
+        if start is not None:
+            yield point(start, nu0)
+        yield point(K_NOMINAL, nu0)
+        # the best of a seeded space-filling sample, drawn in the metaheuristics' space
+        # (short circuits sparse), only when the first starts were not good enough
+        sample_space = default_search(fault_model)
+        Z = qmc.Sobol(n_var, scramble=True, seed=seed).random(LSQ_SAMPLE)
+        K = to_k(Z[:, :N_K], sample_space)
+        nu = nuisance_from_unit(Z[:, N_K:], nu_names) if nu_names else np.zeros((LSQ_SAMPLE, 0))
+        f = objective(np.hstack([K, nu]))
+        for i in np.argsort(f, kind="stable")[:restarts]:
+            if np.isfinite(f[i]):
+                yield point(K[i], Z[i, N_K:])
+
+    max_evals = _remaining_evaluations(termination, 0, np.iinfo(np.int64).max)
+    max_seconds = _remaining_seconds(termination, 0.0)
+    accept = misfit_limit(LSQ_ACCEPT_P) * floor
+    box = (np.zeros(n_var), np.ones(n_var))
+    res, info = multistart_least_squares(
+        lambda Z: objective.residuals(full(Z)), _limited(starts(), 1 + restarts), box,
+        accept=accept, polish_evals=POLISH_LSQ_EVALUATIONS if polish else 0,
+        max_evals=max_evals, max_seconds=max_seconds, callback=callback,
+        fitness=lambda Z: objective(full(Z)))
+    raw = OptimizeResult(x=info["x_raw"], fun=info["f_raw"],
+                         nfev=res.nfev - info["polish_evaluations"], nit=res.nit,
+                         history=res.history, reason=res.reason, elapsed_s=res.elapsed_s,
+                         algorithm=DEFAULT_ALGORITHM)
+    return _Run(raw, res.x, float(res.fun), res.history, info["polish_evaluations"],
+                info["polish_s"]), info["starts"]
+
+
+def _limited(it, n: int):
+    for i, x in enumerate(it):
+        if i >= n:
+            return
+        yield x
+
+
+def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
              budget: Any = None, params: ActuatorParams | None = None,
              options: dict[str, Any] | None = None, n_sub: int = 1, mode: str = "phases",
              polish: bool = True, search: str | None = None, restarts: int | None = None,
@@ -257,7 +338,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
              callback: Callable[[Any], bool | None] | None = None,
              objective: Eq4Objective | None = None,
              fault_model: str | None = None,
-             nuisance: tuple[str, ...] | None = None) -> Identification:
+             nuisance: tuple[str, ...] | None = None,
+             start: Any = None) -> Identification:
     """Identify the fault vector of ``trace``.
 
     Parameters
@@ -265,6 +347,15 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     trace
         Measured (or simulated) trace; validated first.
     algorithm
+        ``"lsq"`` (default, :data:`DEFAULT_ALGORITHM`): batched least squares on the
+        weighted residuals of Eq. 4 (:func:`emaphm.optim.lsq.multistart_least_squares`,
+        SciPy's trust-region reflective method with a Jacobian from one batched kernel
+        call), started from ``start`` if given, then the healthy actuator, then, while
+        the fit is above the misfit test's limit at :data:`LSQ_ACCEPT_P`, the best
+        points of a seeded space-filling sample of :data:`LSQ_SAMPLE` candidates (at
+        most ``restarts`` further starts, default :data:`LSQ_RESTARTS`), searched in
+        :func:`emaphm.search.least_squares_search`; the best refined and polished. It
+        needs some hundreds of model runs where the metaheuristics need thousands. Or
         ``"pso"``, ``"de"``, ``"gwo"`` (the paper's) or the baselines ``"scipy-de"``,
         ``"cmaes"`` (:data:`emaphm.optim.ALL_ALGORITHMS`).
     seed
@@ -310,6 +401,9 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         Mapping of k3..k5 in the monitoring model (:data:`emaphm.faults.FAULT_MODELS`);
         default the trace's own (:func:`emaphm.fitness.trace_fault_model`: its
         metadata's, ``"physical"`` for a bench trace).
+    start
+        ``"lsq"`` only: a fault vector to start from first (the actuator's previous
+        inspection; a warm start), before the healthy actuator.
     nuisance
         Nuisance parameters searched jointly with k (names of
         :data:`emaphm.search.NUISANCE_RANGE`: ``"R"`` the winding resistance, ``"flux"``
@@ -320,13 +414,21 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         most after it, with the winding's and the magnets' temperature), none for data-sheet
         parameters (a prebuilt ``objective`` brings its own).
     """
-    if algorithm not in ALL_ALGORITHMS:
+    if algorithm not in ALGORITHM_NAMES:
         raise ValueError(f"unknown algorithm {algorithm!r}; choose one of "
-                         f"{', '.join(sorted(ALL_ALGORITHMS))}")
+                         f"{', '.join(ALGORITHM_NAMES)}")
+    if start is not None:
+        if algorithm != DEFAULT_ALGORITHM:
+            raise ValueError(f"start (a warm start) is an option of {DEFAULT_ALGORITHM!r}, not of "
+                             f"{algorithm!r}")
+        start = as_k(start)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     if restarts is None:          # none under a budget (a cap) or for the bare algorithm
-        restarts = DEFAULT_RESTARTS if budget is None and polish else 0
+        if algorithm == DEFAULT_ALGORITHM:
+            restarts = LSQ_RESTARTS
+        else:
+            restarts = DEFAULT_RESTARTS if budget is None and polish else 0
     if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) or restarts < 0:
         raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
     if suspect_ratio is None:
@@ -337,7 +439,12 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     if search is not None:
         to_k(np.zeros((1, 8)), search)   # validates the search space name
     termination = parse_budget(budget)
-    optimizer = get_optimizer(algorithm, **(options or {}))
+    if algorithm == DEFAULT_ALGORITHM:
+        if options:
+            raise ValueError(f"{DEFAULT_ALGORITHM!r} takes no optimizer options, got {options}")
+        optimizer = None
+    else:
+        optimizer = get_optimizer(algorithm, **(options or {}))
     validate(trace)
     if objective is None:
         if nuisance is None:
@@ -352,13 +459,20 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
                          f"{objective.model.fault_model!r}")
     fault_model = objective.model.fault_model
     if search is None:
-        search = default_search(fault_model)
+        search = (least_squares_search(fault_model) if algorithm == DEFAULT_ALGORITHM
+                  else default_search(fault_model))
     # compile (or load from the disk cache) the kernels before the clock starts
     tc = time.perf_counter()
-    objective.model.simulate(K_NOMINAL)
+    if algorithm == DEFAULT_ALGORITHM:
+        import scipy.optimize  # noqa: F401  (imported before the clock, like the kernels)
+        import scipy.stats  # noqa: F401
+    objective.model.simulate(K_NOMINAL)                         # the scalar kernel
+    objective.model.simulate_population(                         # the SIMD one
+        np.tile(np.concatenate([K_NOMINAL, np.zeros(len(objective.model.nuisance))]), (2, 1)))
     compile_s = time.perf_counter() - tc
     k0 = objective.stats.kernel_s
     e0 = objective.stats.diverged
+    ev0 = objective.stats.evaluations
     t0 = time.perf_counter()
 
     nu_names = objective.model.nuisance
@@ -377,18 +491,25 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     def run(run_seed: int) -> _Run:
         return _search(fitness, optimizer, run_seed, termination, callback, polish, t0, n_var)
 
-    best = run(int(seed))
-    runs = [best]
-    # a fit far above the trace's noise floor ended in a wrong basin: run again with
-    # seeds spawned from ``seed`` (unless a callback asked to stop)
     floor = objective.noise_floor()
     limit = suspect_ratio * floor if floor > 0 else np.inf
-    for run_seed in _restart_seeds(int(seed), int(restarts)):
-        if best.fun <= limit or runs[-1].res.reason == "callback":
-            break
-        runs.append(run(run_seed))
-        if runs[-1].fun < best.fun:
-            best = runs[-1]
+    if algorithm == DEFAULT_ALGORITHM:
+        best, n_starts = _least_squares(objective, full, search, nu_names, fault_model, start,
+                                        int(seed), termination, callback, polish, floor,
+                                        int(restarts))
+        runs = [best]
+    else:
+        best = run(int(seed))
+        runs = [best]
+        # a fit far above the trace's noise floor ended in a wrong basin: run again with
+        # seeds spawned from ``seed`` (unless a callback asked to stop)
+        for run_seed in _restart_seeds(int(seed), int(restarts)):
+            if best.fun <= limit or runs[-1].res.reason == "callback":
+                break
+            runs.append(run(run_seed))
+            if runs[-1].fun < best.fun:
+                best = runs[-1]
+        n_starts = len(runs)
     z, fit, history, res = best.z, best.fun, best.history, best.res
     if not np.isfinite(fit):
         raise TraceError("no fault vector reproduces this trace: every candidate of the monitoring "
@@ -407,7 +528,8 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
     k_true = _k_true(trace)
     return Identification(
         algorithm=algorithm, seed=int(seed), k=k, fitness=fit,
-        evaluations=sum(r.res.nfev + r.polish_evaluations for r in runs),
+        evaluations=(objective.stats.evaluations - ev0 if algorithm == DEFAULT_ALGORITHM
+                     else sum(r.res.nfev + r.polish_evaluations for r in runs)),
         iterations=int(res.nit), elapsed_s=elapsed, kernel_s=objective.stats.kernel_s - k0,
         history=history, reason=res.reason, model_trace=model_trace,
         k_true=k_true, error_pct=None if k_true is None else float(error_pct(k, k_true)),
@@ -420,7 +542,7 @@ def identify(trace: Trace, algorithm: str = "pso", *, seed: int,
         k_raw=k_raw, fitness_raw=float(res.fun),
         error_pct_raw=None if k_true is None else float(error_pct(k_raw, k_true)),
         polish_evaluations=best.polish_evaluations, polish_s=sum(r.polish_s for r in runs),
-        restarts=len(runs) - 1, noise_floor=floor, suspect=bool(fit > limit),
+        restarts=n_starts - 1, noise_floor=floor, suspect=bool(fit > limit),
         run_evaluations=int(best.res.nfev) + best.polish_evaluations,
     )
 

@@ -21,6 +21,16 @@ and the chance that a start has all three phases near zero is ``0.05^3``.
 Here half of each coordinate's range is a healthy phase and the rest
 concentrates near small shorts; the map is continuously differentiable.
 
+``"ecc-xy-sq"`` (the least-squares pipeline's, under the physical fault model):
+``"ecc-xy"``, and each short-circuit component searched by the square of its share
+of :data:`SC_SEARCH_MAX`, ``k = SC_SEARCH_MAX sqrt(z)``. A fault loop of a fraction
+``mu`` of the turns changes the currents in proportion to ``mu^2`` (its current, of
+order ``mu``, times its coupling, ``mu``), so in ``z`` the residual is linear near a
+healthy phase and a Gauss-Newton step sees the way out of zero, where in ``k`` its
+derivative vanishes. Under the paper's fault model (R, L and c0 scaled by ``1 - k``)
+the residual is already linear in ``k``, and :func:`least_squares_search` keeps
+``"ecc-xy"``.
+
 All maps are vectorised: ``to_k(Z)`` takes (n_pop, 8) in the unit box.
 """
 
@@ -29,9 +39,10 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search",
+           "least_squares_search", "nuisance_to_unit",
            "NUISANCE_RANGE", "nuisance_from_unit"]
 
-SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc")
+SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc", "ecc-xy-sq")
 
 #: Largest shorted fraction the sparse short-circuit search ``"ecc-xy-sc"`` reaches.
 SC_SEARCH_MAX = 0.6
@@ -51,9 +62,24 @@ def nuisance_from_unit(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
     return lo + Z * (hi - lo)
 
 
+def nuisance_to_unit(values: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Unit-box coordinates (n_pop, m) of nuisance values (n_pop, m): the inverse of
+    :func:`nuisance_from_unit`."""
+    values = np.atleast_2d(np.asarray(values, dtype=float))
+    lo = np.array([NUISANCE_RANGE[n][0] for n in names])
+    hi = np.array([NUISANCE_RANGE[n][1] for n in names])
+    return (values - lo) / (hi - lo)
+
+
 def default_search(fault_model: str) -> str:
     """The default search space of a fault model."""
     return "ecc-xy-sc" if fault_model == "physical" else "ecc-xy"
+
+
+def least_squares_search(fault_model: str) -> str:
+    """The search space of the least-squares pipeline: one where the residual is
+    smooth and its derivative nowhere zero at a healthy component."""
+    return "ecc-xy-sq" if fault_model == "physical" else "ecc-xy"
 
 
 def _check(space: str) -> None:
@@ -75,6 +101,8 @@ def to_k(Z: np.ndarray, space: str = "ecc-xy") -> np.ndarray:
     if space == "ecc-xy-sc":
         r = np.maximum(2.0 * Z[:, 2:5] - 1.0, 0.0)
         K[:, 2:5] = SC_SEARCH_MAX * r * r
+    elif space == "ecc-xy-sq":
+        K[:, 2:5] = SC_SEARCH_MAX * np.sqrt(np.clip(Z[:, 2:5], 0.0, 1.0))
     return K
 
 
@@ -90,4 +118,6 @@ def from_k(K: np.ndarray, space: str = "ecc-xy") -> np.ndarray:
     Z[:, 6] = 0.5 * (1.0 + K[:, 5] * np.sin(phi))
     if space == "ecc-xy-sc":
         Z[:, 2:5] = 0.5 + 0.5 * np.sqrt(np.clip(K[:, 2:5] / SC_SEARCH_MAX, 0.0, 1.0))
+    elif space == "ecc-xy-sq":
+        Z[:, 2:5] = np.clip(K[:, 2:5] / SC_SEARCH_MAX, 0.0, 1.0) ** 2
     return Z

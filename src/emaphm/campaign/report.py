@@ -68,7 +68,8 @@ PAPER_ALGORITHMS = ("de", "pso", "gwo")
 
 _MODE_LABELS = {"friction": "Friction", "backlash": "Backlash", "short-circuit": "Short circuit",
                 "eccentricity": "Eccentricity", "gain": "Prop. gain", "multiple": "Multiple faults"}
-_ALGO_LABELS = {"de": "DE", "pso": "PSO", "gwo": "GWO", "scipy-de": "scipy DE", "cmaes": "CMA-ES"}
+_ALGO_LABELS = {"lsq": "LSQ", "de": "DE", "pso": "PSO", "gwo": "GWO", "scipy-de": "scipy DE",
+                "cmaes": "CMA-ES"}
 
 
 def mode_label(mode: str) -> str:

@@ -88,11 +88,13 @@ class SpecError(ValueError):
     """A campaign specification is invalid; the message says what to fix."""
 
 
-def available_algorithms() -> dict[str, type]:
-    """Algorithms a spec may name: the paper's three and the baselines."""
+def available_algorithms() -> dict[str, type | None]:
+    """Algorithms a spec may name: the default least-squares pipeline (``"lsq"``, which
+    takes no options: ``None``), the paper's three and the baselines (their classes)."""
+    from emaphm.identify import DEFAULT_ALGORITHM
     from emaphm.optim import ALL_ALGORITHMS
 
-    return dict(ALL_ALGORITHMS)
+    return {DEFAULT_ALGORITHM: None, **ALL_ALGORITHMS}
 
 
 def _check_name(what: str, name: Any) -> str:
@@ -334,7 +336,12 @@ class CampaignSpec:
             if not isinstance(a.options, Mapping):
                 raise SpecError(f"algorithm {a.label!r}: options must be a table, got {a.options!r}")
             try:
-                registry[a.name](**dict(a.options))
+                if registry[a.name] is None:
+                    if a.options:
+                        raise SpecError(f"algorithm {a.label!r}: {a.name} takes no options, got "
+                                        f"{dict(a.options)}")
+                else:
+                    registry[a.name](**dict(a.options))
             except TypeError as exc:
                 raise SpecError(f"algorithm {a.label!r}: bad option ({exc}); see the docstring of "
                                 f"{registry[a.name].__name__} for its settings") from None

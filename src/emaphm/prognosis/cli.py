@@ -320,9 +320,7 @@ def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
         else:
             run = simulate_degradation(sc, times, seed=seed)
             for t, tr in zip(times, run.traces):
-                inspect(h, actuator, tr, float(t), seed=seed, budget=budget,
-                        **({"options": {"pop_size": 30}} if isinstance(budget, int) and budget < 3000
-                           else {}))
+                inspect(h, actuator, tr, float(t), seed=seed, budget=budget)
         data = h.data(actuator)
     y = indicator_series(data.K)[sc.indicator]
     k_true = sc.k_at(times)
@@ -423,7 +421,9 @@ def register(subparsers: Any) -> None:
     a.add_argument("trace", help="trace file (.csv or .parquet)")
     a.add_argument("--at", type=_time, required=True,
                    help="time of the inspection (flight hours or cycles), after the last one")
-    a.add_argument("--algorithm", default="pso", choices=("pso", "de", "gwo", "scipy-de", "cmaes"))
+    a.add_argument("--algorithm", default="lsq", choices=("lsq", "pso", "de", "gwo", "scipy-de", "cmaes"),
+                   help="lsq (default: least squares, warm-started from the last inspection), "
+                        "the paper's pso, de, gwo, or the baselines")
     a.add_argument("--fault-model", choices=("physical", "paper"), default=None,
                    help="mapping of k3..k5: default the trace's own, physical for a bench trace")
     a.add_argument("--seed", type=_seed, default=0, help="seed of the optimizer (default 0)")

@@ -549,9 +549,14 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     inspection costs nothing and records nothing. Returns ``(inspection,
     assessment)`` (:class:`emaphm.prognosis.uncertainty.Assessment`). Other
     keyword arguments (``algorithm``, ``budget``, ``options``, ``n_runs``,
-    ``level``) go to :func:`emaphm.prognosis.uncertainty.identify_with_spread`.
+    ``level``) go to :func:`emaphm.prognosis.uncertainty.identify_with_spread`. With the
+    default pipeline (``algorithm="lsq"``) the search starts first from the k of the
+    actuator's last inspection under the same fault model (a warm start: faults grow
+    slowly between inspections).
     """
     from ..diagnosis import diagnose, fit_ratio_of
+    from ..fitness import trace_fault_model
+    from ..identify import DEFAULT_ALGORITHM
     from ..traces import validate
     from .uncertainty import identify_with_spread
 
@@ -563,6 +568,12 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
         cal = history.calibration(actuator_id, at)
         if cal is not None:
             calibrated_at, params = cal
+    if kwargs.setdefault("algorithm", DEFAULT_ALGORITHM) == DEFAULT_ALGORITHM \
+            and kwargs.get("start") is None:
+        previous = history.inspections(actuator_id)
+        fault_model = kwargs.get("fault_model") or trace_fault_model(trace)
+        if previous and (previous[-1].extra or {}).get("fault_model", "paper") == fault_model:
+            kwargs["start"] = previous[-1].k
     a = identify_with_spread(trace, seed=seed, method=method, params=params, **kwargs)
     ident = a.identification
     diag = diagnose(a.k, thresholds=thresholds, params=params, fault_model=ident.fault_model,

@@ -24,7 +24,9 @@ Three methods, from cheap to thorough (``method=`` of :func:`identify_with_sprea
     (sharing one objective, so the trace is set up once): ``k`` is the
     component-wise median, the interval the envelope of the runs joined with
     the population interval of all their evaluations. Measures how well the
-    optimizer repeats as well as the fit's flatness.
+    optimizer repeats as well as the fit's flatness. (The default least-squares
+    pipeline repeats itself whenever its first start is good enough, the seed only
+    drawing its further starts: use a metaheuristic or ``"bootstrap"`` with it.)
 ``"bootstrap"``
     ``n_runs`` identifications on noise resampled traces: the monitoring
     model's currents at the identified ``k`` plus the residuals, resampled in
@@ -146,6 +148,15 @@ class _Recorder:
         self.f.append(np.array(f, dtype=float))
         return f
 
+    def residuals(self, K: np.ndarray) -> np.ndarray:
+        """The least-squares pipeline's evaluations, recorded with their fitness."""
+        R = self.base.residuals(K)
+        f = np.einsum("ij,ij->i", R, R)
+        f[~np.isfinite(f)] = np.inf
+        self.K.append(np.array(np.atleast_2d(K), dtype=float))
+        self.f.append(f)
+        return R
+
     def points(self) -> tuple[np.ndarray, np.ndarray]:
         if not self.K:
             return np.empty((0, 8)), np.empty(0)
@@ -198,7 +209,7 @@ def _check(method: str, level: float, n_runs: int, seed: Any) -> None:
 
 
 def identify_with_spread(trace: Any, *, seed: int, method: str = "population", level: float = 0.9,
-                         n_runs: int = 5, algorithm: str = "pso", budget: Any = None,
+                         n_runs: int = 5, algorithm: str = "lsq", budget: Any = None,
                          options: dict | None = None, params: Any = None,
                          objective: Eq4Objective | None = None, error_floor: Any = None,
                          suspect_ratio: float | None = None, retries: int = 2,
