@@ -12,6 +12,13 @@ and the share of time in the model kernel.
 Run: ``python benchmarks/bench_identification.py [--seeds 5] [--workers 2]``
 -> ``benchmarks/results/identification.md`` and ``identification.json``.
 Each worker process runs one identification at a time on one core.
+
+``--pipeline``: the default pipeline (``lsq``) against SciPy's vectorized
+``differential_evolution`` (population 48, 5,250 evaluations, no polish, on the same
+Eq. 4 objective) and PSO (emaphm's, with its polish and restarts), side by side in ONE
+process on the same traces, for twin and plant traces; then the wrong-basin rate
+(Eq. 9 error > 2 %) of ``lsq`` and PSO over ``--basin-seeds`` x 11 scenarios on
+``--workers`` processes -> ``benchmarks/results/pipeline.md`` and ``pipeline.json``.
 """
 
 from __future__ import annotations
@@ -165,6 +172,149 @@ def report(rows: list[dict], seeds: int, workers: int, wall: float, model: str) 
     return "\n".join(out) + "\n"
 
 
+# ----------------------------------------------------------------------- --pipeline
+PIPELINE_SCENARIOS = ("friction-high", "short-circuit-high", "gain-low", "multiple")
+SCIPY_POP, SCIPY_EVALS = 48, 5250
+
+
+def _scipy_de(trace, seed: int) -> dict:
+    """SciPy's vectorized DE on emaphm's Eq. 4 objective (search space ecc-xy, the one the
+    metaheuristics use under the paper's fault model), no polish."""
+    from scipy.optimize import differential_evolution
+
+    from emaphm.faults import error_pct
+    from emaphm.fitness import Eq4Objective
+    from emaphm.search import default_search, to_k
+
+    obj = Eq4Objective.from_trace(trace)
+    space = default_search(obj.model.fault_model)
+    obj.model.simulate_population(np.tile([0, 0, 0, 0, 0, 0, 0.5, 0.5], (2, 1)))  # warm
+    t = time.process_time()
+    res = differential_evolution(lambda Z: obj(to_k(Z.T, space)), [(0.0, 1.0)] * 8,
+                                 popsize=SCIPY_POP // 8, maxiter=SCIPY_EVALS // SCIPY_POP - 1,
+                                 tol=0.0, atol=0.0, polish=False, vectorized=True,
+                                 updating="deferred", rng=seed)
+    cpu = time.process_time() - t
+    k = np.clip(to_k(res.x[None, :], space)[0], 0.0, 1.0)
+    return {"error_pct": float(error_pct(k, trace.meta["k"])), "cpu_s": cpu,
+            "evaluations": int(res.nfev), "fit_ratio": float(res.fun / obj.noise_floor())}
+
+
+def _ours(trace, algo: str, seed: int) -> dict:
+    from emaphm.identify import identify
+
+    t = time.process_time()
+    r = identify(trace, algo, seed=seed)
+    cpu = time.process_time() - t - r.compile_s
+    return {"error_pct": float(r.error_pct), "cpu_s": cpu, "evaluations": int(r.evaluations),
+            "fit_ratio": float(r.fitness / r.noise_floor), "restarts": int(r.restarts)}
+
+
+def side_by_side(seeds: int) -> list[dict]:
+    """Every method on every trace, one after the other in this process."""
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+
+    rows = []
+    for model in ("monitoring", "reference"):
+        for scn in PIPELINE_SCENARIOS:
+            for seed in range(seeds):
+                trace = simulate(scenario=scn, sensors=DEFAULT_SENSORS, seed=seed, model=model)
+                for method, fn in (("lsq", lambda: _ours(trace, "lsq", seed)),
+                                   ("scipy-de", lambda: _scipy_de(trace, seed)),
+                                   ("pso", lambda: _ours(trace, "pso", seed))):
+                    rows.append({"model": model, "scenario": scn, "seed": seed,
+                                 "method": method, **fn()})
+                    print(f"{model:10s} {scn:20s} {seed} {method:8s} "
+                          f"err {rows[-1]['error_pct']:.2f} % cpu {rows[-1]['cpu_s']:.2f} s",
+                          flush=True)
+    return rows
+
+
+def basin_one(task: tuple[str, str, int, str]) -> dict:
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+
+    scenario, algo, seed, model = task
+    trace = simulate(scenario=scenario, sensors=DEFAULT_SENSORS, seed=100 + seed, model=model)
+    return {"scenario": scenario, "method": algo, "seed": seed, "model": model,
+            **_ours(trace, algo, seed)}
+
+
+def pipeline_report(rows: list[dict], basin: list[dict], seeds: int, basin_seeds: int,
+                    load: tuple[float, float], wall: float) -> str:
+    now = _dt.datetime.now(_dt.timezone.utc)
+    out = [f"## The default pipeline (`lsq`) against SciPy's DE and PSO ({now:%Y-%m-%d %H:%M} UTC)", "",
+           f"Machine: {machine()}; load average {load[0]:.2f} before, {load[1]:.2f} after "
+           f"(the other core was busy: other work shared the machine), {wall / 60:.1f} min wall.",
+           "`python benchmarks/bench_identification.py --pipeline`.", "",
+           f"Side by side in one process, one core: the same noisy traces ({len(PIPELINE_SCENARIOS)} "
+           f"scenarios x {seeds} seeds, 20 mA rms noise, 12-bit ADC), each identified by `lsq` "
+           "(the default of `identify` and `emaphm diagnose`), SciPy's vectorized "
+           f"`differential_evolution` (population {SCIPY_POP}, {SCIPY_EVALS} evaluations, no "
+           "polish, on emaphm's Eq. 4 objective) and emaphm's PSO (paper settings, polish, "
+           "restarts). CPU time of the identification (kernel compilation excluded).", ""]
+    for model, title in (("monitoring", "Twin traces (the monitoring model's own, with noise)"),
+                         ("reference", "Plant traces (the reference plant, no inverse crime)")):
+        rs = [r for r in rows if r["model"] == model]
+        out += [f"### {title}", "",
+                "| method | median CPU [s] | CPU vs SciPy DE (median of per-trace ratios) | "
+                "median evaluations | mean Eq. 9 error [%] | max [%] | runs > 2 % |",
+                "|---|---|---|---|---|---|---|"]
+        sc = {(r["scenario"], r["seed"]): r["cpu_s"] for r in rs if r["method"] == "scipy-de"}
+        for m in ("lsq", "scipy-de", "pso"):
+            mr = [r for r in rs if r["method"] == m]
+            cpu = np.array([r["cpu_s"] for r in mr])
+            ratio = np.median([r["cpu_s"] / sc[(r["scenario"], r["seed"])] for r in mr])
+            err = np.array([r["error_pct"] for r in mr])
+            out.append(f"| {m} | {np.median(cpu):.3f} | {ratio:.3f} | "
+                       f"{np.median([r['evaluations'] for r in mr]):.0f} | {err.mean():.3f} | "
+                       f"{err.max():.2f} | {int((err > 2).sum())} / {err.size} |")
+        out += ["", "| scenario | " + " | ".join(f"{m} err [%] (max)" for m in ("lsq", "scipy-de", "pso"))
+                + " |", "|---|---|---|---|"]
+        for scn in PIPELINE_SCENARIOS:
+            cells = []
+            for m in ("lsq", "scipy-de", "pso"):
+                e = [r["error_pct"] for r in rs if r["method"] == m and r["scenario"] == scn]
+                cells.append(f"{np.mean(e):.2f} ({np.max(e):.2f})")
+            out.append(f"| {scn} | " + " | ".join(cells) + " |")
+        out.append("")
+    if basin:
+        out += [f"### Wrong basins: Eq. 9 error above 2 % over the paper's 11 scenarios x "
+                f"{basin_seeds} noise seeds", "",
+                "| traces | method | runs | runs > 2 % | mean error [%] | median CPU [s] |",
+                "|---|---|---|---|---|---|"]
+        for model in ("monitoring", "reference"):
+            for m in ("lsq", "pso"):
+                mr = [r for r in basin if r["model"] == model and r["method"] == m]
+                if not mr:
+                    continue
+                err = np.array([r["error_pct"] for r in mr])
+                out.append(f"| {'twin' if model == 'monitoring' else 'plant'} | {m} | {err.size} | "
+                           f"{int((err > 2).sum())} ({100 * np.mean(err > 2):.1f} %) | "
+                           f"{err.mean():.3f} | {np.median([r['cpu_s'] for r in mr]):.3f} |")
+    return "\n".join(out) + "\n"
+
+
+def pipeline_main(args) -> None:
+    from emaphm.faults import PAPER_SCENARIOS
+
+    load0 = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    _warm()
+    rows = side_by_side(args.seeds)
+    basin = []
+    if args.basin_seeds:
+        tasks = [(s, a, seed, m) for m in args.basin_models.split(",")
+                 for seed in range(args.basin_seeds) for s in PAPER_SCENARIOS for a in ("lsq", "pso")]
+        with ProcessPoolExecutor(args.workers, initializer=_warm) as ex:
+            basin = list(ex.map(basin_one, tasks))
+    wall = time.perf_counter() - t0
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "pipeline.json").write_text(json.dumps({"side_by_side": rows, "basin": basin}, indent=1))
+    text = pipeline_report(rows, basin, args.seeds, args.basin_seeds, (load0, os.getloadavg()[0]), wall)
+    (RESULTS / "pipeline.md").write_text(text)
+    print(text)
+
+
 def main() -> None:
     from emaphm.faults import PAPER_SCENARIOS
 
@@ -175,7 +325,17 @@ def main() -> None:
     ap.add_argument("--model", choices=("reference", "monitoring"), default="reference",
                     help="measured traces from the reference plant (default) or from the "
                          "monitoring model itself (twin traces: the inverse crime, for comparison)")
+    ap.add_argument("--pipeline", action="store_true",
+                    help="the default pipeline against SciPy's DE and PSO (see the docstring)")
+    ap.add_argument("--basin-seeds", type=int, default=19,
+                    help="--pipeline: noise seeds of the wrong-basin count (x 11 scenarios)")
+    ap.add_argument("--basin-models", default="monitoring,reference",
+                    help="--pipeline: traces of the wrong-basin count")
     args = ap.parse_args()
+    if args.pipeline:
+        args.seeds = 3 if args.seeds == 5 else args.seeds
+        pipeline_main(args)
+        return
     scns = args.scenarios.split(",") if args.scenarios else list(PAPER_SCENARIOS)
     tasks = [(s, a, seed, args.model) for seed in range(args.seeds) for s in scns for a in ALGOS]
     _warm()

@@ -45,10 +45,12 @@ LSQ_SAMPLE = 64
 LSQ_RESTARTS = 3
 
 #: A start of the least-squares pipeline is good enough when its fit ratio is below the
-#: misfit test's limit at this false-alarm probability (about 1.8): most fits of an
+#: misfit test's limit at this false-alarm probability (about 2.1): most fits of an
 #: actuator the model describes are (a stricter limit than the verdict's, so that a fit
-#: the verdict would accept is still checked against another start).
-LSQ_ACCEPT_P = 0.05
+#: the verdict would accept is still checked against another start). Further starts
+#: stop once one improves the fit by less than 1 % (the model, not the basin, then
+#: limits it).
+LSQ_ACCEPT_P = 0.01
 
 #: Largest budget accepted: 1e8 evaluations (hours of CPU) or a day of wall clock; a larger
 #: one is a typo, not a plan.
