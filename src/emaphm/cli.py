@@ -218,6 +218,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from .plots import plot_identification
     from .progress import SearchProgress, compile_notice
     from .simulate import DEFAULT_SENSORS, simulate
+    from .traces import TraceError
 
     if (args.trace is None) == (args.scenario is None):
         raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
@@ -260,6 +261,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
                              callback=progress, fault_model=args.fault_model,
                              nuisance=_nuisance_option(args.nuisance))
+    except TraceError as exc:            # found in the trace's content: name the file
+        raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
     finally:
         progress.close()
     diag = diagnose(ident.k, params=params, fault_model=ident.fault_model,

@@ -123,7 +123,7 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 def cmd_add(args: argparse.Namespace) -> int:
     from ..progress import SearchProgress, compile_notice
-    from ..traces import read_trace
+    from ..traces import TraceError, read_trace
     from .history import HealthHistory, inspect
 
     budget = budget_option(args.budget)
@@ -162,6 +162,8 @@ def cmd_add(args: argparse.Namespace) -> int:
                                  method=args.spread, source=str(trace_path), params=params,
                                  algorithm=args.algorithm, fault_model=args.fault_model,
                                  budget=budget, n_runs=args.runs, callback=progress)
+        except TraceError as exc:        # found in the trace's content: name the file
+            raise _usage(f"{trace_path}: {exc}") from None
         finally:
             progress.close()
         unit = h.actuator(args.actuator).time_unit
