@@ -137,7 +137,7 @@ def _nuisance_option(text: str | None) -> tuple[str, ...] | None:
     names = tuple(x.strip() for x in text.split(",") if x.strip())
     bad = [n for n in names if n not in NUISANCE_RANGE]
     if bad or len(set(names)) != len(names):
-        raise UsageError(f"--nuisance {text!r}: give none or a comma-separated subset of "
+        raise UsageError(f"--nuisance {shown(text)}: give none or a comma-separated subset of "
                          f"{', '.join(NUISANCE_RANGE)} (each once)")
     return names
 
@@ -432,7 +432,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(negative_values(parser, sys.argv[1:] if argv is None else argv))
-    cmd = f"emaphm {args.command}"
+    cmd = " ".join(["emaphm", args.command] + ([args.history_command]
+                                               if getattr(args, "history_command", None) else []))
 
     def error(text: str) -> int:
         print(f"{cmd}: error: {one_line(text)}", file=sys.stderr)

@@ -109,7 +109,7 @@ def available_algorithms() -> dict[str, type]:
 
 def _check_name(what: str, name: Any) -> str:
     if not isinstance(name, str) or not _NAME.match(name):
-        raise SpecError(f"{what} name {name!r} must be letters, digits and _ . + - "
+        raise SpecError(f"{what} name {shown(name)} must be letters, digits and _ . + - "
                         "(no spaces or slashes), starting with a letter or digit")
     return name
 
@@ -150,7 +150,7 @@ class ScenarioSpec:
 
         if name not in SCENARIOS:
             groups = ", ".join(SCENARIO_GROUPS)
-            raise SpecError(f"unknown scenario {name!r}; choose one of {', '.join(SCENARIOS)}, "
+            raise SpecError(f"unknown scenario {shown(name)}; choose one of {', '.join(SCENARIOS)}, "
                             f"a group ({groups}) or a custom {{name = ..., k = [8 values]}}")
         mode, magnitude = name, ""
         m = re.fullmatch(r"(.+)-(low|high)", name)
@@ -548,7 +548,7 @@ class CampaignSpec:
         for r in self.runs_list():
             if r.key == key:
                 return r
-        raise SpecError(f"no run {key!r} in this campaign; keys look like "
+        raise SpecError(f"no run {shown(key)} in this campaign; keys look like "
                         f"{self.scenarios[0].name}/{self.algorithms[0].label}/0")
 
 

@@ -293,7 +293,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     names = list(DEGRADATION_SCENARIOS) if args.scenario == "all" else [args.scenario]
     for n in names:
         if n not in DEGRADATION_SCENARIOS:
-            raise _usage(f"unknown degradation scenario {n!r}; choose one of "
+            raise _usage(f"unknown degradation scenario {shown(n)}; choose one of "
                          f"{', '.join(DEGRADATION_SCENARIOS)} or all")
     if args.inspections < 3:
         raise _usage("--inspections must be at least 3 (a trend needs three points)")

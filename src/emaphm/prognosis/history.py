@@ -53,6 +53,7 @@ from typing import Any, Iterator, Sequence
 import numpy as np
 
 from .._sqlite import enable_wal
+from .._text import shown
 from ..faults import as_k
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError",
@@ -383,7 +384,7 @@ class HealthHistory:
     def register(self, actuator_id: str, *, description: str = "", time_unit: str = "h") -> Actuator:
         """Register a new actuator; its inspections are then timed in ``time_unit``."""
         if not isinstance(actuator_id, str) or not _ID.fullmatch(actuator_id):
-            raise HistoryError(f"actuator id {actuator_id!r} must be 1-64 characters of letters, "
+            raise HistoryError(f"actuator id {shown(actuator_id)} must be 1-64 characters of letters, "
                                "digits and . _ : / - starting with a letter or digit, e.g. "
                                "EMA-0042")
         if time_unit not in TIME_UNITS:
@@ -419,8 +420,10 @@ class HealthHistory:
             hint = f" (registered: {', '.join(known[:10])}{'...' if len(known) > 10 else ''})" \
                 if known else " (none registered yet)"
             raise UnknownActuatorError(
-                f"actuator {actuator_id!r} is not registered in {self.path}{hint}; register it "
-                f"first: emaphm history register {actuator_id} --db {self.path}")
+                f"actuator {shown(actuator_id)} is not registered in {self.path}{hint}"
+                + (f"; register it first: emaphm history register {actuator_id} --db {self.path}"
+                   if isinstance(actuator_id, str) and _ID.fullmatch(actuator_id) else
+                   "; an actuator id is 1-64 characters of letters, digits and . _ : / -"))
         return Actuator(*row)
 
     # ------------------------------------------------------------------ inspections
