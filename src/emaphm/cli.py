@@ -228,7 +228,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     budget = budget_option(args.budget)
     plot = plot_path(args.plot)
     params = _load_params(args.params)
-    progress = SearchProgress(enabled=not args.quiet)
+    progress = SearchProgress(enabled=not args.quiet,
+                              header=f"identifying with {args.algorithm.upper()} (seed {args.seed})")
     if args.trace is not None:
         if args.unit_seed is not None or args.unreported_load is not None \
                 or args.tolerances is not None:
@@ -250,7 +251,6 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                              seed=args.seed, fault_model=sim_fault_model,
                              **unit).with_meta(scenario=args.scenario)
     if not args.quiet:
-        print(f"identifying with {args.algorithm.upper()} (seed {args.seed})", file=sys.stderr)
         warn_if_long("emaphm diagnose", identification_seconds(trace.duration, params,
                                                                args.algorithm, budget),
                      "this identification",
@@ -294,10 +294,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     plot = plot_path(args.plot)
     params = _load_params(args.params)
     traces = [_trace_file(name) for name in args.traces]
-    progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs")
+    progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs",
+                             header=f"calibrating on {len(traces)} healthy trace(s) around "
+                                    f"{args.params or 'the default preset'}")
     if not args.quiet:
-        print(f"calibrating on {len(traces)} healthy trace(s) around "
-              f"{args.params or 'the default preset'}", file=sys.stderr)
         warn_if_long("emaphm calibrate", calibration_seconds([t.duration for t in traces], params),
                      "this calibration", "calibrate on shorter traces (one 0.5 s diagnostic "
                      "profile each is enough)")

@@ -57,19 +57,29 @@ class StatusLine:
     ``tty`` (default: ``stream.isatty()``): redraw the line in place, at most every
     ``interval`` seconds. Otherwise nothing is shown unless ``log``, and then a line is
     written at every tenth of the total given to :meth:`show`. ``enabled=False`` shows
-    nothing at all (``--quiet``).
+    nothing at all (``--quiet``). ``header``: a line said once, terminal or not, when the
+    work shows its first progress or notice (so a command refused in its checks prints
+    only its error).
     """
 
     def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True, log: bool = False, interval: float = 0.1) -> None:
+                 enabled: bool = True, log: bool = False, interval: float = 0.1,
+                 header: str | None = None) -> None:
         self.stream = stream if stream is not None else sys.stderr
         self.tty = _isatty(self.stream) if tty is None else bool(tty)
         self.enabled = bool(enabled)
         self.log = bool(log)
         self.interval = float(interval)
+        self.header = header
         self._last = -float("inf")
         self._drawn = False
         self._next_tenth = 1
+
+    def begin(self) -> None:
+        """Say the header, once (nothing when disabled or already said)."""
+        if self.enabled and self.header is not None:
+            header, self.header = self.header, None
+            self.note(header)
 
     @property
     def active(self) -> bool:
@@ -82,6 +92,7 @@ class StatusLine:
         when ``done`` of ``total`` crosses a tenth, or ``force``)."""
         if not self.enabled:
             return
+        self.begin()
         if self.tty:
             now = time.perf_counter()
             if force or now - self._last >= self.interval:
@@ -101,6 +112,8 @@ class StatusLine:
         """A line of its own (a notice), above the status line; shown unless disabled."""
         if not self.enabled:
             return
+        if self.header is not None:
+            self.begin()
         if self.tty and self._drawn:
             self.stream.write("\r\x1b[K")
             self._drawn = False
@@ -159,12 +172,13 @@ class SearchProgress(StatusLine):
     line (e.g. ``"inspection 3/8: "``)."""
 
     def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True, prefix: str = "") -> None:
-        super().__init__(stream, tty=tty, enabled=enabled)
+                 enabled: bool = True, prefix: str = "", header: str | None = None) -> None:
+        super().__init__(stream, tty=tty, enabled=enabled, header=header)
         self.prefix = prefix
         self.run = 1
         self._nfev = 0
         self._t0: float | None = None
+        self._base = 0             # evaluations at the first iteration
         self._spent = 0            # evaluations of the finished runs
 
     def restart(self, prefix: str | None = None) -> None:
@@ -172,23 +186,25 @@ class SearchProgress(StatusLine):
         ``prefix`` if given."""
         if prefix is not None:
             self.prefix = prefix
-        self.run, self._nfev, self._t0, self._spent = 1, 0, None, 0
+        self.run, self._nfev, self._t0, self._base, self._spent = 1, 0, None, 0, 0
 
     def __call__(self, state: Any) -> None:
+        self.begin()
         if not self.active:
             return None
         now = time.perf_counter()
-        if self._t0 is None:
-            self._t0 = now
         nfev = int(state.nfev)
         if nfev < self._nfev:      # a new run (a restart, or the next seed)
             self.run += 1
             self._spent += self._nfev
         self._nfev = nfev
-        rate = (self._spent + nfev) / max(now - self._t0, 1e-9)
+        if self._t0 is None:       # the rate counts from the first iteration on
+            self._t0, self._base = now, nfev
+        dt = now - self._t0
+        rate = f"  {(self._spent + nfev - self._base) / dt:7.0f} evals/s" if dt > 0.05 else ""
         run = f"run {self.run}  " if self.run > 1 else ""
         self.show(f"{self.prefix}{run}iteration {state.nit:4d}  best fitness {state.best_f:.4e}  "
-                  f"{nfev:6d} evaluations  {rate:7.0f} evals/s")
+                  f"{nfev:6d} evaluations{rate}")
         return None
 
 
@@ -197,13 +213,14 @@ class CountProgress(StatusLine):
     total)."""
 
     def __init__(self, what: str, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True, unit: str = "") -> None:
-        super().__init__(stream, tty=tty, enabled=enabled)
+                 enabled: bool = True, unit: str = "", header: str | None = None) -> None:
+        super().__init__(stream, tty=tty, enabled=enabled, header=header)
         self.what = what
         self.unit = unit
         self.t0 = time.perf_counter()
 
     def update(self, i: int, n: int | None = None) -> None:
+        self.begin()
         count = f"{i}/{n}" if n else f"{i}"
         self.show(f"{self.what} {count}{self.unit}, {clock(time.perf_counter() - self.t0)}",
                   force=bool(n) and i >= n)

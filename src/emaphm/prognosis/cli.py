@@ -133,16 +133,16 @@ def cmd_add(args: argparse.Namespace) -> int:
 
         params = load_params(args.params, partial=True)
     trace_path = Path(args.trace)
-    progress = SearchProgress(enabled=not args.quiet)
+    progress = SearchProgress(enabled=not args.quiet,
+                              header=f"diagnosing {trace_path} for {args.actuator} at {args.at:g} "
+                                     f"({args.algorithm.upper()}, seed {args.seed}, spread: "
+                                     f"{args.spread})")
     with HealthHistory(_db(args), create=False) as h:
         h.check_next(args.actuator, args.at)          # cheap checks before reading the trace
         if not trace_path.exists():
             raise _usage(f"trace file {trace_path} does not exist")
         trace = read_trace(trace_path)
         if not args.quiet:
-            print(f"diagnosing {trace_path} for {args.actuator} at {args.at:g} "
-                  f"({args.algorithm.upper()}, seed {args.seed}, spread: {args.spread})",
-                  file=sys.stderr)
             if params is None:
                 from ..params import siemens_1fk7060
 
