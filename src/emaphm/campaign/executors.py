@@ -383,9 +383,10 @@ def _probe(address: str, timeout: float) -> None:
             detail = "it closed or ignored the Dask handshake"
         elif not isinstance(cause, OSError):
             detail = f"it sent bytes that are no Dask message: {detail[:100]}"
+        tls = "; a scheduler started with TLS needs tls://" if address.startswith("tcp://") else ""
         raise ValueError(f"the service at {address} did not answer as a Dask scheduler "
                          f"({detail}); check the address (the scheduler's port, 8786 by "
-                         "default) and that both sides run compatible versions of "
+                         f"default){tls}, and that both sides run compatible versions of "
                          "dask.distributed")
     reply = box.get("reply")
     if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
