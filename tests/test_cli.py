@@ -377,14 +377,22 @@ def test_the_cli_starts_without_the_heavy_modules():
     assert "emaphm.prognosis.cli" in mods and "emaphm.campaign.cli" in mods
 
 
-def test_the_error_boundary_names_the_path_of_an_os_error_and_exits_2(tmp_path, capsys):
-    not_a_folder = tmp_path / "afile"
-    not_a_folder.write_text("x")
-    rc = main(["simulate", "--scenario", "nominal", "--model", "monitoring",
-               "--out", str(not_a_folder / "x.csv")])
+def test_the_error_boundary_names_the_path_of_an_os_error_and_exits_2(monkeypatch, capsys):
+    # what no check foresaw (a disk that fills, a permission lost mid-run) still reaches
+    # the user as one line naming the path (the corpus of malformed inputs is in
+    # test_bad_inputs.py)
+    import emaphm.cli as cli
+
+    def full_disk(args):
+        raise OSError(28, "No space left on device", "/data/out/x.parquet")
+
+    monkeypatch.setattr(cli, "cmd_scenarios", full_disk)
+    rc = cli.main(["scenarios"])
     err = capsys.readouterr().err
-    assert rc == 2 and "Traceback" not in err and str(not_a_folder) in err
-    assert err.count("\n") == 1
+    assert rc == 2 and "Traceback" not in err and err.count("\n") == 1
+    assert err == ("emaphm scenarios: error: /data/out/x.parquet: No space left on device; check "
+                   "the path, that it is a file where a file is meant, its permissions and the "
+                   "free space\n")
 
 
 def test_an_unexpected_exception_is_shown_as_a_bug(monkeypatch, capsys):
@@ -397,22 +405,6 @@ def test_an_unexpected_exception_is_shown_as_a_bug(monkeypatch, capsys):
     rc = cli.main(["scenarios"])
     err = capsys.readouterr().err
     assert rc == 1 and "Traceback" in err and "this is a bug in emaphm" in err
-
-
-@pytest.mark.parametrize("args, words", [
-    (["diagnose", "--scenario", "nominal", "--budget", "99999999999999999999999"],
-     "above 1e+08 evaluations"),
-    (["diagnose", "--scenario", "nominal", "--budget", "100000s"], "above a day"),
-    (["simulate", "--scenario", "nominal", "--noise", "1e6", "--seed", "1", "--out", "x.csv"],
-     "outside 0 to 1 A"),
-])
-def test_options_out_of_any_plausible_range_are_refused(args, words, capsys, tmp_path,
-                                                        monkeypatch):
-    monkeypatch.chdir(tmp_path)
-    assert main(args) == 2
-    err = capsys.readouterr().err
-    assert words in err and "Traceback" not in err
-    assert list(tmp_path.iterdir()) == []
 
 
 def _imported(source: str, package: str) -> set[str]:

@@ -16,7 +16,7 @@ from typing import Any, Callable, Sequence
 from ._text import one_line, shown
 
 __all__ = ["EXIT_USAGE", "UsageError", "Parser", "arg_type", "seed", "bounded_int",
-           "budget_option", "out_path", "plot_path", "actuator_id", "MAX_ID_CHARS",
+           "budget_option", "out_path", "plot_path", "writable_folder", "actuator_id", "MAX_ID_CHARS",
            "negative_values", "shown"]
 
 EXIT_USAGE = 2
@@ -95,7 +95,25 @@ def out_path(path: str, suffixes: tuple[str, ...], what: str) -> Path:
                          f"{' or '.join(suffixes)}")
     if not p.parent.exists():
         raise UsageError(f"{what} {shown(path)}: folder {p.parent} does not exist; create it first")
+    writable_folder(p.parent, what)
     return p
+
+
+def writable_folder(folder: Path, what: str) -> Path:
+    """``folder`` if it is a folder this process can create files in (tried with an
+    anonymous temporary file, which leaves nothing behind), else a :class:`UsageError`:
+    an output that cannot be written is refused before any work, not after."""
+    import tempfile
+
+    if not folder.is_dir():
+        raise UsageError(f"{what}: {folder} is a file, not a folder; give a path in a folder")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as exc:
+        raise UsageError(f"{what}: cannot write in the folder {folder} ({exc.strerror or exc}); "
+                         "give a folder you can write to") from None
+    return folder
 
 
 def plot_path(value: str | None, what: str = "--plot") -> Path | None:

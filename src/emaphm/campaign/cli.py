@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from .._cli_common import UsageError, arg_type, budget_option
+from .._cli_common import UsageError, arg_type, budget_option, writable_folder
 
 __all__ = ["register", "cmd_campaign", "cmd_report"]
 
@@ -175,6 +175,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         raise UsageError(f"--out {out} exists and is not a folder")
     if not out.parent.exists():
         raise UsageError(f"--out {out}: folder {out.parent} does not exist; create it first")
+    writable_folder(out if out.is_dir() else out.parent, "--out")
     paths = write_report(args.store, out, figures=not args.no_figures)
     for p in paths:
         print(p)

@@ -52,7 +52,7 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from .._sqlite import enable_wal
+from .._sqlite import enable_wal, journal_files, remove_journal_files
 from .._text import shown
 from ..faults import as_k
 
@@ -270,13 +270,24 @@ class HealthHistory:
         if create and not self.path.parent.exists():
             raise HistoryError(f"cannot create the health history {self.path}: folder "
                                f"{self.path.parent} does not exist; create it first")
+        created = journal_files(self.path) if self.path.exists() else []
         try:
             self._con = sqlite3.connect(str(self.path), timeout=timeout_s, isolation_level=None)
+        except sqlite3.DatabaseError as exc:
+            raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
+                               "give another --db path") from None
+        try:
             self._con.execute("PRAGMA foreign_keys = ON")
             mode = enable_wal(self._con, timeout_s)
             self._con.execute("PRAGMA synchronous = FULL")
             version = self._con.execute("PRAGMA user_version").fetchone()[0]
         except sqlite3.DatabaseError as exc:
+            self._con.close()
+            remove_journal_files(created)       # a refused file is left as it was found
+            if "malformed" in str(exc):         # an SQLite file, cut or overwritten in part
+                raise HistoryError(f"{self.path} is damaged ({exc}); it was not changed. "
+                                   "Restore it from a backup; nothing is read from or added "
+                                   "to a damaged history") from None
             raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
                                "give another --db path") from None
         self.journal_mode = str(mode)
@@ -287,6 +298,7 @@ class HealthHistory:
                 check = str(exc)
             if check != "ok":
                 self._con.close()
+                remove_journal_files(created)
                 raise HistoryError(f"{self.path} is damaged (SQLite quick_check: {check[:200]}); "
                                    "it was not changed. Restore it from a backup; nothing is read "
                                    "from or added to a damaged history")
