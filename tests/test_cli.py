@@ -501,3 +501,21 @@ def test_the_estimate_counts_the_default_stopping_rule_and_the_budget(nominal_pa
     s = identification_seconds(500.0, nominal_params, "pso", 10_000)
     assert s == pytest.approx(4e6 * 10_000 * 40e-9)
     assert identification_seconds(500.0, nominal_params, "pso", 10_000, runs=5) == pytest.approx(5 * s)
+
+
+def test_a_long_calibration_is_announced(nominal_params):
+    import io
+
+    from emaphm._cli_common import calibration_seconds, warn_if_long
+    from emaphm.calibration import PARAMETERS
+
+    short = calibration_seconds([0.5, 0.5], nominal_params)       # two diagnostic profiles
+    assert short < 60.0
+    buf = io.StringIO()
+    assert not warn_if_long("emaphm calibrate", short, "this calibration", "hint", buf)
+    long = calibration_seconds([30.0], nominal_params)             # a 30 s recording
+    assert long == pytest.approx(30 * 8000 * 20 * (len(PARAMETERS) + 1) * 7e-6)
+    assert warn_if_long("emaphm calibrate", long, "this calibration", "calibrate on shorter "
+                        "traces", buf)
+    assert buf.getvalue().startswith("emaphm calibrate: note: this calibration may take about ")
+    assert buf.getvalue().endswith(" on one core; calibrate on shorter traces\n")

@@ -174,8 +174,13 @@ def negative_values(parser: argparse.ArgumentParser, argv: Sequence[str]) -> lis
 #: BENCHMARKS.md measures 26-28 ns for populations of 50-200 and 48 ns for 10; 40 ns
 #: keeps a margin for a loaded machine.
 SECONDS_PER_CANDIDATE_STEP = 40e-9
-#: ... and for one candidate alone (the calibration's simulations): 277 ns measured.
-SECONDS_PER_SINGLE_STEP = 300e-9
+#: Seconds per model step of one calibration simulation (a model built for one candidate,
+#: the data sheet's deviations applied, then run): 238 runs of a 0.5 s trace (4000 steps)
+#: took 6.7 s of CPU on a loaded 2-core Xeon, 7 us per step.
+SECONDS_PER_CALIBRATION_STEP = 7e-6
+#: Model runs per trace of a calibration, per free parameter and one more: 238 runs for the
+#: 13 parameters (18 per parameter) in that measurement.
+CALIBRATION_RUNS_PER_PARAMETER = 20
 #: An identification or calibration estimated to take longer than this is announced.
 LONG_RUN_S = 60.0
 
@@ -220,13 +225,14 @@ def identification_seconds(duration_s: float, params: Any, algorithm: str, budge
 
 
 def calibration_seconds(durations_s: Sequence[float], params: Any) -> float:
-    """Rough seconds of a calibration on traces lasting ``durations_s``: at most 60
-    least-squares iterations, each simulating every trace once per free parameter and
-    once more (:func:`emaphm.calibration.calibrate`)."""
+    """Rough seconds of a calibration on traces lasting ``durations_s``: every trace
+    simulated about :data:`CALIBRATION_RUNS_PER_PARAMETER` times per free parameter (and
+    once more) by :func:`emaphm.calibration.calibrate`'s least squares."""
     from .calibration import PARAMETERS
 
     steps = sum(_model_steps(d, params) for d in durations_s)
-    return steps * 60 * (len(PARAMETERS) + 1) * SECONDS_PER_SINGLE_STEP
+    runs = CALIBRATION_RUNS_PER_PARAMETER * (len(PARAMETERS) + 1)
+    return steps * runs * SECONDS_PER_CALIBRATION_STEP
 
 
 def warn_if_long(command: str, seconds: float | None, what: str, hint: str,
