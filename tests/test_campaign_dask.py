@@ -194,7 +194,7 @@ def test_the_documented_tls_setup_connects(tmp_path):
                    tls_worker_cert=cert, tls_worker_key=key, tls_client_cert=cert,
                    tls_client_key=key, require_encryption=True)
     with distributed.LocalCluster(n_workers=1, processes=False, protocol="tls", security=sec,
-                                  dashboard_address=None, host="127.0.0.1",
+                                  dashboard_address=":0", host="127.0.0.1",
                                   silence_logs=50) as c:
         assert c.scheduler_address.startswith("tls://")
         with dask.config.set({"distributed.comm.tls.ca-file": ca,

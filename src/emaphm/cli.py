@@ -24,9 +24,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import __version__
-from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_option,  # noqa: F401
-                          identification_seconds, calibration_seconds, negative_values,
-                          out_path, plot_path, warn_if_long)
+from ._cli_common import (EXIT_USAGE, Parser, UsageError, budget_option, calibration_seconds,
+                          identification_seconds, negative_values, out_path, plot_path,
+                          warn_if_long)
 from ._cli_common import seed as _seed
 from ._text import one_line, shown
 

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .._cli_common import (UsageError, actuator_id, arg_type, budget_option,
-                           identification_seconds, plot_path, warn_if_long)
+                           identification_seconds, plot_path, shown, warn_if_long)
 from .._cli_common import seed as _seed
 
 __all__ = ["register"]
