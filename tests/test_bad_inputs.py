@@ -432,6 +432,17 @@ def _(d, b):
     return ["diagnose", "--scenario", "z" * 100_000]
 
 
+@case("demo-unknown-scenario-100-kB", "unknown degradation scenario 'wwww", "(100000 characters)")
+def _(d, b):
+    return ["demo-degradation", "--scenario", "w" * 100_000, "--synthetic"]
+
+
+@case("history-without-a-subcommand", "required: {register,calibrate,add,show,list}",
+      "see emaphm history --help")
+def _(d, b):
+    return ["history"]
+
+
 # ----------------------------------------------------------------------------- the test
 def _snapshot(folder: Path) -> dict[str, str]:
     """Every path under ``folder`` with the hash of its bytes (folders: "dir")."""

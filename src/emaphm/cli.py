@@ -357,7 +357,7 @@ def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog="emaphm", description=__doc__.split("\n")[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--version", action="version", version=f"emaphm {__version__}")
-    sub = ap.add_subparsers(dest="command", required=True)
+    sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     s = sub.add_parser("simulate", help="simulate an actuator and write its trace")
     s.add_argument("--model", choices=("reference", "monitoring"), default="reference")

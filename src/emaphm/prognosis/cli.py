@@ -447,7 +447,8 @@ def register(subparsers: Any) -> None:
     from .choices import SELECTION_RULES, SPREAD_METHODS
 
     hp = subparsers.add_parser("history", help="health history of actuators: register, add, show")
-    hs = hp.add_subparsers(dest="history_command", required=True)
+    hs = hp.add_subparsers(dest="history_command", required=True,
+                           metavar="{register,calibrate,add,show,list}")
 
     r = hs.add_parser("register", help="register an actuator before its first inspection")
     r.add_argument("actuator", type=actuator_id, help="actuator id, e.g. EMA-0042")
