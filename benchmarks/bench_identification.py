@@ -72,7 +72,9 @@ def _warm() -> None:
     from emaphm.identify import identify
     from emaphm.simulate import simulate
 
-    identify(simulate(scenario="nominal"), "pso", seed=0, budget=200)
+    trace = simulate(scenario="nominal")
+    identify(trace, "pso", seed=0, budget=200)
+    identify(trace, "lsq", seed=0, budget=200)       # scipy.optimize imported, scalar kernel
 
 
 def pc(times, errs) -> list[float]:
@@ -205,7 +207,7 @@ def _ours(trace, algo: str, seed: int) -> dict:
 
     t = time.process_time()
     r = identify(trace, algo, seed=seed)
-    cpu = time.process_time() - t - r.compile_s
+    cpu = time.process_time() - t          # kernels compiled and loaded by _warm()
     return {"error_pct": float(r.error_pct), "cpu_s": cpu, "evaluations": int(r.evaluations),
             "fit_ratio": float(r.fitness / r.noise_floor), "restarts": int(r.restarts)}
 

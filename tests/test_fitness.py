@@ -394,3 +394,31 @@ def test_undiagnosable_currents_are_refused_with_the_reason(rm_friction_high, ca
         Eq4Objective.from_trace(tr)
     # the untouched recording passes
     check_diagnosable(rm_friction_high)
+
+
+# ----------------------------------------------------------------------------- metadata
+@pytest.mark.parametrize("change, match", [
+    (lambda p: p["load"].append({"shape": "Constant", "value": "abc"}),
+     r"^trace metadata profile\.load\[0\]\.value: expected a number in N m, got the string 'abc'; "
+     r"correct the profile, or delete it"),
+    (lambda p: p["command"][0].update(height=1e300), r"profile\.command\[0\]\.height = 1e\+300 rad"),
+    (lambda p: p["load"].append({"shape": "Constant", "value": 1000.0}),
+     r"load torque reaches 1000 N m, more than 10 times the motor's peak torque \(T_max = 18 N m\)"),
+])
+def test_a_trace_whose_profile_is_nonsense_is_refused(mm_gain_low, change, match):
+    # the load of a trace's profile drives the model: a malformed or absurd one is refused
+    # (it was silently dropped, or diagnosed from an infinite fitness)
+    import copy
+
+    prof = copy.deepcopy(mm_gain_low.meta["profile"])
+    change(prof)
+    with pytest.raises(TraceError, match=match):
+        Eq4Objective.from_trace(mm_gain_low.with_meta(profile=prof))
+
+
+def test_a_trace_without_a_profile_has_zero_load(mm_gain_low):
+    meta = {k: v for k, v in mm_gain_low.meta.items() if k != "profile"}
+    bare = Trace(t=mm_gain_low.t, theta_ref=mm_gain_low.theta_ref, theta_m=mm_gain_low.theta_m,
+                 omega_m=mm_gain_low.omega_m, i_abc=mm_gain_low.i_abc, meta=meta)
+    obj = Eq4Objective.from_trace(bare)
+    assert not np.any(obj.model.profile.load_torque(obj.model.t))

@@ -74,7 +74,12 @@ def test_scalar_is_broadcast_to_three_phases():
     (lambda: Inverter(V_dc=-600.0), r"Inverter\.V_dc \[V\] must be > 0"),
     (lambda: Inverter(f_pwm=0.0), r"Inverter\.f_pwm \[Hz\] must be > 0"),
     (lambda: Controller(Kp=-60.0), r"Controller\.Kp \[1/s\] must be > 0"),
-    (lambda: Controller(k_T=True), r"Controller\.k_T \[N m/A peak\] must be a number"),
+    (lambda: Controller(k_T=True), r"Controller\.k_T \[N m/A peak\]: expected a number in N m/A peak, got True"),
+    (lambda: Motor(R="3.15 ohm"), r"Motor\.R \[ohm\]: expected a number in ohm or 3 per-phase numbers "
+                                  r"\(a, b, c\), got the string '3\.15 ohm'; write R = 3\.15 \(a bare number in ohm\)"),
+    (lambda: Motor(L="22 mH"), r"got the string '22 mH'; write L = 0\.022 \(a bare number in H\)"),
+    (lambda: Inverter(V_dc="six hundred"), r"Inverter\.V_dc \[V\]: expected a number in V, got the string "
+                                            r"'six hundred'; write V_dc as a bare number in V"),
     (lambda: Transmission(FSJ=-0.1), r"Transmission\.FSJ \[N m\] must be >= 0"),
     (lambda: Transmission(backlash=-1e-4), r"Transmission\.backlash \[rad\] must be >= 0"),
     (lambda: Transmission(FSJ=0.1, FDJ=0.2),

@@ -116,7 +116,7 @@ def test_trapezoid_known_cruise():
     (lambda: Profile(0.0), r"Profile\.duration \[s\] must be > 0"),
     (lambda: Profile.from_dict({"duration": 1.0, "command": [{"shape": "Spline"}]}),
      r"unknown profile shape 'Spline'"),
-    (lambda: Profile.from_dict({"command": []}), r"cannot rebuild a profile"),
+    (lambda: Profile.from_dict({"command": []}), r"cannot rebuild a profile without its duration"),
     (lambda: get_profile("chirp"), r"unknown profile 'chirp'; choose one of"),
 ])
 def test_profile_errors(build, match):
@@ -189,3 +189,51 @@ def test_diagnostic_profile_coverage():
     # no load torque by default; a constant one on request
     assert not p.load_torque(t).any()
     assert diagnostic(0.3).load_torque(t) == pytest.approx(np.full(t.size, 0.3))
+
+
+# --------------------------------------------------------------------------- from data
+def _meta(**change):
+    """The diagnostic profile's dict with ``change`` applied to its first command shape."""
+    d = json.loads(json.dumps(diagnostic(load_torque=0.5).to_dict()))
+    d["command"][0].update(change)
+    return d
+
+
+@pytest.mark.parametrize("data, match", [
+    (_meta(height="abc"), r"^profile\.command\[0\]\.height: expected a number in rad, got the string 'abc'$"),
+    (_meta(t0=[1, 2]), r"^profile\.command\[0\]\.t0: expected a number in s, got \[1, 2\]$"),
+    (_meta(height=None), r"^profile\.command\[0\]\.height: expected a number in rad, got None$"),
+    (_meta(height=True), r"expected a number in rad, got True"),
+    (_meta(height=1e300), r"^profile\.command\[0\]\.height = 1e\+300 rad is beyond any actuator test "
+                          r"\(at most 1e\+06 rad in magnitude\)"),
+    (_meta(height=float("nan")), r"expected a finite number in rad, got nan"),
+    (_meta(extra=1), r"^profile\.command\[0\]: unknown field\(s\) \['extra'\] of Step; its fields: t0, height$"),
+    ({**_meta(), "command": [{"shape": "Step", "t0": 0.0}]}, r"profile\.command\[0\]: Step is missing height"),
+    ({**_meta(), "load": [{"shape": "Constant", "value": 1e300}]},
+     r"^profile\.load\[0\]\.value = 1e\+300 N m is beyond any actuator test"),
+    ({**_meta(), "load": [{"shape": "Sine", "amplitude": "abc", "frequency": 2}]},
+     r"^profile\.load\[0\]\.amplitude: expected a number in N m, got the string 'abc'$"),
+    ({**_meta(), "load": [{"shape": "Sine", "amplitude": 1.0, "frequency": 1e9}]},
+     r"profile\.load\[0\]\.frequency = 1e\+09 Hz is beyond"),
+    ({**_meta(), "load": [{"shape": "Tabulated", "t": [0, 1], "values": [0, "x"]}]},
+     r"profile\.load\[0\]\.values\[1\]: expected a number in N m, got the string 'x'"),
+    ({**_meta(), "duration": "abc"}, r"^profile\.duration: expected a number in s, got the string 'abc'$"),
+    ({**_meta(), "duration": -1.0}, r"Profile\.duration \[s\] must be > 0"),
+    ({**_meta(), "command": "abc"}, r"^profile\.command: expected a list of shapes, got 'abc'$"),
+    ({**_meta(), "command": [["Step", 0, 1]]}, r"^profile\.command\[0\]: expected an object such as"),
+    ({**_meta(), "speed": 3}, r"^profile: unknown field\(s\) \['speed'\]"),
+    ({**_meta(), "name": 5}, r"^profile\.name: expected text, got 5$"),
+    ([1, 2], r"^profile: expected an object with duration, command and load, got \[1, 2\]$"),
+    (_meta(height="x" * 100_000), r"got the string 'xxxx.*\.\.\.' \(100000 characters\)$"),
+])
+def test_a_profile_from_data_is_checked_field_by_field(data, match):
+    # trace metadata is user input: each field named by its path, with the unit expected,
+    # in our words (never "could not convert string to float"), and never echoed whole
+    with pytest.raises(ProfileError, match=match) as info:
+        Profile.from_dict(data)
+    assert len(str(info.value)) < 300
+
+
+def test_shapes_refuse_what_is_not_a_number():
+    with pytest.raises(ProfileError, match=r"^Sine\.amplitude must be a number, got 'abc'$"):
+        Sine("abc", 2.0)

@@ -49,7 +49,7 @@ import datetime as _dt
 import math
 import time
 from dataclasses import dataclass, replace
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -223,11 +223,13 @@ class CalibrationResult:
 def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
               sources: Sequence[str] | None = None, free: Sequence[str] | None = None,
               fit_limit: float = HEALTHY_FIT_LIMIT,
-              correlation_limit: float = CORRELATION_LIMIT) -> CalibrationResult:
+              correlation_limit: float = CORRELATION_LIMIT,
+              progress: Callable[[int], Any] | None = None) -> CalibrationResult:
     """Calibrate a healthy unit on ``traces`` around its data sheet ``params``.
 
     ``free``: the parameters to estimate (default all of :data:`PARAMETERS`);
-    ``sources``: a name per trace for the report. Raises :class:`CalibrationError`
+    ``sources``: a name per trace for the report; ``progress``: called with the number of
+    model simulations so far after each (a progress line). Raises :class:`CalibrationError`
     when a trace does not look healthy after calibration (its fit stays above
     ``fit_limit`` times its noise floor) or cannot be used.
     """
@@ -262,6 +264,8 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
             for tg in targets:
                 count[0] += 1
                 i = _model_currents(p, tg)
+                if progress is not None:
+                    progress(count[0])
                 if not np.all(np.isfinite(i)):
                     out = None
                     break

@@ -19,18 +19,18 @@ import json
 import os
 import sys
 import time
-from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
 from . import __version__
+from ._cli_common import (EXIT_USAGE, Parser, UsageError, budget_option, calibration_seconds,
+                          identification_seconds, negative_values, out_path, plot_path,
+                          warn_if_long)
+from ._cli_common import seed as _seed
+from ._text import one_line, shown
 
-EXIT_USAGE = 2
-
-
-class UsageError(Exception):
-    """Bad input found after parsing; printed without a traceback, exit status 2."""
+__all__ = ["main", "build_parser", "EXIT_USAGE", "UsageError"]
 
 
 def _load_params(path: str | None):
@@ -39,48 +39,16 @@ def _load_params(path: str | None):
     return load_params(path, partial=True) if path else siemens_1fk7060()
 
 
-def _check_out_path(path: str, suffixes: tuple[str, ...], what: str) -> Path:
-    p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise UsageError(f"{what} {path!r} must end in {' or '.join(suffixes)}")
-    if not p.parent.exists():
-        raise UsageError(f"{what} {path!r}: folder {p.parent} does not exist; create it first")
-    return p
+def _trace_file(name: str) -> Any:
+    """Read the trace file ``name`` (a UsageError when it is missing)."""
+    from pathlib import Path
 
+    from .traces import read_trace
 
-def arg_type(convert: Callable[[str], Any], valid: Callable[[Any], bool],
-             expected: str) -> Callable[[str], Any]:
-    """An argparse ``type=``: ``convert`` the text, keep it if ``valid``, else an error
-    "``expected``, got 'text'" (exit status 2). Shared by every subcommand."""
-    def parse(value: str) -> Any:
-        try:
-            x = convert(value)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{expected}, got {value!r}") from None
-        if not valid(x):
-            raise argparse.ArgumentTypeError(f"{expected}, got {value!r}")
-        return x
-    parse.__name__ = convert.__name__          # argparse names the type in its messages
-    return parse
-
-
-_seed = arg_type(int, lambda s: s >= 0, "seed must be a non-negative integer")
-
-
-def budget_option(text: str | None) -> Any:
-    """The value of a ``--budget`` option: ``"5000"`` -> 5000 evaluations, ``"30s"`` a
-    wall-clock budget, None the algorithm's default; checked by
-    :func:`emaphm.identify.parse_budget` (a :class:`UsageError` naming the option)."""
-    from .identify import parse_budget
-
-    if text is None:
-        return None
-    value: Any = int(text) if text.strip().isdigit() else text
-    try:
-        parse_budget(value)
-    except ValueError as exc:
-        raise UsageError(f"--budget: {exc}") from None
-    return value
+    path = Path(name)
+    if not path.exists():
+        raise UsageError(f"trace file {path} does not exist")
+    return read_trace(path)
 
 
 # ----------------------------------------------------------------------------- scenarios
@@ -102,13 +70,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .faults import as_k, scenario
     from .acquisition import Sensors
     from .plots import plot_trace
+    from .progress import compile_notice
     from .simulate import DEFAULT_SENSORS, simulate
     from .traces import write_trace
 
     if (args.k is None) == (args.scenario is None):
         raise UsageError("give exactly one of --k K1,...,K8 or --scenario NAME (see `emaphm scenarios`)")
-    out = _check_out_path(args.out, (".csv", ".parquet"), "--out")
-    plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
+    out = out_path(args.out, (".csv", ".parquet"), "--out")
+    plot = plot_path(args.plot)
     k = as_k(args.k) if args.k is not None else scenario(args.scenario)
     fault_model = _fault_model_option(args)
     params = _load_params(args.params)
@@ -129,8 +98,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if sensors.current_noise > 0 and args.seed is None:
         raise UsageError("sensor noise needs --seed S (randomness always flows from an explicit seed)")
     t0 = time.perf_counter()
-    trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed,
-                     fault_model=fault_model, **unit)
+    with compile_notice():
+        trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed,
+                         fault_model=fault_model, **unit)
     if args.scenario:
         trace = trace.with_meta(scenario=args.scenario)
     elapsed = time.perf_counter() - t0
@@ -167,7 +137,7 @@ def _nuisance_option(text: str | None) -> tuple[str, ...] | None:
     names = tuple(x.strip() for x in text.split(",") if x.strip())
     bad = [n for n in names if n not in NUISANCE_RANGE]
     if bad or len(set(names)) != len(names):
-        raise UsageError(f"--nuisance {text!r}: give none or a comma-separated subset of "
+        raise UsageError(f"--nuisance {shown(text)}: give none or a comma-separated subset of "
                          f"{', '.join(NUISANCE_RANGE)} (each once)")
     return names
 
@@ -193,32 +163,6 @@ def _unit_options(args: argparse.Namespace, params) -> dict[str, Any]:
 
 
 # ----------------------------------------------------------------------------- diagnose
-class _Progress:
-    """One status line on stderr: iteration, best fitness, evaluations per second."""
-
-    def __init__(self, enabled: bool) -> None:
-        self.enabled = enabled
-        self.t0 = time.perf_counter()
-        self.last = 0.0
-
-    def __call__(self, state: Any) -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self.last < 0.1:
-            return
-        self.last = now
-        rate = state.nfev / max(now - self.t0, 1e-9)
-        sys.stderr.write(f"\r  iteration {state.nit:4d}  best fitness {state.best_f:.4e}  "
-                         f"{state.nfev:6d} evaluations  {rate:7.0f} evals/s")
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\n")
-            sys.stderr.flush()
-
-
 def _table(ident, diag) -> str:
     from .faults import K_LABELS, K_NAMES
 
@@ -271,45 +215,53 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     from .faults import scenario
     from .identify import ALGORITHM_NAMES, identify
     from .plots import plot_identification
+    from .progress import SearchProgress, compile_notice
     from .simulate import DEFAULT_SENSORS, simulate
-    from .traces import read_trace
+    from .traces import TraceError
 
     if (args.trace is None) == (args.scenario is None):
         raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
     if args.algorithm not in ALGORITHM_NAMES:
-        raise UsageError(f"unknown algorithm {args.algorithm!r}; choose one of "
+        raise UsageError(f"unknown algorithm {shown(args.algorithm)}; choose one of "
                          f"{', '.join(ALGORITHM_NAMES)}")
     budget = budget_option(args.budget)
-    plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
+    plot = plot_path(args.plot)
     params = _load_params(args.params)
+    progress = SearchProgress(enabled=not args.quiet,
+                              header=f"identifying with {args.algorithm.upper()} (seed {args.seed})")
     if args.trace is not None:
         if args.unit_seed is not None or args.unreported_load is not None \
                 or args.tolerances is not None:
             raise UsageError("--unit-seed, --tolerances and --unreported-load describe a simulated "
                              "plant: use them with --scenario, not with a trace file")
-        path = Path(args.trace)
-        if not path.exists():
-            raise UsageError(f"trace file {path} does not exist")
-        trace = read_trace(path)
+        trace = _trace_file(args.trace)
     else:
         k_true = scenario(args.scenario)
         sim_fault_model = _fault_model_option(args)
         unit = _unit_options(args, params)
-        print(f"simulating scenario {args.scenario} on the reference plant "
-              f"({sim_fault_model} fault model, switching PWM, sensor noise "
-              f"{DEFAULT_SENSORS.current_noise * 1e3:.0f} mA rms, seed {args.seed}"
-              + (f", unit {args.unit_seed}" if args.unit_seed is not None else "") + ")",
-              file=sys.stderr)
-        trace = simulate(k_true, model="reference", params=params, sensors=DEFAULT_SENSORS,
-                         seed=args.seed, fault_model=sim_fault_model,
-                         **unit).with_meta(scenario=args.scenario)
-    progress = _Progress(enabled=not args.quiet and sys.stderr.isatty())
+        if not args.quiet:
+            print(f"simulating scenario {args.scenario} on the reference plant "
+                  f"({sim_fault_model} fault model, switching PWM, sensor noise "
+                  f"{DEFAULT_SENSORS.current_noise * 1e3:.0f} mA rms, seed {args.seed}"
+                  + (f", unit {args.unit_seed}" if args.unit_seed is not None else "") + ")",
+                  file=sys.stderr)
+        with compile_notice(progress, enabled=not args.quiet):
+            trace = simulate(k_true, model="reference", params=params, sensors=DEFAULT_SENSORS,
+                             seed=args.seed, fault_model=sim_fault_model,
+                             **unit).with_meta(scenario=args.scenario)
     if not args.quiet:
-        print(f"identifying with {args.algorithm.upper()} (seed {args.seed})", file=sys.stderr)
+        warn_if_long("emaphm diagnose", identification_seconds(trace.duration, params,
+                                                               args.algorithm, budget),
+                     "this identification",
+                     "diagnose a shorter window (one 0.5 s diagnostic profile is enough), or "
+                     "cap it with --budget (e.g. --budget 60s)")
     try:
-        ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
-                         callback=progress, fault_model=args.fault_model,
-                         nuisance=_nuisance_option(args.nuisance))
+        with compile_notice(progress, enabled=not args.quiet):
+            ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
+                             callback=progress, fault_model=args.fault_model,
+                             nuisance=_nuisance_option(args.nuisance))
+    except TraceError as exc:            # found in the trace's content: name the file
+        raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
     finally:
         progress.close()
     diag = diagnose(ident.k, params=params, fault_model=ident.fault_model,
@@ -331,26 +283,31 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------------- calibrate
 def cmd_calibrate(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
     from .calibration import CalibrationError, calibrate
     from .params import save_params
-    from .traces import read_trace
+    from .progress import CountProgress, compile_notice
 
-    out = _check_out_path(args.out, (".toml",), "--out")
-    plot = _check_out_path(args.plot, (".png", ".svg", ".pdf"), "--plot") if args.plot else None
+    out = out_path(args.out, (".toml",), "--out")
+    plot = plot_path(args.plot)
     params = _load_params(args.params)
-    traces = []
-    for name in args.traces:
-        path = Path(name)
-        if not path.exists():
-            raise UsageError(f"trace file {path} does not exist")
-        traces.append(read_trace(path))
+    traces = [_trace_file(name) for name in args.traces]
+    progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs",
+                             header=f"calibrating on {len(traces)} healthy trace(s) around "
+                                    f"{args.params or 'the default preset'}")
     if not args.quiet:
-        print(f"calibrating on {len(traces)} healthy trace(s) around "
-              f"{args.params or 'the default preset'}", file=sys.stderr)
+        warn_if_long("emaphm calibrate", calibration_seconds([t.duration for t in traces], params),
+                     "this calibration", "calibrate on shorter traces (one 0.5 s diagnostic "
+                     "profile each is enough)")
     try:
-        res = calibrate(traces, params, sources=[str(Path(n).name) for n in args.traces])
+        with compile_notice(progress, enabled=not args.quiet):
+            res = calibrate(traces, params, sources=[str(Path(n).name) for n in args.traces],
+                            progress=progress.update)
     except CalibrationError as exc:
         raise UsageError(str(exc)) from None
+    finally:
+        progress.close()
     save_params(res.params, out)
     if args.json:
         d = res.to_dict()
@@ -371,7 +328,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_params(args: argparse.Namespace) -> int:
     from .params import save_params, siemens_1fk7060
 
-    out = _check_out_path(args.out, (".toml",), "--out")
+    out = out_path(args.out, (".toml",), "--out")
     save_params(siemens_1fk7060(), out)
     print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it and "
           "pass it with --params", file=sys.stderr)
@@ -396,10 +353,10 @@ def _plant_arguments(p: argparse.ArgumentParser, *, diagnose: bool = False) -> N
 
 
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="emaphm", description=__doc__.split("\n")[0],
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = Parser(prog="emaphm", description=__doc__.split("\n")[0],
+                formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--version", action="version", version=f"emaphm {__version__}")
-    sub = ap.add_subparsers(dest="command", required=True)
+    sub = ap.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     s = sub.add_parser("simulate", help="simulate an actuator and write its trace")
     s.add_argument("--model", choices=("reference", "monitoring"), default="reference")
@@ -475,16 +432,22 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
-    cmd = f"emaphm {args.command}"
+    args = parser.parse_args(negative_values(parser, sys.argv[1:] if argv is None else argv))
+    cmd = " ".join(["emaphm", args.command] + ([args.history_command]
+                                               if getattr(args, "history_command", None) else []))
+
+    def error(text: str) -> int:
+        print(f"{cmd}: error: {one_line(text)}", file=sys.stderr)
+        return EXIT_USAGE
+
+    # the one error boundary: an expected failure is one line and exit 2, anything else is a
+    # bug, shown with its traceback
     try:
         return args.func(args)
     except UsageError as exc:
-        print(f"{cmd}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return error(str(exc))
     except (ValueError, FileNotFoundError) as exc:   # TraceError, ParameterError, FaultVectorError...
-        print(f"{cmd}: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        return error(str(exc))
     except KeyboardInterrupt:
         print(f"{cmd}: interrupted", file=sys.stderr)
         return 130
@@ -492,21 +455,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 0
-    # the one error boundary: an expected failure is one line and exit 2, anything else is a
-    # bug, shown with its traceback
     except OSError as exc:                           # a folder, no permission, a full disk...
-        path = f" {exc.filename}:" if getattr(exc, "filename", None) else ""
-        print(f"{cmd}: error:{path} {exc.strerror or exc}; check the path, that it is a file "
-              "where a file is meant, its permissions and the free space", file=sys.stderr)
-        return EXIT_USAGE
+        path = f"{exc.filename}: " if getattr(exc, "filename", None) else ""
+        return error(f"{path}{exc.strerror or exc}; check the path, that it is a file where a "
+                     "file is meant, its permissions and the free space")
     except RecursionError:
-        print(f"{cmd}: error: the input is nested too deeply to read (e.g. trace metadata); the "
-              "file is malformed: export it again", file=sys.stderr)
-        return EXIT_USAGE
+        return error("the input is nested too deeply to read (e.g. trace metadata); the file is "
+                     "malformed: export it again")
     except MemoryError:
-        print(f"{cmd}: error: the input needs more memory than this machine has; use a shorter "
-              "or less finely sampled trace", file=sys.stderr)
-        return EXIT_USAGE
+        return error("the input needs more memory than this machine has; use a shorter or less "
+                     "finely sampled trace")
     except Exception:                                # noqa: BLE001 - a bug: say so, keep the trace
         import traceback
 

@@ -43,6 +43,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ._text import shown
 from .params import ActuatorParams
 
 __all__ = [
@@ -102,7 +103,7 @@ def as_k(k: Sequence[float] | np.ndarray | str) -> np.ndarray:
             k = [float(x) for x in k.replace(" ", "").split(",") if x != ""]
         except ValueError:
             raise FaultVectorError(
-                f"fault vector {k!r} is not a comma-separated list of 8 numbers, "
+                f"fault vector {shown(k)} is not a comma-separated list of 8 numbers, "
                 "e.g. 0.75,0,0,0,0,0,0.5,0.5") from None
     arr = np.asarray(k, dtype=float)
     if arr.shape != (N_K,):
@@ -151,7 +152,7 @@ FAULT_MODELS = ("paper", "physical")
 def check_fault_model(name: str) -> str:
     """``name`` if it is one of :data:`FAULT_MODELS`, else a FaultVectorError naming them."""
     if name not in FAULT_MODELS:
-        raise FaultVectorError(f"unknown fault model {name!r}; choose 'physical' (the shorted "
+        raise FaultVectorError(f"unknown fault model {shown(name)}; choose 'physical' (the shorted "
                                "turns carry a fault-loop current) or 'paper' (the shorted turns "
                                "are removed: R x (1-k), L x (1-k)^2)")
     return name
@@ -230,7 +231,7 @@ def scenario(name: str) -> np.ndarray:
         return SCENARIOS[name].copy()
     except KeyError:
         raise FaultVectorError(
-            f"unknown scenario {name!r}; choose one of {', '.join(SCENARIOS)} "
+            f"unknown scenario {shown(name)}; choose one of {', '.join(SCENARIOS)} "
             "(`emaphm scenarios` lists them with their k)") from None
 
 

@@ -24,6 +24,7 @@ from typing import Literal
 
 import numpy as np
 
+from ._text import shown
 from .faults import check_fault_model
 from .models.monitoring import STATUS_DIVERGED, MonitoringModel
 from .params import ActuatorParams, siemens_1fk7060
@@ -49,12 +50,30 @@ def on_model_grid(trace: Trace, T_s: float) -> tuple[np.ndarray, Trace, np.ndarr
     t_model = np.arange(n) * T_s
     load = np.zeros(n)
     prof = trace.meta.get("profile") if isinstance(trace.meta, dict) else None
-    if isinstance(prof, dict):
+    if prof is not None:
         try:
             load = Profile.from_dict(prof).load_torque(t_model)
-        except ProfileError:
-            pass
+        except ProfileError as exc:
+            raise TraceError(f"trace metadata {exc}; correct the profile, or delete it from the "
+                             "metadata (a trace without one is diagnosed with zero load)") from None
     return t_model, resample(trace, t0 + t_model), load
+
+
+#: A load torque in a trace's profile above this many times the motor's peak torque is
+#: not a test an actuator could follow: a unit slip or a corrupt file.
+MAX_LOAD_OVER_T_MAX = 10.0
+
+
+def check_load(load: np.ndarray, params: ActuatorParams) -> None:
+    """Refuse a load torque [N m] (from a trace's profile) that the actuator could not
+    hold: more than :data:`MAX_LOAD_OVER_T_MAX` times the motor's peak torque."""
+    peak = float(np.max(np.abs(load))) if load.size else 0.0
+    limit = MAX_LOAD_OVER_T_MAX * params.motor.T_max
+    if peak > limit:
+        raise TraceError(f"trace metadata profile: the load torque reaches {peak:.4g} N m, more "
+                         f"than {MAX_LOAD_OVER_T_MAX:g} times the motor's peak torque (T_max = "
+                         f"{params.motor.T_max:g} N m): no actuator follows its command under "
+                         "it; check the load in the metadata (N m) or the parameters (--params)")
 
 
 def aligned_currents(trace: Trace, t_model: np.ndarray, lag: float = 0.0) -> np.ndarray:
@@ -83,6 +102,9 @@ def trace_fault_model(trace: Trace) -> str:
     ``model`` but no ``fault_model``); ``"physical"`` for a bench trace."""
     meta = trace.meta if isinstance(trace.meta, dict) else {}
     fm = meta.get("fault_model")
+    if fm is not None and not isinstance(fm, str):
+        raise TraceError(f"trace metadata fault_model: expected 'physical' or 'paper', got "
+                         f"{shown(fm)}; correct it or delete it from the metadata")
     if isinstance(fm, str) and fm:
         return check_fault_model(fm)
     return "paper" if meta.get("model") in ("reference", "monitoring") else "physical"
@@ -265,6 +287,7 @@ class Eq4Objective:
         check_diagnosable(trace)
         if load_torque is None:
             load_torque = meta_load
+            check_load(load_torque, params)
         else:
             load_torque = np.asarray(load_torque, dtype=float)
             if load_torque.shape != (n,):

@@ -65,12 +65,15 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import tomllib
 from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
 from typing import Any
 
 import tomli_w
+
+from ._text import shown
 
 __all__ = [
     "C0_1FK7060",
@@ -149,12 +152,40 @@ _UNITS: dict[str, str] = {
 }
 
 
+_PREFIXES = {"": 1.0, "m": 1e-3, "u": 1e-6, "\u00b5": 1e-6, "k": 1e3, "M": 1e6}
+
+
+def _value_in_text(text: str, unit: str) -> float | None:
+    """The SI value a text such as ``"3.15 ohm"``, ``"22 mH"`` or ``"8kHz"`` means when its
+    unit is ``unit`` (with an SI prefix m, u, k, M); None if it says something else."""
+    m = re.fullmatch(r"\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(\S*(?: \S+)?)\s*", text)
+    if not m or not unit:
+        return None
+    number, given = float(m.group(1)), m.group(2).replace("\u03a9", "ohm")
+    for prefix, factor in _PREFIXES.items():
+        if given[:len(prefix)] == prefix and given[len(prefix):].lower() == unit.lower():
+            return number * factor
+    return None
+
+
+def _not_a_number(where: str, name: str, value: Any, expected: str) -> ParameterError:
+    """The error for a field given as text or another non-number; for text with a number
+    and the field's unit (``"3.15 ohm"``, ``"22 mH"``), how to write it."""
+    if isinstance(value, str):
+        unit = _UNITS.get(name, "").replace(", per phase", "")
+        si = _value_in_text(value, unit)
+        fix = (f"; write {name} = {si:g} (a bare number in {unit})" if si is not None
+               else f"; write {name} as a bare number in {unit}" if unit else "")
+        return ParameterError(f"{where}: expected {expected}, got the string {shown(value)}{fix}")
+    return ParameterError(f"{where}: expected {expected}, got {shown(value)}")
+
+
 def _check(owner: str, name: str, value: float, *, lo: float | None = None,
            hi: float | None = None, strict_lo: bool = True) -> float:
     unit = _UNITS.get(name, "")
     where = f"{owner}.{name} [{unit}]"
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ParameterError(f"{where} must be a number, got {value!r}")
+        raise _not_a_number(where, name, value, f"a number in {unit}")
     v = float(value)
     if not math.isfinite(v):
         raise ParameterError(f"{where} must be finite, got {value!r}")
@@ -171,12 +202,14 @@ def _phase3(owner: str, name: str, value: Any, *, lo: float = 0.0,
     """Accept a scalar (same on all phases) or three per-phase values."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         value = (value, value, value)
+    unit = _UNITS[name].replace(", per phase", "")
+    expected = f"a number in {unit} or 3 per-phase numbers (a, b, c)"
+    if isinstance(value, (str, bytes, dict)) or isinstance(value, bool):
+        raise _not_a_number(f"{owner}.{name} [{_UNITS[name]}]", name, value, expected)
     try:
         vals = tuple(value)
     except TypeError:
-        raise ParameterError(
-            f"{owner}.{name} [{_UNITS[name]}] must be a number or a list of 3 "
-            f"per-phase numbers (a, b, c), got {value!r}") from None
+        raise _not_a_number(f"{owner}.{name} [{_UNITS[name]}]", name, value, expected) from None
     if len(vals) != 3:
         raise ParameterError(
             f"{owner}.{name} [{_UNITS[name]}] needs 3 per-phase values (a, b, c), "
@@ -503,7 +536,10 @@ class ActuatorParams:
                     f"{source}: [{sec}] is missing "
                     + ", ".join(f"{n} [{_UNITS[n]}]" for n in sorted(missing)))
             kw = {n: given[n] for n in given}
-            parts[sec] = replace(base, **kw) if base is not None else klass(**kw)
+            try:
+                parts[sec] = replace(base, **kw) if base is not None else klass(**kw)
+            except ParameterError as exc:        # name the file and the section
+                raise ParameterError(f"{source}: {exc}") from None
         name = data.get("name", defaults.name if defaults is not None else "custom")
         params = cls(name=str(name), **parts)
         check_plausible(params, source=source)
@@ -520,9 +556,11 @@ def check_plausible(params: ActuatorParams, *, source: str = "parameters") -> No
     m, inv = params.motor, params.inverter
     where = f"{source}:"
     if not 500.0 <= inv.f_pwm <= 100e3:
+        why = (f"the models take one step per PWM period, so {inv.f_pwm:g} Hz would ask for "
+               f"{0.5 * inv.f_pwm:.3g} steps per 0.5 s test" if inv.f_pwm > 100e3 else
+               "a current loop that slow cannot control a servo motor; give hertz, not kilohertz")
         raise ParameterError(f"{where} inverter.f_pwm [Hz] = {inv.f_pwm:g} is outside 500 Hz to "
-                             "100 kHz, the range of servo drives (8000 = 8 kHz; the models take "
-                             "one step per PWM period, so 1e9 would ask for 5e8 steps)")
+                             f"100 kHz, the range of servo drives (8000 = 8 kHz): {why}")
     for j, ph in enumerate("abc"):
         R, L = m.R[j], m.L[j]
         if L > 1.0:

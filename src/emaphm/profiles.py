@@ -12,10 +12,12 @@ vector ``k`` leaves a mark in the phase currents (see its docstring).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import MISSING, asdict, dataclass, field, fields
 from typing import Any, Union
 
 import numpy as np
+
+from ._text import shown
 
 __all__ = ["Step", "Ramp", "Sine", "Trapezoid", "Constant", "Tabulated", "Profile", "ProfileError",
            "diagnostic", "step", "ramp", "sine", "trapezoid", "PROFILES", "get_profile"]
@@ -27,6 +29,8 @@ class ProfileError(ValueError):
 
 def _finite(owner: str, **values: float) -> None:
     for name, v in values.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+            raise ProfileError(f"{owner}.{name} must be a number, got {shown(v)}")
         if not math.isfinite(v):
             raise ProfileError(f"{owner}.{name} must be finite, got {v!r}")
 
@@ -157,12 +161,87 @@ def _shape_to_dict(s: Shape) -> dict[str, Any]:
     return {"shape": type(s).__name__, **asdict(s)}
 
 
-def _shape_from_dict(d: dict[str, Any]) -> Shape:
+# What a profile read back from data (trace metadata) may hold. Far beyond any actuator's
+# test, so that only nonsense or a unit slip is refused: the time of a shape [s], the
+# duration [s], a command magnitude [rad], a load magnitude [N m], a frequency [Hz], a
+# speed [rad/s], an acceleration [rad/s^2], the samples of a Tabulated shape.
+MAX_TIME_S = 1e4
+MAX_COMMAND_RAD = 1e6
+MAX_LOAD_NM = 1e5
+MAX_FREQUENCY_HZ = 1e5
+MAX_SPEED = 1e6
+MAX_ACCELERATION = 1e9
+MAX_TABULATED = 10_000_000
+
+# field -> (unit, largest magnitude, may be +inf); "magnitude" fields take the side's unit
+_FIELDS: dict[str, tuple[str, float, bool]] = {
+    "t0": ("s", MAX_TIME_S, False), "t1": ("s", MAX_TIME_S, True),
+    "frequency": ("Hz", MAX_FREQUENCY_HZ, False), "v_max": ("rad/s", MAX_SPEED, False),
+    "a_max": ("rad/s^2", MAX_ACCELERATION, False),
+}
+_MAGNITUDES = ("height", "amplitude", "value", "values")
+
+
+def _number(where: str, value: Any, unit: str, largest: float, *, inf_ok: bool = False) -> float:
+    """``value`` as a float, or a ProfileError "``where``: expected a number in ``unit``"."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        got = f"the string {shown(value)}" if isinstance(value, str) else shown(value)
+        raise ProfileError(f"{where}: expected a number in {unit}, got {got}")
+    v = float(value)
+    if math.isnan(v) or (math.isinf(v) and not (inf_ok and v > 0)):
+        raise ProfileError(f"{where}: expected a finite number in {unit}, got {value!r}")
+    if math.isfinite(v) and abs(v) > largest:
+        raise ProfileError(f"{where} = {v:g} {unit} is beyond any actuator test (at most "
+                           f"{largest:g} {unit} in magnitude); check the value and its unit "
+                           f"({unit})")
+    return v
+
+
+def _samples(where: str, value: Any, unit: str, largest: float) -> tuple[float, ...]:
+    if not isinstance(value, (list, tuple)):
+        raise ProfileError(f"{where}: expected a list of numbers in {unit}, got {shown(value)}")
+    if len(value) > MAX_TABULATED:
+        raise ProfileError(f"{where}: {len(value)} samples, more than {MAX_TABULATED}; "
+                           "decimate the tabulated profile")
+    return tuple(_number(f"{where}[{i}]", x, unit, largest) for i, x in enumerate(value))
+
+
+def _shape_from_dict(d: Any, where: str = "shape", side: str = "command") -> Shape:
+    """A shape from its dict, every field checked: its type, its unit (``side``: a
+    ``"command"`` magnitude is in rad, a ``"load"`` one in N m) and a plausible size."""
+    if not isinstance(d, dict):
+        raise ProfileError(f"{where}: expected an object such as {{\"shape\": \"Step\", "
+                           f"\"t0\": 0.02, \"height\": 0.5}}, got {shown(d)}")
     d = dict(d)
     kind = d.pop("shape", None)
     if kind not in _SHAPES:
-        raise ProfileError(f"unknown profile shape {kind!r}; known: {', '.join(_SHAPES)}")
-    return _SHAPES[kind](**d)
+        raise ProfileError(f"{where}: unknown profile shape {shown(kind)}; known: {', '.join(_SHAPES)}")
+    cls = _SHAPES[kind]
+    known = {f.name: f for f in fields(cls)}
+    extra = sorted(set(d) - set(known), key=str)
+    if extra:
+        raise ProfileError(f"{where}: unknown field(s) {shown(extra)} of {kind}; its fields: "
+                           f"{', '.join(known)}")
+    missing = [n for n, f in known.items() if n not in d and f.default is MISSING]
+    if missing:
+        raise ProfileError(f"{where}: {kind} is missing {', '.join(missing)}")
+    unit, largest = ("rad", MAX_COMMAND_RAD) if side == "command" else ("N m", MAX_LOAD_NM)
+    kw: dict[str, Any] = {}
+    for name, value in d.items():
+        at = f"{where}.{name}"
+        if name == "t":
+            kw[name] = _samples(at, value, "s", MAX_TIME_S)
+        elif name == "values":
+            kw[name] = _samples(at, value, unit, largest)
+        elif name in _MAGNITUDES:
+            kw[name] = _number(at, value, unit, largest)
+        else:
+            f_unit, f_largest, inf_ok = _FIELDS[name]
+            kw[name] = _number(at, value, f_unit, f_largest, inf_ok=inf_ok)
+    try:
+        return cls(**kw)
+    except ProfileError as exc:
+        raise ProfileError(f"{where}: {exc}") from None
 
 
 @dataclass(frozen=True)
@@ -216,14 +295,35 @@ class Profile:
                 "load": [_shape_to_dict(s) for s in self.load]}
 
     @classmethod
-    def from_dict(cls, d: dict[str, Any]) -> "Profile":
+    def from_dict(cls, d: Any, where: str = "profile") -> "Profile":
+        """Rebuild a profile from :meth:`to_dict`'s data (e.g. trace metadata), checking
+        every field: a ProfileError names it by its path (``where``, then e.g.
+        ``.command[0].amplitude``), what was expected, with its unit, and what came."""
+        if not isinstance(d, dict):
+            raise ProfileError(f"{where}: expected an object with duration, command and load, "
+                               f"got {shown(d)}")
+        extra = sorted(set(d) - {"name", "duration", "description", "command", "load"}, key=str)
+        if extra:
+            raise ProfileError(f"{where}: unknown field(s) {shown(extra)}; a profile has name, "
+                               "duration, description, command and load")
+        if "duration" not in d:
+            raise ProfileError(f"{where}: cannot rebuild a profile without its duration [s]")
+        duration = _number(f"{where}.duration", d["duration"], "s", MAX_TIME_S)
+        sides: dict[str, tuple[Shape, ...]] = {}
+        for side in ("command", "load"):
+            shapes = d.get(side, [])
+            if not isinstance(shapes, (list, tuple)):
+                raise ProfileError(f"{where}.{side}: expected a list of shapes, got {shown(shapes)}")
+            sides[side] = tuple(_shape_from_dict(x, f"{where}.{side}[{i}]", side)
+                                for i, x in enumerate(shapes))
+        for key in ("name", "description"):
+            if key in d and not isinstance(d[key], str):
+                raise ProfileError(f"{where}.{key}: expected text, got {shown(d[key])}")
         try:
-            return cls(duration=float(d["duration"]),
-                       command=tuple(_shape_from_dict(s) for s in d.get("command", ())),
-                       load=tuple(_shape_from_dict(s) for s in d.get("load", ())),
-                       name=str(d.get("name", "custom")), description=str(d.get("description", "")))
-        except (KeyError, TypeError) as exc:
-            raise ProfileError(f"cannot rebuild a profile from {d!r}: {exc}") from None
+            return cls(duration=duration, command=sides["command"], load=sides["load"],
+                       name=d.get("name", "custom"), description=d.get("description", ""))
+        except ProfileError as exc:
+            raise ProfileError(f"{where}: {exc}") from None
 
 
 def diagnostic(load_torque: float = 0.0) -> Profile:

@@ -20,7 +20,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from emaphm.cli import arg_type, budget_option
+from .._cli_common import UsageError, arg_type, budget_option, writable_folder
 
 __all__ = ["register", "cmd_campaign", "cmd_report"]
 
@@ -28,9 +28,28 @@ _SPEC_OPTIONS = ("spec", "scenarios", "algorithms", "runs", "seed", "noise", "bu
                  "fault_model")
 
 
-_positive_int = arg_type(int, lambda n: n >= 1, "expected a positive integer")
 _non_negative_int = arg_type(int, lambda n: n >= 0, "expected an integer >= 0")
-_non_negative_float = arg_type(float, lambda x: x >= 0, "expected a number >= 0")
+
+
+def _runs(text: str) -> int:
+    from .spec import MAX_RUNS                   # imported when parsed: --help stays fast
+
+    return arg_type(int, lambda n: 1 <= n <= MAX_RUNS, f"expected an integer from 1 to "
+                    f"{MAX_RUNS} (runs per scenario and algorithm)")(text)
+
+
+def _noise(text: str) -> float:
+    from .spec import MAX_NOISE
+
+    return arg_type(float, lambda x: 0.0 <= x <= MAX_NOISE,
+                    f"expected a current noise from 0 to {MAX_NOISE:g} A rms (a servo drive's "
+                    "current sensor has tens of milliamperes; default 0.02)")(text)
+
+
+_workers = arg_type(int, lambda n: 0 <= n <= 4096, "expected an integer from 0 to 4096 "
+                    "(local worker processes; 0 runs in this process)")
+_timeout = arg_type(float, lambda x: 0.0 < x <= 3600.0, "expected seconds, more than 0 and at "
+                    "most 3600")
 
 
 def build_spec(args: argparse.Namespace) -> Any:
@@ -63,9 +82,8 @@ def build_spec(args: argparse.Namespace) -> Any:
 
 
 def cmd_campaign(args: argparse.Namespace) -> int:
-    from emaphm.cli import UsageError
-
-    from .executors import make_executor
+    from ..progress import compile_notice
+    from .executors import DaskExecutor, make_executor, warm_up
     from .runner import CampaignInterrupted, ProgressLine, replay, run_campaign
     from .store import CampaignStore
 
@@ -83,7 +101,7 @@ def cmd_campaign(args: argparse.Namespace) -> int:
         print(f"{spec.n_runs} runs; spec hash {spec.hash[:12]}", file=sys.stderr)
         return 0
     store_path = Path(args.store)
-    executor = make_executor(args.workers, args.scheduler)
+    executor = make_executor(args.workers, args.scheduler, timeout=args.connect_timeout)
     if hasattr(executor, "check"):            # a wrong scheduler address fails before the store
         executor.check()
     # open (and so validate, or create) the store before starting any worker
@@ -96,6 +114,11 @@ def cmd_campaign(args: argparse.Namespace) -> int:
               f"{len(spec.algorithms)} algorithms x {spec.runs}), {counts['ok']} already in {store_path}; "
               f"{executor.describe()}", file=sys.stderr)
     progress = None if quiet else ProgressLine(sys.stderr)
+    if counts["ok"] < spec.n_runs and not isinstance(executor, DaskExecutor):
+        # load (or compile, once, with a notice) the kernels here first: the local workers
+        # then find them in Numba's disk cache instead of all compiling them at once
+        with compile_notice(progress, enabled=not quiet):
+            warm_up()
     try:
         summary = run_campaign(spec, store_path, executor, progress,
                                allow_version_mix=args.allow_version_mix)
@@ -118,8 +141,6 @@ def cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace, replay: Any) -> int:
-    from emaphm.cli import UsageError
-
     if not Path(args.store).exists():
         raise UsageError(f"--replay needs an existing --store; {args.store} does not exist")
     if any(getattr(args, name, None) is not None for name in _SPEC_OPTIONS):
@@ -145,8 +166,6 @@ def _brief(r: Any) -> dict[str, Any]:
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from emaphm.cli import UsageError
-
     from .report import write_report
 
     if not Path(args.store).exists():
@@ -156,6 +175,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         raise UsageError(f"--out {out} exists and is not a folder")
     if not out.parent.exists():
         raise UsageError(f"--out {out}: folder {out.parent} does not exist; create it first")
+    writable_folder(out if out.is_dir() else out.parent, "--out")
     paths = write_report(args.store, out, figures=not args.no_figures)
     for p in paths:
         print(p)
@@ -173,9 +193,9 @@ def register(sub: Any) -> None:
                                        "default: paper (the 11 of the paper)")
     c.add_argument("--algorithms", help="comma-separated algorithms, default de,pso,gwo "
                                         "(also scipy-de, cmaes)")
-    c.add_argument("--runs", type=_positive_int, help="runs per scenario and algorithm (default 10)")
+    c.add_argument("--runs", type=_runs, help="runs per scenario and algorithm (default 10)")
     c.add_argument("--seed", type=_non_negative_int, help="master seed (default 0)")
-    c.add_argument("--noise", type=_non_negative_float, help="current sensor noise, A rms (default 0.02)")
+    c.add_argument("--noise", type=_noise, help="current sensor noise, A rms (default 0.02)")
     c.add_argument("--budget", help="per run: evaluations (e.g. 5000) or seconds (e.g. 30s, not "
                                     "reproducible); default: each algorithm's stopping rule")
     c.add_argument("--polish", action=argparse.BooleanOptionalAction, default=None,
@@ -184,9 +204,13 @@ def register(sub: Any) -> None:
                    help="mapping of k3..k5 for every scenario; default each scenario's own (the "
                         "paper's scenarios: paper; turn-short-*: physical)")
     c.add_argument("--store", default="results.sqlite", help="result store, SQLite (default results.sqlite)")
-    c.add_argument("--workers", type=_non_negative_int,
+    c.add_argument("--workers", type=_workers,
                    help="local worker processes (default: all cores; 0: in this process)")
-    c.add_argument("--scheduler", help="Dask scheduler address, tcp://HOST:PORT (needs emaphm[dask])")
+    c.add_argument("--scheduler", help="Dask scheduler address, tcp://HOST:PORT, HOST:PORT or "
+                                       "tls://HOST:PORT (needs emaphm[dask]; connect only to a "
+                                       "scheduler you trust: Dask exchanges pickles)")
+    c.add_argument("--connect-timeout", type=_timeout, default=None,
+                   help="seconds to wait for the Dask scheduler to answer (default 10)")
     c.add_argument("--replay", metavar="RUN_KEY", help="rerun one stored run alone, e.g. friction-low/pso/3, "
                                                        "and compare it with the stored result")
     c.add_argument("--dry-run", action="store_true", help="list the runs and their seeds; run nothing")

@@ -20,6 +20,10 @@ DaskExecutor       an existing ``dask.distributed`` cluster (scheduler address o
                    Dask is imported only here, and only when this executor is used
 =================  ===========================================================================
 
+Dask sends tasks and results as pickles, and unpickling runs code: connect only to a
+scheduler you trust, on a network you trust, or over TLS (``tls://`` with certificates from
+Dask's configuration, ``distributed.comm.tls.*``; see docs/campaigns.md).
+
 Every worker process is warmed once (:func:`warm_up`: the Numba kernels of both models
 are loaded from their on-disk cache, or compiled if there is none, by a tiny
 identification) before it takes its first run, so no run pays for compilation and no
@@ -31,7 +35,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import re
 import signal
+import socket
 import sys
 import threading
 import time
@@ -39,7 +45,46 @@ from concurrent.futures.process import BrokenProcessPool
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any, Callable, Iterable, Iterator, Protocol
 
-__all__ = ["DaskExecutor", "Executor", "LocalExecutor", "SerialExecutor", "make_executor", "warm_up"]
+__all__ = ["DaskExecutor", "Executor", "LocalExecutor", "SerialExecutor", "make_executor", "warm_up",
+           "parse_scheduler_address", "DEFAULT_CONNECT_TIMEOUT"]
+
+#: Seconds to wait for a Dask scheduler to accept the connection and answer its handshake.
+DEFAULT_CONNECT_TIMEOUT = 10.0
+#: The schemes a scheduler address may have: plain TCP, or TCP under TLS.
+SCHEDULER_SCHEMES = ("tcp", "tls")
+_HOST_PORT = re.compile(r"(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):(?P<port>\d{1,5})")
+
+
+def parse_scheduler_address(address: str) -> str:
+    """A Dask scheduler address as ``tcp://HOST:PORT`` or ``tls://HOST:PORT``; ``HOST:PORT``
+    means TCP. ValueError, naming the problem, for anything else (another scheme such as
+    ``inproc://``, which names a scheduler inside one Python process, a missing or bad
+    port, a path)."""
+    from emaphm._text import shown
+
+    if not isinstance(address, str) or not address.strip():
+        raise ValueError("the scheduler address is empty; give tcp://HOST:PORT, e.g. "
+                         "tcp://10.0.0.1:8786")
+    text = address.strip()
+    scheme, sep, rest = text.partition("://")
+    if not sep:
+        scheme, rest = "tcp", text
+    scheme = scheme.lower()
+    if scheme not in SCHEDULER_SCHEMES:
+        why = (" (an inproc:// address names a scheduler inside one Python process, which a "
+               "command cannot reach; start one with `dask scheduler` or use --workers)"
+               if scheme == "inproc" else "")
+        raise ValueError(f"scheduler address {shown(address)}: scheme {scheme}:// is not "
+                         f"supported{why}; give tcp://HOST:PORT or tls://HOST:PORT")
+    m = _HOST_PORT.fullmatch(rest)
+    if not m:
+        raise ValueError(f"scheduler address {shown(address)} is not HOST:PORT after "
+                         f"{scheme}://; give e.g. {scheme}://10.0.0.1:8786 (the address "
+                         "`dask scheduler` prints)")
+    port = int(m.group("port"))
+    if not 1 <= port <= 65535:
+        raise ValueError(f"scheduler address {shown(address)}: port {port} is outside 1-65535")
+    return f"{scheme}://{m.group('host')}:{port}"
 
 _WARM = False
 
@@ -197,14 +242,28 @@ class LocalExecutor:
 class DaskExecutor:
     """Runs on an existing Dask distributed cluster.
 
-    ``scheduler`` is a scheduler address (``"tcp://host:8786"``), then a Client is
-    opened for the campaign and closed after it, or a ``distributed.Client`` (left
-    open). Workers need emaphm installed (same version) and are warmed once each, by a
+    ``scheduler`` is a scheduler address (``"tcp://host:8786"``, ``"host:8786"`` or
+    ``"tls://host:8786"``, checked by :func:`parse_scheduler_address`), then a Client is
+    opened for the campaign and closed after it, or a ``distributed.Client`` (left open).
+    ``timeout``: seconds to wait for the scheduler to answer (default
+    :data:`DEFAULT_CONNECT_TIMEOUT`); a service that does not answer as a Dask scheduler
+    within it, or answers something else, is a ValueError naming the address.
+
+    Dask exchanges pickles: connect only to a scheduler you trust. A ``tls://`` address
+    uses the certificates of Dask's configuration (``distributed.comm.tls.ca-file``,
+    ``.client.cert``, ``.client.key``); or pass a Client built with a ``Security`` object.
+
+    Workers need emaphm installed (same version) and are warmed once each, by a
     :func:`warm_up` task pinned to every worker present at the start (a worker that joins
     later warms itself before its first run). Results come back as they finish.
     """
 
-    def __init__(self, scheduler: Any, *, warm: bool = True) -> None:
+    def __init__(self, scheduler: Any, *, warm: bool = True, timeout: float | None = None) -> None:
+        if isinstance(scheduler, str):
+            scheduler = parse_scheduler_address(scheduler)
+        timeout = DEFAULT_CONNECT_TIMEOUT if timeout is None else float(timeout)
+        if not timeout > 0:
+            raise ValueError(f"the connection timeout must be positive seconds, got {timeout!r}")
         try:
             import distributed  # noqa: F401
         except ImportError:
@@ -212,6 +271,7 @@ class DaskExecutor:
                              "pip install 'emaphm[dask]'") from None
         self.scheduler = scheduler
         self.warm = warm
+        self.timeout = timeout
         self.workers = None
 
     def describe(self) -> str:
@@ -226,14 +286,8 @@ class DaskExecutor:
             client.close()
 
     def _client(self) -> tuple[Any, bool]:
-        from distributed import Client
-
         if isinstance(self.scheduler, str):
-            try:
-                return Client(self.scheduler, timeout="20s"), True
-            except OSError as exc:
-                raise ValueError(f"cannot reach the Dask scheduler at {self.scheduler} ({exc}); "
-                                 "check the address (tcp://HOST:PORT) and that it is running") from None
+            return _connect(self.scheduler, self.timeout), True
         return self.scheduler, False
 
     def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
@@ -268,11 +322,99 @@ class DaskExecutor:
                 client.close()
 
 
-def make_executor(workers: int | None = None, scheduler: Any = None) -> Any:
-    """The executor for CLI-style options: a scheduler -> Dask; ``workers=0`` ->
-    in-process; otherwise a local pool of ``workers`` (default all cores)."""
+def _probe(address: str, timeout: float) -> None:
+    """Ask the service at ``address`` who it is, within ``timeout`` seconds: a ValueError
+    naming the address unless a Dask scheduler answers.
+
+    Dask bounds the TCP connection by its own timeout but not the handshake that follows
+    (a service that accepts and never answers would hang the command), and a failed
+    ``Client`` lingers and complains when it is collected; so the question is asked on a
+    bare connection, in an event loop of its own (in a thread: the caller may run one)."""
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    security = Security()
+    if address.startswith("tls://") and not security.tls_ca_file:
+        raise ValueError(f"{address}: tls:// needs the certificates in Dask's configuration "
+                         "(distributed.comm.tls.ca-file, .client.cert and .client.key, e.g. in "
+                         "~/.config/dask/distributed.yaml or as DASK_DISTRIBUTED__COMM__TLS__"
+                         "CA_FILE=...; see docs/campaigns.md)")
+    host, _, port = address.partition("://")[2].rpartition(":")
+    try:                      # first whether anything listens there at all
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        why = exc.strerror or str(exc) or type(exc).__name__
+        raise ValueError(f"cannot reach a Dask scheduler at {address} ({why}); check the "
+                         "address and that the scheduler is running") from None
+
+    async def ask() -> Any:
+        args = security.get_connection_args("client")   # tls:// certificates from the config
+        comm = await connect(address, timeout=timeout, **args)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    box: dict[str, Any] = {}
+
+    def run() -> None:
+        try:      # Dask's connect gives up after ``timeout``; the handshake is bounded here
+            box["reply"] = asyncio.run(asyncio.wait_for(ask(), timeout + 2.0))
+        except BaseException as exc:               # noqa: BLE001 - reported below
+            box["error"] = exc
+
+    thread = threading.Thread(target=run, name="emaphm-dask-probe", daemon=True)
+    thread.start()
+    thread.join(timeout + 5.0)
+    exc = box.get("error")
+    if thread.is_alive() or isinstance(exc, (asyncio.TimeoutError, TimeoutError)):
+        raise ValueError(f"the service at {address} accepted the connection but gave no Dask "
+                         f"answer within {timeout:g} s: not a Dask scheduler, or one too busy; "
+                         "check the address (the scheduler's port, 8786 by default, not the "
+                         "dashboard's 8787), and for tls:// the certificates "
+                         "(--connect-timeout to wait longer)")
+    if exc is not None:
+        cause = exc.__cause__ if exc.__cause__ is not None else exc
+        detail = f"{type(cause).__name__}: {str(cause)[:160]}" if str(cause) else type(cause).__name__
+        if "timed out trying to connect" in str(exc).lower():
+            detail = "it closed or ignored the Dask handshake"
+        elif not isinstance(cause, OSError):
+            detail = f"it sent bytes that are no Dask message: {detail[:100]}"
+        tls = "; a scheduler started with TLS needs tls://" if address.startswith("tcp://") else ""
+        raise ValueError(f"the service at {address} did not answer as a Dask scheduler "
+                         f"({detail}); check the address (the scheduler's port, 8786 by "
+                         f"default){tls}, and that both sides run compatible versions of "
+                         "dask.distributed")
+    reply = box.get("reply")
+    if not (isinstance(reply, dict) and reply.get("type") == "Scheduler"):
+        what = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise ValueError(f"the service at {address} is not a Dask scheduler (it says it is a "
+                         f"{str(what)[:40]}); give the scheduler's address, e.g. the one "
+                         "`dask scheduler` prints")
+
+
+def _connect(address: str, timeout: float) -> Any:
+    """A ``distributed.Client`` of the scheduler at ``address``, asked first (:func:`_probe`)."""
+    from distributed import Client
+
+    _probe(address, timeout)
+    try:
+        return Client(address, timeout=f"{timeout}s")
+    except OSError as exc:
+        raise ValueError(f"cannot connect to the Dask scheduler at {address} ({exc}); check "
+                         "that it is still running") from None
+
+
+def make_executor(workers: int | None = None, scheduler: Any = None, *,
+                  timeout: float | None = None) -> Any:
+    """The executor for CLI-style options: a scheduler -> Dask (``timeout``: seconds to
+    wait for it); ``workers=0`` -> in-process; otherwise a local pool of ``workers``
+    (default all cores)."""
     if scheduler is not None:
-        return DaskExecutor(scheduler)
+        return DaskExecutor(scheduler, timeout=timeout)
     if workers == 0:
         return SerialExecutor()
     return LocalExecutor(workers)

@@ -15,12 +15,12 @@ uninterrupted one, whatever the executor and the number of workers.
 from __future__ import annotations
 
 import os
-import sys
 import time
 import traceback
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import Any
 
+from ..progress import RunProgress
 from .executors import make_executor, warm_up
 from .spec import CampaignSpec, Run
 from .store import CampaignStore, RunResult
@@ -64,73 +64,9 @@ def execute_run(run: Run) -> RunResult:
 
 # ----------------------------------------------------------------------------- progress
 
-
-class ProgressLine:
-    """Progress on a stream (stderr): runs done / total, failures, rate and ETA.
-
-    On a terminal one line is rewritten in place (at most ten times a second); otherwise a
-    line is printed at every tenth of the campaign.
-    """
-
-    def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None) -> None:
-        self.stream = stream if stream is not None else sys.stderr
-        self.tty = self.stream.isatty() if tty is None else tty
-        self.total = self.done = self.failed = self.todo = self.new = 0
-        self.t0 = time.perf_counter()
-        self._last = 0.0
-        self._next_tenth = 1
-
-    def start(self, total: int, already: int, todo: int) -> None:
-        self.total, self.done, self.todo = total, already, todo
-        self.t0 = time.perf_counter()
-        self._draw(force=True)
-
-    def update(self, result: RunResult) -> None:
-        self.new += 1
-        if result.ok:
-            self.done += 1
-        else:
-            self.failed += 1
-        self._draw()
-
-    def _line(self) -> str:
-        elapsed = time.perf_counter() - self.t0
-        left = self.todo - self.new
-        eta = "--"
-        if self.new and left > 0:
-            eta = _clock(elapsed / self.new * left)
-        elif left <= 0:
-            eta = "0s"
-        pct = 100.0 * self.done / self.total if self.total else 100.0
-        return (f"runs {self.done}/{self.total} ({pct:.0f}%)  failures {self.failed}  "
-                f"elapsed {_clock(elapsed)}  ETA {eta}")
-
-    def _draw(self, force: bool = False) -> None:
-        now = time.perf_counter()
-        if self.tty:
-            if force or now - self._last >= 0.1 or self.new == self.todo:
-                self._last = now
-                self.stream.write("\r" + self._line() + "\x1b[K")
-                self.stream.flush()
-        elif force or (self.todo and self.new * 10 >= self._next_tenth * self.todo):
-            while self.todo and self.new * 10 >= self._next_tenth * self.todo:
-                self._next_tenth += 1
-            self.stream.write(self._line() + "\n")
-            self.stream.flush()
-
-    def close(self) -> None:
-        if self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
-
-
-def _clock(seconds: float) -> str:
-    s = int(round(seconds))
-    if s < 60:
-        return f"{s}s"
-    if s < 3600:
-        return f"{s // 60}m{s % 60:02d}s"
-    return f"{s // 3600}h{s % 3600 // 60:02d}m"
+#: The campaign's progress line (runs done / total, failures, elapsed, ETA): the shared
+#: :class:`emaphm.progress.RunProgress`, under the name this module has always exported.
+ProgressLine = RunProgress
 
 
 # ----------------------------------------------------------------------------- campaign

@@ -54,6 +54,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from .._text import shown
+
 __all__ = [
     "AlgorithmSpec",
     "CampaignSpec",
@@ -83,6 +85,16 @@ _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]*$")
 _DEFAULT_NOISE = 0.02               # A rms, emaphm.simulate.DEFAULT_SENSORS
 _DEFAULT_LSB = 40.0 / 4096          # A, a 12-bit ADC over +-20 A
 
+#: Upper bounds of what a spec may ask for: sensor noise [A rms] (a servo drive's current
+#: sensor has tens of mA; above 1 A a trace carries nothing a model can fit), runs per
+#: scenario and algorithm, runs in all, a population (hours of CPU per run beyond these),
+#: monitoring-model sub-steps.
+MAX_NOISE = 1.0
+MAX_RUNS = 10_000
+MAX_TOTAL_RUNS = 1_000_000
+MAX_POP_SIZE = 10_000
+MAX_N_SUB = 64
+
 
 class SpecError(ValueError):
     """A campaign specification is invalid; the message says what to fix."""
@@ -99,7 +111,7 @@ def available_algorithms() -> dict[str, type | None]:
 
 def _check_name(what: str, name: Any) -> str:
     if not isinstance(name, str) or not _NAME.match(name):
-        raise SpecError(f"{what} name {name!r} must be letters, digits and _ . + - "
+        raise SpecError(f"{what} name {shown(name)} must be letters, digits and _ . + - "
                         "(no spaces or slashes), starting with a letter or digit")
     return name
 
@@ -140,7 +152,7 @@ class ScenarioSpec:
 
         if name not in SCENARIOS:
             groups = ", ".join(SCENARIO_GROUPS)
-            raise SpecError(f"unknown scenario {name!r}; choose one of {', '.join(SCENARIOS)}, "
+            raise SpecError(f"unknown scenario {shown(name)}; choose one of {', '.join(SCENARIOS)}, "
                             f"a group ({groups}) or a custom {{name = ..., k = [8 values]}}")
         mode, magnitude = name, ""
         m = re.fullmatch(r"(.+)-(low|high)", name)
@@ -262,9 +274,9 @@ class CampaignSpec:
     ============  ==================  ===============  ===========================================
     scenarios     ScenarioSpec...     the paper's 11   scenarios (names, groups or custom k)
     algorithms    AlgorithmSpec...    de, pso, gwo     algorithms with their settings
-    runs          int >= 1            10               runs of each algorithm on each scenario
+    runs          int 1..10000        10               runs of each algorithm on each scenario
     master_seed   int >= 0            0                root of every seed (see module docs)
-    noise         float >= 0          0.02             current sensor noise, A rms
+    noise         float 0..1          0.02             current sensor noise, A rms
     adc_lsb       float >= 0          40/4096          current quantisation step, A (0: none)
     budget        int, str, None      None             per run: evaluations, "30s" (wall clock,
                                                        not reproducible), None/"default": each
@@ -335,6 +347,12 @@ class CampaignSpec:
             _check_name("algorithm label", a.label)
             if not isinstance(a.options, Mapping):
                 raise SpecError(f"algorithm {a.label!r}: options must be a table, got {a.options!r}")
+            pop = a.options.get("pop_size")
+            if isinstance(pop, (int, float, np.integer, np.floating)) and not isinstance(pop, bool) \
+                    and pop > MAX_POP_SIZE:
+                raise SpecError(f"algorithm {a.label!r}: pop_size {pop:g} is above {MAX_POP_SIZE}; "
+                                "each iteration would run that many models (the defaults are "
+                                "10-50)")
             try:
                 if registry[a.name] is None:
                     if a.options:
@@ -352,10 +370,15 @@ class CampaignSpec:
         _no_duplicates("algorithm label", [a.label for a in checked])
         object.__setattr__(self, "algorithms", tuple(checked))
 
-        object.__setattr__(self, "runs", _int("runs", self.runs, 1))
+        object.__setattr__(self, "runs", _int("runs", self.runs, 1, MAX_RUNS))
         object.__setattr__(self, "master_seed", _int("master_seed", self.master_seed, 0))
-        object.__setattr__(self, "n_sub", _int("n_sub", self.n_sub, 1))
-        object.__setattr__(self, "noise", _real("noise", self.noise))
+        object.__setattr__(self, "n_sub", _int("n_sub", self.n_sub, 1, MAX_N_SUB))
+        object.__setattr__(self, "noise", _real("noise", self.noise, MAX_NOISE, "A rms"))
+        total = len(self.scenarios) * len(self.algorithms) * self.runs
+        if total > MAX_TOTAL_RUNS:
+            raise SpecError(f"{total} runs in all ({len(self.scenarios)} scenarios x "
+                            f"{len(self.algorithms)} algorithms x {self.runs}) is above "
+                            f"{MAX_TOTAL_RUNS}; split the campaign")
         object.__setattr__(self, "adc_lsb", _real("adc_lsb", self.adc_lsb))
         object.__setattr__(self, "budget", _budget_value("budget", self.budget))
         if not isinstance(self.polish, bool):
@@ -532,7 +555,7 @@ class CampaignSpec:
         for r in self.runs_list():
             if r.key == key:
                 return r
-        raise SpecError(f"no run {key!r} in this campaign; keys look like "
+        raise SpecError(f"no run {shown(key)} in this campaign; keys look like "
                         f"{self.scenarios[0].name}/{self.algorithms[0].label}/0")
 
 
@@ -628,16 +651,21 @@ def _no_duplicates(what: str, names: Sequence[str]) -> None:
         seen.add(n)
 
 
-def _int(name: str, value: Any, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
-        raise SpecError(f"{name} must be an integer >= {minimum}, got {value!r}")
+def _int(name: str, value: Any, minimum: int, maximum: int | None = None) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum \
+            or (maximum is not None and value > maximum):
+        bounds = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum}"
+        raise SpecError(f"{name} must be an integer {bounds}, got {shown(value)}")
     return int(value)
 
 
-def _real(name: str, value: Any) -> float:
+def _real(name: str, value: Any, maximum: float | None = None, unit: str = "") -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)) \
-            or not math.isfinite(float(value)) or value < 0:
-        raise SpecError(f"{name} must be a finite number >= 0, got {value!r}")
+            or not math.isfinite(float(value)) or value < 0 \
+            or (maximum is not None and value > maximum):
+        bounds = ">= 0" if maximum is None else f"from 0 to {maximum:g}"
+        unit = f" {unit}" if unit else ""
+        raise SpecError(f"{name} must be a finite number {bounds}{unit}, got {shown(value)}")
     return float(value)
 
 

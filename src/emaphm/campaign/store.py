@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any, Iterator
 
 from emaphm import __version__
-from emaphm._sqlite import enable_wal
+from emaphm._sqlite import enable_wal, journal_files, remove_journal_files
 
 from .spec import CampaignSpec, Run, SpecError
 
@@ -297,9 +297,11 @@ class CampaignStore:
         elif not p.parent.exists():
             raise FileNotFoundError(f"cannot create {p}: folder {p.parent} does not exist; create it first")
 
+        created = journal_files(p) if exists else []
         try:
             conn = _connect(p, readonly=readonly and exists)
         except sqlite3.DatabaseError as exc:
+            remove_journal_files(created)
             raise IncompatibleStoreError(_damaged(p, str(exc))) from None
         try:
             if exists:
@@ -329,6 +331,7 @@ class CampaignStore:
                     "--store path.", diffs)
         except BaseException:
             conn.close()
+            remove_journal_files(created)       # a refused store is left as it was found
             raise
         return cls(p, conn, meta, readonly=readonly)
 

@@ -24,14 +24,19 @@ from typing import Any
 
 import numpy as np
 
-from emaphm.cli import _seed, arg_type, budget_option
+from .._cli_common import (UsageError, actuator_id, arg_type, budget_option,
+                           identification_seconds, plot_path, shown, warn_if_long)
+from .._cli_common import seed as _seed
 
 __all__ = ["register"]
 
+#: Identifications per inspection for the seeds and bootstrap spreads, and inspections of
+#: a degradation demo, at most (each is a whole identification).
+MAX_SPREAD_RUNS = 100
+MAX_INSPECTIONS = 200
+
 
 def _usage(msg: str) -> Exception:
-    from ..cli import UsageError
-
     return UsageError(msg)
 
 
@@ -42,14 +47,7 @@ def _db(args: argparse.Namespace) -> Path:
 
 
 def _plot_path(value: str | None) -> Path | None:
-    if not value:
-        return None
-    p = Path(value)
-    if p.suffix.lower() not in (".png", ".svg", ".pdf"):
-        raise _usage(f"--plot {value!r} must end in .png, .svg or .pdf")
-    if not p.parent.exists():
-        raise _usage(f"--plot {value!r}: folder {p.parent} does not exist; create it first")
-    return p
+    return plot_path(value)
 
 
 def _fmt_time(x: float, unit: str) -> str:
@@ -69,8 +67,10 @@ def cmd_register(args: argparse.Namespace) -> int:
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
+    from .._cli_common import calibration_seconds
     from ..calibration import CalibrationError, calibrate
     from ..params import load_params, siemens_1fk7060
+    from ..progress import CountProgress, compile_notice
     from ..traces import read_trace
     from .history import HealthHistory
 
@@ -82,10 +82,20 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             if not Path(name).exists():
                 raise _usage(f"trace file {name} does not exist")
             traces.append(read_trace(name))
+        progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs")
+        if not args.quiet:
+            warn_if_long("emaphm history calibrate",
+                         calibration_seconds([t.duration for t in traces], base),
+                         "this calibration", "calibrate on shorter traces (one 0.5 s "
+                         "diagnostic profile each is enough)")
         try:
-            res = calibrate(traces, base, sources=[Path(n).name for n in args.traces])
+            with compile_notice(progress, enabled=not args.quiet):
+                res = calibrate(traces, base, sources=[Path(n).name for n in args.traces],
+                                progress=progress.update)
         except CalibrationError as exc:
             raise _usage(str(exc)) from None
+        finally:
+            progress.close()
         h.calibrate(args.actuator, args.at, res.params, sources=args.traces)
     if args.json:
         print(json.dumps({**res.to_dict(), "actuator": args.actuator, "at": args.at}))
@@ -112,7 +122,8 @@ def cmd_list(args: argparse.Namespace) -> int:
 
 
 def cmd_add(args: argparse.Namespace) -> int:
-    from ..traces import read_trace
+    from ..progress import SearchProgress, compile_notice
+    from ..traces import TraceError, read_trace
     from .history import HealthHistory, inspect
 
     budget = budget_option(args.budget)
@@ -122,19 +133,39 @@ def cmd_add(args: argparse.Namespace) -> int:
 
         params = load_params(args.params, partial=True)
     trace_path = Path(args.trace)
+    progress = SearchProgress(enabled=not args.quiet,
+                              header=f"diagnosing {trace_path} for {args.actuator} at {args.at:g} "
+                                     f"({args.algorithm.upper()}, seed {args.seed}, spread: "
+                                     f"{args.spread})")
     with HealthHistory(_db(args), create=False) as h:
         h.check_next(args.actuator, args.at)          # cheap checks before reading the trace
         if not trace_path.exists():
             raise _usage(f"trace file {trace_path} does not exist")
         trace = read_trace(trace_path)
         if not args.quiet:
-            print(f"diagnosing {trace_path} for {args.actuator} at {args.at:g} "
-                  f"({args.algorithm.upper()}, seed {args.seed}, spread: {args.spread})",
-                  file=sys.stderr)
-        ins, a = inspect(h, args.actuator, trace, args.at, seed=args.seed, method=args.spread,
-                         source=str(trace_path), params=params, algorithm=args.algorithm,
-                         fault_model=args.fault_model,
-                         budget=budget, n_runs=args.runs)
+            if params is None:
+                from ..params import siemens_1fk7060
+
+                cal = h.calibration(args.actuator, args.at)
+                est_params = cal[1] if cal is not None else siemens_1fk7060()
+            else:
+                est_params = params
+            warn_if_long("emaphm history add",
+                         identification_seconds(trace.duration, est_params, args.algorithm, budget,
+                                                runs=1 if args.spread == "population" else args.runs),
+                         "this inspection",
+                         "record a shorter window (one 0.5 s diagnostic profile is enough), or "
+                         "cap each identification with --budget (e.g. --budget 60s)")
+        try:
+            with compile_notice(progress, enabled=not args.quiet):
+                ins, a = inspect(h, args.actuator, trace, args.at, seed=args.seed,
+                                 method=args.spread, source=str(trace_path), params=params,
+                                 algorithm=args.algorithm, fault_model=args.fault_model,
+                                 budget=budget, n_runs=args.runs, callback=progress)
+        except TraceError as exc:        # found in the trace's content: name the file
+            raise _usage(f"{trace_path}: {exc}") from None
+        finally:
+            progress.close()
         unit = h.actuator(args.actuator).time_unit
     if args.json:
         print(json.dumps(ins.to_dict()))
@@ -262,7 +293,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     names = list(DEGRADATION_SCENARIOS) if args.scenario == "all" else [args.scenario]
     for n in names:
         if n not in DEGRADATION_SCENARIOS:
-            raise _usage(f"unknown degradation scenario {n!r}; choose one of "
+            raise _usage(f"unknown degradation scenario {shown(n)}; choose one of "
                          f"{', '.join(DEGRADATION_SCENARIOS)} or all")
     if args.inspections < 3:
         raise _usage("--inspections must be at least 3 (a trend needs three points)")
@@ -275,14 +306,17 @@ def cmd_demo(args: argparse.Namespace) -> int:
         except OSError as exc:
             raise _usage(f"--plot-dir {plot_dir} cannot be created ({exc.strerror}); give a "
                          "folder you can write to") from None
+    from ..progress import SearchProgress, compile_notice
+
     results = []
-    with tempfile.TemporaryDirectory() as tmp:
+    progress = SearchProgress(enabled=not (args.quiet or args.json))
+    with tempfile.TemporaryDirectory() as tmp, compile_notice(progress, enabled=not args.quiet):
         db = Path(args.db) if args.db else Path(tmp) / "demo.sqlite"
         for i, name in enumerate(names):
             results.append(run_demo(name, db=db, n_inspections=args.inspections,
                                     seed=args.seed + i, synthetic=args.synthetic,
                                     budget=args.budget, plot_dir=plot_dir,
-                                    quiet=args.quiet or args.json))
+                                    quiet=args.quiet or args.json, progress=progress))
     if args.json:
         print(json.dumps(results))
     return 0
@@ -290,11 +324,12 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
              synthetic: bool = False, budget: Any = None, plot_dir: Path | None = None,
-             quiet: bool = False) -> dict:
+             quiet: bool = False, progress: Any = None) -> dict:
     """The whole loop on one degradation scenario: simulate, diagnose, record, predict.
 
     Returns a JSON-able summary (per inspection: time, true and identified
-    indicator, RUL median and interval, true RUL; and the metrics).
+    indicator, RUL median and interval, true RUL; and the metrics). ``progress``: a
+    :class:`emaphm.progress.SearchProgress` to show the simulations and identifications on.
     """
     from . import metrics
     from .history import HealthHistory, inspect
@@ -318,9 +353,17 @@ def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
             for t, k in zip(times, K):
                 h.add(actuator, float(t), k, spread_method="synthetic")
         else:
-            run = simulate_degradation(sc, times, seed=seed)
-            for t, tr in zip(times, run.traces):
-                inspect(h, actuator, tr, float(t), seed=seed, budget=budget)
+            def simulated(i: int, n: int) -> None:
+                if progress is not None:
+                    progress.show(f"{name}: simulated inspection {i}/{n}", force=i == n)
+
+            run = simulate_degradation(sc, times, seed=seed, progress=simulated)
+            for j, (t, tr) in enumerate(zip(times, run.traces)):
+                if progress is not None:
+                    progress.restart(f"{name}: inspection {j + 1}/{len(times)}: ")
+                inspect(h, actuator, tr, float(t), seed=seed, budget=budget, callback=progress)
+            if progress is not None:
+                progress.close()
         data = h.data(actuator)
     y = indicator_series(data.K)[sc.indicator]
     k_true = sc.k_at(times)
@@ -380,6 +423,14 @@ def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
 # ----------------------------------------------------------------------------- wiring
 _time = arg_type(float, lambda t: math.isfinite(t) and t >= 0,
                  "time must be a finite number >= 0 (flight hours or cycles)")
+_spread_runs = arg_type(int, lambda n: 2 <= n <= MAX_SPREAD_RUNS,
+                        f"expected an integer from 2 to {MAX_SPREAD_RUNS} (identifications of "
+                        "one inspection)")
+_inspections = arg_type(int, lambda n: 3 <= n <= MAX_INSPECTIONS,
+                        f"expected an integer from 3 to {MAX_INSPECTIONS} (a trend needs three "
+                        "points; each is an identification)")
+_evaluations = arg_type(int, lambda n: 1 <= n <= 100_000_000,
+                        "expected a number of evaluations from 1 to 1e8")
 
 
 def _db_arg(p: argparse.ArgumentParser) -> None:
@@ -394,10 +445,11 @@ def register(subparsers: Any) -> None:
     from .choices import SELECTION_RULES, SPREAD_METHODS
 
     hp = subparsers.add_parser("history", help="health history of actuators: register, add, show")
-    hs = hp.add_subparsers(dest="history_command", required=True)
+    hs = hp.add_subparsers(dest="history_command", required=True,
+                           metavar="{register,calibrate,add,show,list}")
 
     r = hs.add_parser("register", help="register an actuator before its first inspection")
-    r.add_argument("actuator", help="actuator id, e.g. EMA-0042")
+    r.add_argument("actuator", type=actuator_id, help="actuator id, e.g. EMA-0042")
     r.add_argument("--description", default="", help="free text, e.g. 'left aileron, A320 MSN 1234'")
     r.add_argument("--unit", choices=("h", "cycles"), default="h",
                    help="time unit of its inspections: flight hours (default) or cycles")
@@ -408,16 +460,17 @@ def register(subparsers: Any) -> None:
                       description="Run emaphm calibrate on traces of the actuator known to be "
                                   "healthy and record the result: inspections at or after --at "
                                   "are diagnosed with these parameters unless --params is given.")
-    c.add_argument("actuator")
+    c.add_argument("actuator", type=actuator_id)
     c.add_argument("traces", nargs="+", help="healthy traces (.csv or .parquet)")
     c.add_argument("--at", type=_time, required=True, help="time of the calibration")
     c.add_argument("--params", help="data-sheet parameters TOML (default: the preset)")
     c.add_argument("--json", action="store_true")
+    c.add_argument("--quiet", action="store_true", help="no progress line")
     _db_arg(c)
     c.set_defaults(func=cmd_calibrate)
 
     a = hs.add_parser("add", help="diagnose a trace and record it as an inspection")
-    a.add_argument("actuator")
+    a.add_argument("actuator", type=actuator_id)
     a.add_argument("trace", help="trace file (.csv or .parquet)")
     a.add_argument("--at", type=_time, required=True,
                    help="time of the inspection (flight hours or cycles), after the last one")
@@ -431,7 +484,8 @@ def register(subparsers: Any) -> None:
                                     "the paper's stopping rules")
     a.add_argument("--spread", choices=SPREAD_METHODS, default="population",
                    help="interval of k: population (free, default), seeds or bootstrap")
-    a.add_argument("--runs", type=int, default=5, help="identifications for seeds/bootstrap (default 5)")
+    a.add_argument("--runs", type=_spread_runs, default=5,
+                   help="identifications for seeds/bootstrap (default 5)")
     a.add_argument("--params", help="actuator parameters TOML (default: the actuator's latest "
                                     "calibration at that time, else the preset)")
     a.add_argument("--json", action="store_true")
@@ -440,7 +494,7 @@ def register(subparsers: Any) -> None:
     a.set_defaults(func=cmd_add)
 
     s = hs.add_parser("show", help="the inspections of an actuator (table, optional figure)")
-    s.add_argument("actuator")
+    s.add_argument("actuator", type=actuator_id)
     s.add_argument("--plot", help="write each k component over time (.png/.svg/.pdf)")
     s.add_argument("--json", action="store_true")
     _db_arg(s)
@@ -452,7 +506,7 @@ def register(subparsers: Any) -> None:
     ls.set_defaults(func=cmd_list)
 
     p = subparsers.add_parser("prognose", help="fault trends and remaining useful life of an actuator")
-    p.add_argument("actuator")
+    p.add_argument("actuator", type=actuator_id)
     p.add_argument("--threshold", action="append", metavar="MODE=VALUE",
                    help="failure threshold of a fault mode (repeatable), e.g. friction=0.4; "
                         "defaults friction 0.5, backlash 0.5, short_circuit 0.3, "
@@ -473,11 +527,13 @@ def register(subparsers: Any) -> None:
                               help="simulate a growing fault, diagnose, record and predict, end to end")
     d.add_argument("--scenario", default="friction-growth",
                    help=f"one of {', '.join(DEGRADATION_SCENARIOS)}, or all")
-    d.add_argument("--inspections", type=int, default=8, help="inspections over the life (default 8)")
+    d.add_argument("--inspections", type=_inspections, default=8,
+                   help="inspections over the life (default 8)")
     d.add_argument("--seed", type=_seed, default=0)
     d.add_argument("--synthetic", action="store_true",
                    help="skip the identifications: true k plus identification-level noise")
-    d.add_argument("--budget", type=int, help="evaluations per identification (default: the paper's rules)")
+    d.add_argument("--budget", type=_evaluations,
+                   help="evaluations per identification (default: the paper's rules)")
     d.add_argument("--db", help="keep the demo's history in this database (default: a temporary one)")
     d.add_argument("--plot-dir", help="write the prognosis and alpha-lambda figures here")
     d.add_argument("--json", action="store_true")

@@ -52,7 +52,8 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from .._sqlite import enable_wal
+from .._sqlite import enable_wal, journal_files, remove_journal_files
+from .._text import shown
 from ..faults import as_k
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError",
@@ -269,13 +270,24 @@ class HealthHistory:
         if create and not self.path.parent.exists():
             raise HistoryError(f"cannot create the health history {self.path}: folder "
                                f"{self.path.parent} does not exist; create it first")
+        created = journal_files(self.path) if self.path.exists() else []
         try:
             self._con = sqlite3.connect(str(self.path), timeout=timeout_s, isolation_level=None)
+        except sqlite3.DatabaseError as exc:
+            raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
+                               "give another --db path") from None
+        try:
             self._con.execute("PRAGMA foreign_keys = ON")
             mode = enable_wal(self._con, timeout_s)
             self._con.execute("PRAGMA synchronous = FULL")
             version = self._con.execute("PRAGMA user_version").fetchone()[0]
         except sqlite3.DatabaseError as exc:
+            self._con.close()
+            remove_journal_files(created)       # a refused file is left as it was found
+            if "malformed" in str(exc):         # an SQLite file, cut or overwritten in part
+                raise HistoryError(f"{self.path} is damaged ({exc}); it was not changed. "
+                                   "Restore it from a backup; nothing is read from or added "
+                                   "to a damaged history") from None
             raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
                                "give another --db path") from None
         self.journal_mode = str(mode)
@@ -286,6 +298,7 @@ class HealthHistory:
                 check = str(exc)
             if check != "ok":
                 self._con.close()
+                remove_journal_files(created)
                 raise HistoryError(f"{self.path} is damaged (SQLite quick_check: {check[:200]}); "
                                    "it was not changed. Restore it from a backup; nothing is read "
                                    "from or added to a damaged history")
@@ -383,7 +396,7 @@ class HealthHistory:
     def register(self, actuator_id: str, *, description: str = "", time_unit: str = "h") -> Actuator:
         """Register a new actuator; its inspections are then timed in ``time_unit``."""
         if not isinstance(actuator_id, str) or not _ID.fullmatch(actuator_id):
-            raise HistoryError(f"actuator id {actuator_id!r} must be 1-64 characters of letters, "
+            raise HistoryError(f"actuator id {shown(actuator_id)} must be 1-64 characters of letters, "
                                "digits and . _ : / - starting with a letter or digit, e.g. "
                                "EMA-0042")
         if time_unit not in TIME_UNITS:
@@ -419,8 +432,10 @@ class HealthHistory:
             hint = f" (registered: {', '.join(known[:10])}{'...' if len(known) > 10 else ''})" \
                 if known else " (none registered yet)"
             raise UnknownActuatorError(
-                f"actuator {actuator_id!r} is not registered in {self.path}{hint}; register it "
-                f"first: emaphm history register {actuator_id} --db {self.path}")
+                f"actuator {shown(actuator_id)} is not registered in {self.path}{hint}"
+                + (f"; register it first: emaphm history register {actuator_id} --db {self.path}"
+                   if isinstance(actuator_id, str) and _ID.fullmatch(actuator_id) else
+                   "; an actuator id is 1-64 characters of letters, digits and . _ : / -"))
         return Actuator(*row)
 
     # ------------------------------------------------------------------ inspections

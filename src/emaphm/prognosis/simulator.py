@@ -36,7 +36,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -275,11 +275,13 @@ class DegradationRun:
 
 def simulate_degradation(scenario: DegradationScenario, times: Sequence[float], *, seed: int,
                          model: str = "reference", params: Any = None, profile: Any = None,
-                         sensors: Any = None, fault_model: str = "paper") -> DegradationRun:
+                         sensors: Any = None, fault_model: str = "paper",
+                         progress: Callable[[int, int], Any] | None = None) -> DegradationRun:
     """One trace per inspection time, with sensor noise (:data:`emaphm.simulate.DEFAULT_SENSORS`
     by default). The inspection ``i`` uses the noise seed drawn from the ``i``-th child of
     ``SeedSequence(seed)``. The degradation presets and their failure thresholds are
-    stated in the paper's fault model (``fault_model="paper"``)."""
+    stated in the paper's fault model (``fault_model="paper"``). ``progress(i, n)`` is
+    called after each of the ``n`` traces (a progress line)."""
     from ..simulate import DEFAULT_SENSORS, simulate
 
     seed = _check_seed(seed)
@@ -294,4 +296,6 @@ def simulate_degradation(scenario: DegradationScenario, times: Sequence[float], 
                       sensors=DEFAULT_SENSORS if sensors is None else sensors, seed=s,
                       fault_model=fault_model)
         traces.append(tr.with_meta(inspection_time=float(t), degradation=scenario.to_dict()))
+        if progress is not None:
+            progress(len(traces), times.size)
     return DegradationRun(scenario=scenario, times=times, k_true=K, traces=tuple(traces), seeds=seeds)

@@ -49,6 +49,8 @@ from typing import Mapping
 
 import numpy as np
 
+from .._text import shown
+
 __all__ = ["INDICATORS", "INDICATOR_MODE", "INDICATOR_COMPONENT", "FailureThresholds",
            "DEFAULT_FAILURE_THRESHOLDS", "indicator_values", "parse_threshold"]
 
@@ -99,7 +101,7 @@ class FailureThresholds:
     def for_indicator(self, indicator: str) -> float:
         """The threshold on ``indicator`` (one of :data:`INDICATORS`)."""
         if indicator not in INDICATOR_MODE:
-            raise ValueError(f"unknown health indicator {indicator!r}; choose one of "
+            raise ValueError(f"unknown health indicator {shown(indicator)}; choose one of "
                              f"{', '.join(INDICATORS)}")
         return getattr(self, INDICATOR_MODE[indicator])
 
@@ -109,7 +111,7 @@ class FailureThresholds:
         for name, value in updates.items():
             mode = INDICATOR_MODE.get(name, name)
             if mode not in asdict(self):
-                raise ValueError(f"unknown fault mode {name!r} for a failure threshold; choose "
+                raise ValueError(f"unknown fault mode {shown(name)} for a failure threshold; choose "
                                  f"one of {', '.join(asdict(self))}")
             fields[mode] = value
         return replace(self, **fields)
@@ -138,14 +140,14 @@ def parse_threshold(text: str) -> tuple[str, float]:
     name, sep, value = text.partition("=")
     name = name.strip().replace("-", "_")
     if not sep:
-        raise ValueError(f"threshold {text!r} must read MODE=VALUE, e.g. friction=0.4")
+        raise ValueError(f"threshold {shown(text)} must read MODE=VALUE, e.g. friction=0.4")
     try:
         v = float(value)
     except ValueError:
-        raise ValueError(f"threshold {text!r}: {value!r} is not a number; write e.g. "
+        raise ValueError(f"threshold {shown(text)}: {shown(value)} is not a number; write e.g. "
                          "friction=0.4") from None
     valid = set(asdict(DEFAULT_FAILURE_THRESHOLDS)) | set(INDICATORS)
     if name not in valid:
-        raise ValueError(f"threshold {text!r}: unknown fault mode {name!r}; choose one of "
+        raise ValueError(f"threshold {shown(text)}: unknown fault mode {shown(name)}; choose one of "
                          f"{', '.join(asdict(DEFAULT_FAILURE_THRESHOLDS))}")
     return name, v

@@ -1,0 +1,496 @@
+"""The bad-input corpus of issue 10, generated: one case per class of malformed input to
+``diagnose``, ``simulate``, ``calibrate``, ``history``, ``campaign`` and ``report``.
+
+Every case runs the command in-process (:func:`emaphm.cli.main`) in a folder of its own
+and asserts what a user must see: exit status 2, exactly one line on stderr, no
+traceback, the words that name the problem; and that it changed nothing: every file in
+the folder has the same bytes afterwards and no file (a temporary one included) was left.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import random
+import shutil
+import stat
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pytest
+
+from emaphm.cli import main
+from emaphm.simulate import simulate
+from emaphm.traces import Trace, write_trace
+
+IS_ROOT = hasattr(os, "geteuid") and os.geteuid() == 0
+
+
+# ----------------------------------------------------------------------------- inputs
+@dataclass(frozen=True)
+class Base:
+    """Valid inputs the cases start from (made once)."""
+
+    trace: Trace              # a 0.5 s monitoring-model trace of the nominal actuator
+    csv: Path
+    history: Path             # a health history with EMA-1 registered
+    store: Path               # a campaign store holding a spec and no run
+
+
+@pytest.fixture(scope="module")
+def base(tmp_path_factory) -> Base:
+    from emaphm.campaign import CampaignStore
+    from emaphm.campaign.spec import paper_spec, parse_algorithms, parse_scenarios
+    from emaphm.prognosis.history import HealthHistory
+
+    folder = tmp_path_factory.mktemp("base")
+    trace = simulate(scenario="nominal", model="monitoring")
+    csv = folder / "good.csv"
+    write_trace(trace, csv)
+    history = folder / "history.sqlite"
+    with HealthHistory(history) as h:
+        h.register("EMA-1")
+    store = folder / "store.sqlite"
+    spec = paper_spec(runs=1, scenarios=parse_scenarios("gain-low"),
+                      algorithms=parse_algorithms("pso"))
+    CampaignStore.open(store, spec).close()
+    return Base(trace, csv, history, store)
+
+
+def _with(trace: Trace, **changes) -> Trace:
+    cols = dict(t=trace.t, theta_ref=trace.theta_ref, theta_m=trace.theta_m,
+                omega_m=trace.omega_m, i_abc=trace.i_abc, meta=trace.meta)
+    cols.update(changes)
+    return Trace(**cols)
+
+
+def _deep_csv(base: Base, path: Path, depth: int = 200_000) -> None:
+    """A CSV trace whose metadata JSON is nested ``depth`` deep."""
+    lines = base.csv.read_text().splitlines(keepends=True)
+    lines[0] = "# emaphm-trace 1 {\"x\": " + "[" * depth + "]" * depth + "}\n"
+    path.write_text("".join(lines))
+
+
+def _deep_parquet(base: Base, path: Path, depth: int = 200_000) -> None:
+    import pyarrow.parquet as pq
+
+    write_trace(base.trace, path)
+    table = pq.read_table(path)
+    meta = dict(table.schema.metadata)
+    meta[b"emaphm"] = b'{"x": ' + b"[" * depth + b"]" * depth + b"}"
+    pq.write_table(table.replace_schema_metadata(meta), path)
+
+
+def _profile(base: Base, path: Path, change: Callable[[dict], None]) -> None:
+    meta = json.loads(json.dumps(base.trace.meta))
+    change(meta["profile"])
+    write_trace(base.trace.with_meta(profile=meta["profile"]), path)
+
+
+def _toml(path: Path, text: str) -> None:
+    path.write_text(text)
+
+
+def _random_bytes(path: Path, n: int = 64 * 1024, seed: int = 0) -> None:
+    path.write_bytes(random.Random(seed).randbytes(n))
+
+
+def _truncated(src: Path, path: Path) -> None:
+    data = src.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+
+
+def _read_only_folder(path: Path) -> Path:
+    path.mkdir()
+    path.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    return path
+
+
+def _copy(src: Path, path: Path) -> Path:
+    shutil.copyfile(src, path)
+    return path
+
+
+# ----------------------------------------------------------------------------- the corpus
+#: name -> (make(folder, base) -> argv, words the message must hold, needs a non-root user)
+CASES: dict[str, tuple[Callable[[Path, Base], list[str]], list[str], bool]] = {}
+
+
+def case(name: str, *words: str, not_root: bool = False):
+    def register(make):
+        CASES[name] = (make, list(words), not_root)
+        return make
+    return register
+
+
+# tracebacks before (exit 1) --------------------------------------------------------
+@case("deep-metadata-csv", "metadata is nested too deeply")
+def _(d, b):
+    _deep_csv(b, d / "deep.csv")
+    return ["diagnose", str(d / "deep.csv")]
+
+
+@case("deep-metadata-parquet", "metadata is nested too deeply")
+def _(d, b):
+    _deep_parquet(b, d / "deep.parquet")
+    return ["diagnose", str(d / "deep.parquet")]
+
+
+@case("deep-metadata-history-add", "metadata is nested too deeply")
+def _(d, b):
+    _deep_csv(b, d / "deep.csv")
+    return ["history", "add", "EMA-1", str(d / "deep.csv"), "--at", "10",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("trace-path-is-a-folder", "is a folder; give a trace file")
+def _(d, b):
+    (d / "trace.csv").mkdir()
+    return ["diagnose", str(d / "trace.csv")]
+
+
+@case("out-in-a-read-only-folder", "cannot write in the folder", "Permission denied",
+      not_root=True)
+def _(d, b):
+    ro = _read_only_folder(d / "ro")
+    return ["simulate", "--scenario", "nominal", "--model", "monitoring", "--out", str(ro / "x.csv")]
+
+
+@case("plot-in-a-read-only-folder", "--plot: cannot write in the folder", not_root=True)
+def _(d, b):
+    ro = _read_only_folder(d / "ro")
+    return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--plot", str(ro / "p.png")]
+
+
+@case("out-under-a-file", "is a file, not a folder")
+def _(d, b):
+    (d / "afile").write_text("x")
+    return ["simulate", "--scenario", "nominal", "--model", "monitoring",
+            "--out", str(d / "afile" / "x.csv")]
+
+
+@case("plot-under-a-file", "--plot: ", "is a file, not a folder")
+def _(d, b):
+    (d / "afile").write_text("x")
+    return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--plot", str(d / "afile" / "p.png")]
+
+
+@case("simulate-out-is-a-folder", "--out", "is a folder; give a file name")
+def _(d, b):
+    (d / "x.csv").mkdir()
+    return ["simulate", "--scenario", "nominal", "--out", str(d / "x.csv")]
+
+
+@case("simulate-params-is-a-folder", "p.toml is a folder; give a TOML file")
+def _(d, b):
+    (d / "p.toml").mkdir()
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("f-pwm-1e9", "inverter.f_pwm [Hz] = 1e+09 is outside 500 Hz to 100 kHz")
+def _(d, b):
+    _toml(d / "p.toml", "[inverter]\nf_pwm = 1e9\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("history-db-of-random-bytes", "is not an emaphm health history")
+def _(d, b):
+    _random_bytes(d / "h.sqlite")
+    return ["history", "show", "EMA-1", "--db", str(d / "h.sqlite")]
+
+
+@case("history-db-truncated", "h.sqlite is damaged", "Restore it from a backup")
+def _(d, b):
+    _truncated(b.history, d / "h.sqlite")
+    return ["history", "show", "EMA-1", "--db", str(d / "h.sqlite")]
+
+
+@case("history-add-to-random-bytes", "is not an emaphm health history")
+def _(d, b):
+    _random_bytes(d / "h.sqlite")
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--db", str(d / "h.sqlite")]
+
+
+@case("campaign-store-truncated", "store.sqlite")
+def _(d, b):
+    _truncated(b.store, d / "store.sqlite")
+    return ["campaign", "--store", str(d / "store.sqlite"), "--workers", "0"]
+
+
+@case("campaign-store-of-random-bytes", "store.sqlite", "not an emaphm campaign store")
+def _(d, b):
+    _random_bytes(d / "store.sqlite")
+    return ["campaign", "--store", str(d / "store.sqlite"), "--workers", "0"]
+
+
+@case("campaign-dry-run-on-a-truncated-store", "store.sqlite")
+def _(d, b):
+    _truncated(b.store, d / "store.sqlite")
+    return ["campaign", "--store", str(d / "store.sqlite"), "--dry-run"]
+
+
+@case("campaign-dry-run-on-random-bytes", "not an emaphm campaign store")
+def _(d, b):
+    _random_bytes(d / "store.sqlite")
+    return ["campaign", "--store", str(d / "store.sqlite"), "--dry-run"]
+
+
+@case("report-of-a-truncated-store", "store.sqlite")
+def _(d, b):
+    _truncated(b.store, d / "store.sqlite")
+    return ["report", str(d / "store.sqlite"), "--out", str(d / "report")]
+
+
+@case("report-of-random-bytes", "not an emaphm campaign store")
+def _(d, b):
+    _random_bytes(d / "store.sqlite")
+    return ["report", str(d / "store.sqlite"), "--out", str(d / "report")]
+
+
+@case("report-out-in-a-read-only-folder", "--out: cannot write in the folder", not_root=True)
+def _(d, b):
+    ro = _read_only_folder(d / "ro")
+    return ["report", str(_copy(b.store, d / "store.sqlite")), "--out", str(ro / "report")]
+
+
+@case("report-out-under-a-file", "--out", "exists and is not a folder")
+def _(d, b):
+    (d / "report").write_text("x")
+    return ["report", str(_copy(b.store, d / "store.sqlite")), "--out", str(d / "report")]
+
+
+# a verdict on nonsense before (exit 0) ------------------------------------------------
+@case("all-zero-currents", "phase current i_a is constant", "dead or disconnected")
+def _(d, b):
+    write_trace(_with(b.trace, i_abc=np.zeros_like(b.trace.i_abc)), d / "zeros.csv")
+    return ["diagnose", str(d / "zeros.csv")]
+
+
+@case("metadata-load-1e300", "profile.load[0].value = 1e+300 N m is beyond any actuator test")
+def _(d, b):
+    _profile(b, d / "t.csv", lambda p: p["load"].append({"shape": "Constant", "value": 1e300}))
+    return ["diagnose", str(d / "t.csv")]
+
+
+@case("metadata-load-beyond-the-motor", "load torque reaches 500 N m", "T_max = 18 N m")
+def _(d, b):
+    _profile(b, d / "t.csv", lambda p: p["load"].append({"shape": "Constant", "value": 500.0}))
+    return ["diagnose", str(d / "t.csv")]
+
+
+@case("toml-in-milliohm-and-millihenry", "motor.L [H] of phase a = 22 H is above 1 H",
+      "22 mH = 0.022")
+def _(d, b):
+    _toml(d / "p.toml", "[motor]\nR = 3150\nL = 22\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("toml-in-milliohm", "is 44541 V, above inverter.V_dc = 600 V", "3.15 ohm, not 3150 milliohm")
+def _(d, b):
+    _toml(d / "p.toml", "[motor]\nR = 3150\n")
+    return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--params", str(d / "p.toml")]
+
+
+# partial before: the right exit, the wrong words ---------------------------------------
+@case("latin-1-csv", "not a UTF-8 text file", "export the CSV as UTF-8")
+def _(d, b):
+    text = b.csv.read_text().replace("emaphm-trace 1 {", "emaphm-trace 1 {\"note\": \"Pr\u00fcfstand\", ", 1)
+    (d / "t.csv").write_bytes(text.encode("latin-1"))
+    return ["diagnose", str(d / "t.csv")]
+
+
+@case("binary-csv", "t.csv")
+def _(d, b):
+    _random_bytes(d / "t.csv", 4096, seed=1)
+    return ["diagnose", str(d / "t.csv")]
+
+
+@case("metadata-profile-abc", "profile.command[0].height: expected a number in rad, got the "
+                              "string 'abc'")
+def _(d, b):
+    _profile(b, d / "t.csv", lambda p: p["command"][0].update(height="abc"))
+    return ["diagnose", str(d / "t.csv")]
+
+
+@case("metadata-profile-duration-abc", "profile.duration: expected a number in s, got the "
+                                       "string 'abc'")
+def _(d, b):
+    _profile(b, d / "t.csv", lambda p: p.update(duration="abc"))
+    return ["history", "add", "EMA-1", str(d / "t.csv"), "--at", "1",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("r-as-text-with-a-unit", "R [ohm]: expected a number in ohm or 3 per-phase numbers",
+      "got the string '3.15 ohm'; write R = 3.15")
+def _(d, b):
+    _toml(d / "p.toml", '[motor]\nR = "3.15 ohm"\n')
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("budget-negative-seconds", "--budget: budget must be positive, got '-1s'")
+def _(d, b):
+    return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--budget", "-1s"]
+
+
+@case("budget-negative-exponent", "--budget: budget must be positive, got '-1e6'")
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--budget", "-1e6", "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("budget-huge", "above 1e+08 evaluations")
+def _(d, b):
+    return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--budget", "99999999999999999999999"]
+
+
+@case("budget-beyond-a-day", "--budget: budget '100000s' is above a day (86400 s)")
+def _(d, b):
+    return ["diagnose", "--scenario", "nominal", "--budget", "100000s",
+            "--plot", str(d / "p.png")]
+
+
+@case("campaign-budget-huge", "above 1e+08 evaluations")
+def _(d, b):
+    return ["campaign", "--store", str(d / "s.sqlite"), "--budget", "99999999999999999999999",
+            "--dry-run"]
+
+
+@case("simulate-noise-1e6", "--noise 1e+06 A rms is outside 0 to 1 A")
+def _(d, b):
+    return ["simulate", "--scenario", "nominal", "--noise", "1e6", "--seed", "1",
+            "--out", str(d / "x.csv")]
+
+
+@case("campaign-noise-1e6", "--noise: expected a current noise from 0 to 1 A rms")
+def _(d, b):
+    return ["campaign", "--store", str(d / "s.sqlite"), "--noise", "1e6", "--dry-run"]
+
+
+@case("campaign-runs-beyond-reason", "--runs: expected an integer from 1 to 10000")
+def _(d, b):
+    return ["campaign", "--store", str(d / "s.sqlite"), "--runs", "100000000", "--dry-run"]
+
+
+@case("campaign-pop-size-beyond-reason", "pop_size 1e+08 is above 10000")
+def _(d, b):
+    _toml(d / "spec.toml", 'algorithms = ["pso"]\n[options.pso]\npop_size = 100000000\n')
+    return ["campaign", "--spec", str(d / "spec.toml"), "--store", str(d / "s.sqlite"),
+            "--dry-run"]
+
+
+@case("history-spread-runs-beyond-reason", "--runs: expected an integer from 2 to 100")
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--spread", "seeds", "--runs", "100000", "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("f-pwm-10", "inverter.f_pwm [Hz] = 10 is outside 500 Hz to 100 kHz", "give hertz")
+def _(d, b):
+    _toml(d / "p.toml", "[inverter]\nf_pwm = 10\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("actuator-id-100-kB-register", "actuator id 'xxxxx", "(100000 characters) is longer "
+                                                          "than 200 characters")
+def _(d, b):
+    return ["history", "register", "x" * 100_000, "--db", str(d / "h.sqlite")]
+
+
+@case("actuator-id-100-kB-add", "(100000 characters) is longer than 200 characters")
+def _(d, b):
+    return ["history", "add", "x" * 100_000, str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("actuator-id-100-kB-prognose", "(100000 characters) is longer than 200 characters")
+def _(d, b):
+    return ["prognose", "x" * 100_000, "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("actuator-id-too-long-for-the-store", "actuator id 'yyyy", "(150 characters) must be "
+                                                                "1-64 characters")
+def _(d, b):
+    return ["history", "register", "y" * 150, "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("dask-inproc-address", "scheme inproc:// is not supported")
+def _(d, b):
+    return ["campaign", "--store", str(d / "s.sqlite"), "--scheduler", "inproc://x"]
+
+
+@case("unknown-scenario-100-kB", "unknown scenario 'zzzz", "(100000 characters)")
+def _(d, b):
+    return ["diagnose", "--scenario", "z" * 100_000]
+
+
+@case("demo-unknown-scenario-100-kB", "unknown degradation scenario 'wwww", "(100000 characters)")
+def _(d, b):
+    return ["demo-degradation", "--scenario", "w" * 100_000, "--synthetic"]
+
+
+@case("history-without-a-subcommand", "required: {register,calibrate,add,show,list}",
+      "see emaphm history --help")
+def _(d, b):
+    return ["history"]
+
+
+# ----------------------------------------------------------------------------- the test
+def _snapshot(folder: Path) -> dict[str, str]:
+    """Every path under ``folder`` with the hash of its bytes (folders: "dir")."""
+    out = {}
+    for p in sorted(folder.rglob("*")):
+        rel = str(p.relative_to(folder))
+        out[rel] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
+    return out
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_bad_input_is_one_line_exit_2_and_changes_nothing(name, base, tmp_path, capsys):
+    make, words, not_root = CASES[name]
+    if not_root and IS_ROOT:
+        pytest.skip("root writes into read-only folders; the '-under-a-file' cases cover "
+                    "an unwritable output for root")
+    folder = tmp_path / "case"
+    folder.mkdir()
+    argv = make(folder, base)
+    before = _snapshot(folder)
+    try:
+        rc = main(argv)
+    except SystemExit as exc:                # argparse's own refusals
+        rc = exc.code
+    out, err = capsys.readouterr()
+    assert rc == 2, err
+    assert err.endswith("\n") and err.count("\n") == 1, f"not one line on stderr:\n{err}"
+    assert err.startswith("emaphm ") and ": error: " in err
+    assert "Traceback" not in err
+    for w in words:
+        assert w in err, f"{w!r} not in {err!r}"
+    assert len(err) < 1200, "a user value was echoed whole"
+    assert _snapshot(folder) == before, "an input changed or a file was left behind"
+    for p in folder.rglob("*"):              # give read-only folders back to the cleanup
+        if p.is_dir():
+            p.chmod(stat.S_IRWXU)
+
+
+def test_the_corpus_covers_every_class_of_issue_10():
+    # the 14 bad and 15 partial classes, each with at least one case
+    classes = ["deep-metadata-csv", "deep-metadata-parquet", "deep-metadata-history-add",
+               "trace-path-is-a-folder", "out-under-a-file", "plot-under-a-file",
+               "simulate-out-is-a-folder", "simulate-params-is-a-folder", "f-pwm-1e9",
+               "history-db-of-random-bytes", "campaign-store-truncated",
+               "campaign-store-of-random-bytes", "campaign-dry-run-on-a-truncated-store",
+               "report-of-random-bytes", "report-out-under-a-file", "all-zero-currents",
+               "metadata-load-1e300", "toml-in-milliohm-and-millihenry", "latin-1-csv",
+               "binary-csv", "metadata-profile-abc", "r-as-text-with-a-unit",
+               "budget-negative-seconds", "budget-huge", "simulate-noise-1e6", "f-pwm-10",
+               "actuator-id-100-kB-add", "dask-inproc-address"]
+    assert not set(classes) - set(CASES)
