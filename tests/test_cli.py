@@ -465,7 +465,7 @@ def test_diagnose_shows_progress_on_a_terminal(rm_trace_file, capsys, monkeypatc
     monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
     assert main(["diagnose", str(rm_trace_file), "--budget", "400"]) == 0
     err = capsys.readouterr().err
-    assert err.startswith("identifying with PSO (seed 0)\n")
+    assert err.startswith("identifying with LSQ (seed 0)\n")
     assert "\riteration " in err and " evaluations" in err and err.endswith("\n")
     assert main(["diagnose", str(rm_trace_file), "--budget", "400", "--quiet"]) == 0
     assert capsys.readouterr().err == ""
@@ -481,8 +481,8 @@ def test_a_long_identification_is_announced_with_an_estimate(rm_trace_file, caps
     assert main(["diagnose", str(rm_trace_file), "--budget", "300"]) == 0
     err = capsys.readouterr().err
     notes = [ln for ln in err.splitlines() if "note:" in ln]
-    # 4000 model steps x 300 evaluations x 1 ms = 1200 s
-    assert notes == ["emaphm diagnose: note: this identification may take about 20m00s on one "
+    # the default pipeline: 4000 model steps x 300 evaluations x 4 (small batches) x 1 ms
+    assert notes == ["emaphm diagnose: note: this identification may take about 1h19m on one "
                      "core; diagnose a shorter window (one 0.5 s diagnostic profile is enough), "
                      "or cap it with --budget (e.g. --budget 60s)"]
     monkeypatch.setattr(common, "SECONDS_PER_CANDIDATE_STEP", 40e-9)
@@ -497,6 +497,8 @@ def test_the_estimate_counts_the_default_stopping_rule_and_the_budget(nominal_pa
     assert expected_evaluations("pso") == 200 * 50 + 50 + 2000
     assert expected_evaluations("pso", 5000) == 5000
     assert expected_evaluations("de", "30s") is None          # the budget bounds the time
+    # lsq: its whole run in population evaluations' worth, or 4x a smaller budget
+    assert expected_evaluations("lsq") == 5000 and expected_evaluations("lsq", 300) == 1200
     # a 500 s trace at the 8 kHz PWM: 4e6 model steps
     s = identification_seconds(500.0, nominal_params, "pso", 10_000)
     assert s == pytest.approx(4e6 * 10_000 * 40e-9)

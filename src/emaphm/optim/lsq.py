@@ -54,6 +54,10 @@ class _Budget(Exception):
     """Raised inside the residual function when the evaluation or time budget is spent."""
 
 
+class _Stop(Exception):
+    """Raised inside the Jacobian when the callback asks to stop."""
+
+
 class _Counted:
     """The residual function with an evaluation count, a budget and a one-point cache
     (SciPy asks for ``r(x)`` and then the Jacobian at the same ``x``)."""
@@ -89,7 +93,9 @@ def _sse(r: np.ndarray) -> float:
 def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any, bounds: Any, *,
                           diff_step: float | Sequence[float] = 1e-3, max_evals: float = 2000,
                           max_seconds: float = float("inf"), xtol: float = 1e-4,
-                          ftol: float = 1e-6, max_nfev: int = 60) -> OptimizeResult:
+                          ftol: float = 1e-6, max_nfev: int = 60,
+                          callback: Callable[[np.ndarray, float, int, int], bool | None] | None = None,
+                          ) -> OptimizeResult:
     """Minimise ``||r(x)||^2`` inside ``bounds`` from ``x0``.
 
     ==========  ======  ==========================================================
@@ -105,13 +111,15 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
                         (defaults 1e-4, 1e-6: tighter ones cost a sixth more evaluations
                         for a change far below the model's own error)
     max_nfev    --      SciPy's limit on its own calls of ``r`` (steps tried)
+    callback    --      ``callback(best_x, best_f, nfev, nit)`` before each Jacobian;
+                        True stops (reason ``"callback"``)
     ==========  ======  ==========================================================
 
     Returns an :class:`~emaphm.optim.base.OptimizeResult` whose ``fun`` is
     ``||r(x)||^2`` (``inf`` where ``r(x0)`` is not finite), ``nfev`` counts points
     (Jacobian batches included), ``nit`` the Jacobians and ``reason`` is
-    ``"converged"``, ``"max_iterations"``, ``"max_evaluations"``, ``"wall_clock"`` or
-    ``"not_finite"``. The BLAS SciPy calls runs on one thread (a thread pool
+    ``"converged"``, ``"max_iterations"``, ``"max_evaluations"``, ``"wall_clock"``,
+    ``"callback"`` or ``"not_finite"``. The BLAS SciPy calls runs on one thread (a thread pool
     spinning beside busy cores made each small SVD up to 60x slower).
     """
     from scipy.optimize import least_squares
@@ -138,6 +146,8 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
     def jac(x: np.ndarray) -> np.ndarray:
         r0 = f.at(x)
         history.append(best["f"])
+        if callback is not None and callback(best["x"], best["f"], f.nfev, len(history)):
+            raise _Stop
         step = np.where(x + h <= b.hi, h, -h)
         R = f.batch(x[None, :] + np.diag(step))
         J = (R - r0[None, :]) / step[:, None]
@@ -160,6 +170,8 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
             reason = "max_iterations"
     except _Budget:
         reason = "wall_clock" if time.perf_counter() > f.deadline else "max_evaluations"
+    except _Stop:
+        reason = "callback"
     history.append(best["f"])
     return OptimizeResult(x=best["x"], fun=float(best["f"]), nfev=f.nfev, nit=len(history) - 1,
                           history=np.minimum.accumulate(np.asarray(history)), reason=reason,
@@ -188,7 +200,7 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
        settles what the differences could not resolve.
 
     ``max_evals`` and ``max_seconds`` cap everything; ``callback(LSQState)`` is called
-    after each pass and True stops. ``fitness(X) -> (m,)``, if given, is ``||r||^2``
+    before each Jacobian and True stops. ``fitness(X) -> (m,)``, if given, is ``||r||^2``
     computed more cheaply for the polish (without the residual vectors). Returns ``(result, info)``: ``result.reason`` is
     why the search stopped (``"converged"`` or a budget's or the callback's), and
     ``info`` holds ``starts`` (how many were run), ``x_raw, f_raw`` (the best before
@@ -216,19 +228,21 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
         if evals < b.lo.size + 1 or seconds <= 0:
             reason = "max_evaluations" if evals < b.lo.size + 1 else "wall_clock"
             return False
+        def each(x_best: np.ndarray, f_best: float, n_ev: int, n_it: int) -> bool:
+            if best is not None and best.fun <= f_best:
+                x_best, f_best = best.x, best.fun
+            hist = np.minimum.accumulate(np.append(history, f_best))
+            return bool(callback(LSQState(x_best, f_best, nfev + n_ev, nit + n_it, hist, n_run)))
+
         r = least_squares_batched(residuals, x, b, diff_step=step, max_evals=evals,
-                                  max_seconds=seconds)
+                                  max_seconds=seconds, callback=None if callback is None else each)
         nfev += r.nfev
         nit += r.nit
         if best is None or r.fun < best.fun:
             best = r
         history.extend(np.minimum(r.history, best.fun).tolist())
-        if r.reason in ("max_evaluations", "wall_clock"):
+        if r.reason in ("max_evaluations", "wall_clock", "callback"):
             reason = r.reason
-            return False
-        if callback is not None and callback(LSQState(best.x, best.fun, nfev, nit,
-                                                      np.minimum.accumulate(history), n_run)):
-            reason = "callback"
             return False
         return True
 
