@@ -10,8 +10,8 @@ Run: ``python benchmarks/collect.py``.
 from pathlib import Path
 
 ROOT = Path(__file__).parent
-ORDER = ["plant.md", "commissioning.md", "identification.md", "identification_twin.md",
-         "false_alarms.md", "models.md", "model_report.md", "optim.md", "prognosis.md"]
+ORDER = ["plant.md", "commissioning.md", "pipeline.md", "identification.md", "identification_twin.md",
+         "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
 CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
 HEADER = """# Benchmarks
@@ -33,7 +33,9 @@ model that shared the monitoring model's equations; their scripts re-run them.
 |---|---|
 | FDI on plant traces beside twin traces (physical faults, thresholds, verdicts) | `benchmarks/bench_plant.py` |
 | commissioning production units (`emaphm calibrate`) | `benchmarks/bench_commissioning.py` |
+| the default pipeline (`lsq`) beside SciPy's DE and PSO, twin and plant | `benchmarks/bench_identification.py --pipeline` |
 | monitoring/reference model speed | `benchmarks/bench_models.py` |
+| small populations (least-squares batches) against N = 50 | `benchmarks/bench_models.py --small-batches-only` |
 | model agreement and sensitivity | `benchmarks/model_report.py` |
 | identification accuracy and speed (paper Table 3 layout), plant and twin | `benchmarks/bench_identification.py [--model monitoring]` |
 | false alarms and fault naming | `benchmarks/bench_false_alarms.py` |

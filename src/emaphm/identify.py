@@ -47,9 +47,9 @@ LSQ_RESTARTS = 3
 #: A start of the least-squares pipeline is good enough when its fit ratio is below the
 #: misfit test's limit at this false-alarm probability (about 2.1): most fits of an
 #: actuator the model describes are (a stricter limit than the verdict's, so that a fit
-#: the verdict would accept is still checked against another start). Further starts
-#: stop once one improves the fit by less than 1 % (the model, not the basin, then
-#: limits it).
+#: the verdict would accept is still checked against another start). Below the
+#: suspect limit, further starts stop once one improves the fit by less than 1 % (the
+#: model, not the basin, then limits it); above it every start is tried.
 LSQ_ACCEPT_P = 0.01
 
 #: Largest budget accepted: 1e8 evaluations (hours of CPU) or a day of wall clock; a larger
@@ -281,7 +281,7 @@ def _k_true(trace: Trace) -> np.ndarray | None:
 def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndarray], search: str,
                    nu_names: tuple[str, ...], fault_model: str, start: np.ndarray | None, seed: int,
                    termination: Any, callback: Any, polish: bool, floor: float,
-                   restarts: int) -> tuple[_Run, int]:
+                   restarts: int, limit: float) -> tuple[_Run, int]:
     """The default pipeline (see :func:`identify`): ``(run, starts taken)``."""
     from scipy.stats import qmc
 
@@ -314,7 +314,7 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
     box = (np.zeros(n_var), np.ones(n_var))
     res, info = multistart_least_squares(
         lambda Z: objective.residuals(full(Z)), _limited(starts(), 1 + restarts), box,
-        accept=accept, polish_evals=POLISH_LSQ_EVALUATIONS if polish else 0,
+        accept=accept, settle=limit, polish_evals=POLISH_LSQ_EVALUATIONS if polish else 0,
         max_evals=max_evals, max_seconds=max_seconds, callback=callback,
         fitness=lambda Z: objective(full(Z)))
     raw = OptimizeResult(x=info["x_raw"], fun=info["f_raw"],
@@ -498,7 +498,7 @@ def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
     if algorithm == DEFAULT_ALGORITHM:
         best, n_starts = _least_squares(objective, full, search, nu_names, fault_model, start,
                                         int(seed), termination, callback, polish, floor,
-                                        int(restarts))
+                                        int(restarts), limit)
         runs = [best]
     else:
         best = run(int(seed))

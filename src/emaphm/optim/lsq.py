@@ -184,15 +184,16 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
                              max_evals: float = float("inf"), max_seconds: float = float("inf"),
                              callback: Callable[[LSQState], bool | None] | None = None,
                              fitness: Callable[[np.ndarray], np.ndarray] | None = None,
-                             min_gain: float = 0.01,
+                             min_gain: float = 0.01, settle: float = float("inf"),
                              ) -> tuple[OptimizeResult, dict[str, Any]]:
     """Least squares from each of ``starts`` in turn until one reaches ``accept``; the
     best refined and polished.
 
     1. From each start (in the order given) :func:`least_squares_batched` with step
-       ``diff_steps[0]``; stop as soon as the best ``||r||^2 <= accept``, or when a
-       further start improved the best by less than the fraction ``min_gain`` (the fit
-       is then limited by the model, not by the basin the first start fell into).
+       ``diff_steps[0]``; stop as soon as the best ``||r||^2 <= accept``, or, once the
+       best is at or below ``settle``, when a further start improved it by less than the
+       fraction ``min_gain`` (the fit is then limited by the model, not by the basin the
+       first start fell into; above ``settle`` every start is tried).
     2. From the best point, one pass with each further step of ``diff_steps`` (a pass
        that does not improve is dropped).
     3. :func:`~emaphm.optim.local.compass_search` of the best point (step 0.02 of the
@@ -251,7 +252,8 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
         n_run += 1
         before = np.inf if best is None else best.fun
         going = run(np.asarray(x, dtype=float), diff_steps[0])
-        if not going or best.fun <= accept or (n_run > 1 and best.fun > (1 - min_gain) * before):
+        if not going or best.fun <= accept or (n_run > 1 and best.fun <= settle
+                                                and best.fun > (1 - min_gain) * before):
             break
     if going:
         for step in diff_steps[1:]:
