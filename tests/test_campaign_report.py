@@ -13,14 +13,15 @@ import sqlite3
 
 import numpy as np
 import pytest
+from figures import assert_png_of, legend_texts
 
 from emaphm.campaign import CampaignStore, RunResult, paper_spec
-from emaphm.campaign.report import (PAPER_TABLE3, PAPER_TOTALS, performance_coefficient,
-                                    single_fault_table, summarize, write_report)
+from emaphm.campaign.report import (PAPER_TABLE3, PAPER_TOTALS, bar_figure, convergence_figure,
+                                    performance_coefficient, single_fault_table, summarize,
+                                    write_report)
 from emaphm.campaign.spec import parse_algorithms
 from emaphm.cli import main
 
-PNG = b"\x89PNG\r\n\x1a\n"
 ALGOS = ("de", "pso", "gwo")
 
 
@@ -109,8 +110,9 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
                      "fig8_time.png", "convergence.png"}
     for p in paths:
         assert p.parent == out and p.stat().st_size > 0
-        if p.suffix == ".png":
-            assert p.read_bytes()[:8] == PNG
+    assert_png_of(out / "fig7_error.png", (max(8.0, 0.9 * 11), 4.8))
+    assert_png_of(out / "fig8_time.png", (max(8.0, 0.9 * 11), 4.8))
+    assert_png_of(out / "convergence.png", (11, 3.2 * 2))
     conn = sqlite3.connect(f"file:{paper_store}?mode=ro", uri=True)
     assert list(conn.iterdump()) == before, "a report must not write to the store"
     conn.close()
@@ -177,3 +179,51 @@ def test_cli_report(paper_store, tmp_path, capsys):
     assert (out / "report.md").exists() and "report.md" in capsys.readouterr().out
     assert main(["report", str(tmp_path / "none.sqlite"), "--out", str(out)]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- figures
+def test_the_bar_figures_show_the_mean_and_the_range_of_every_cell(paper_store):
+    from matplotlib.container import BarContainer
+
+    with CampaignStore.open(paper_store, readonly=True) as st:
+        spec, cells = st.spec, summarize(st.results())
+    scen = [s.name for s in spec.scenarios]
+    fig = bar_figure(spec, cells, "error", "identification error, Eq. 9 [%]", "Fig. 7")
+    (ax,) = fig.axes
+    bars = [c for c in ax.containers if isinstance(c, BarContainer)]
+    assert len(bars) == len(ALGOS) and all(len(b) == len(scen) for b in bars)
+    for b, a in zip(bars, ALGOS):
+        np.testing.assert_allclose([r.get_height() for r in b],
+                                   [cells[(s, a)].stat("error") for s in scen])
+    top = max(cells[(s, a)].stat("error", "max") for s in scen for a in ALGOS)
+    assert ax.get_ylim()[0] == 0.0 and ax.get_ylim()[1] > top       # whiskers inside
+    assert [t.get_text() for t in ax.get_xticklabels()] == scen
+    assert ax.get_ylabel() == "identification error, Eq. 9 [%]" and ax.get_title() == "Fig. 7"
+    assert legend_texts(ax) == ["DE", "PSO", "GWO"]
+    # the whiskers run from the minimum to the maximum of each cell
+    err = [c for c in ax.containers if not isinstance(c, BarContainer)]
+    assert len(err) == len(ALGOS)
+    segs = np.asarray(err[0].lines[2][0].get_segments())           # DE, one per scenario
+    np.testing.assert_allclose(segs[:, 0, 1], [cells[(s, "de")].stat("error", "min") for s in scen])
+    np.testing.assert_allclose(segs[:, 1, 1], [cells[(s, "de")].stat("error", "max") for s in scen])
+
+
+def test_the_convergence_figure_has_one_median_per_algorithm_and_scenario(paper_store):
+    with CampaignStore.open(paper_store, readonly=True) as st:
+        spec, results = st.spec, st.results()
+    fig = convergence_figure(spec, results)
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_title() for ax in shown] == ["friction-high", "short-circuit-high", "gain-high",
+                                                "multiple"]
+    for ax in shown:
+        assert len(ax.lines) == len(ALGOS) and len(ax.collections) == len(ALGOS)   # + IQR bands
+        assert legend_texts(ax) == ["DE (n=2)", "PSO (n=2)", "GWO (n=2)"]
+        assert ax.get_yscale() == "log" and ax.get_xlabel() == "evaluations"
+        assert ax.get_ylabel() == "best fitness (Eq. 4)"
+        for line in ax.lines:
+            y = np.asarray(line.get_ydata())
+            assert np.all(np.diff(y[np.isfinite(y)]) <= 0)          # best-so-far medians
+            # the synthetic runs end at 1e-4 and 2e-4 after 50 x (20 or 21) + 40 evaluations
+            assert np.nanmin(y) == pytest.approx(1.5e-4)
+            assert line.get_xdata()[-1] == pytest.approx(50 * 21 + 40)      # the longer run
+    assert convergence_figure(spec, []) is None
