@@ -9,6 +9,7 @@ the paper's numbers back.
 from __future__ import annotations
 
 import csv
+import re
 import sqlite3
 
 import numpy as np
@@ -132,15 +133,12 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
     assert set(comp) == set(ALGOS)
     assert float(comp["gwo"][4]) == 2630.7                    # paper_time_s, typo corrected
 
-    # every cell of a numeric column parses as a plain number (no "np.float64(...)")
-    for name in ("table3_single_faults.csv", "table4_multiple_faults.csv", "per_scenario.csv",
-                 "paper_comparison.csv"):
-        rows = _read_csv(out / name)
-        for r in rows[1:]:
-            for cell in r:
-                if cell and not cell.replace("-", "").replace("_", "").isalpha():
-                    float(cell)
-                assert "np." not in cell, (name, cell)
+    # every cell of every numeric column parses as a plain number (no "np.float64(...)")
+    for name in CSV_FILES:
+        numeric_columns(out / name)
+    runs_cols = numeric_columns(out / "runs.csv")
+    assert {"seed", "fitness", "evaluations", "k", "k_true", "spawn_key"} <= set(runs_cols)
+    assert all(len(k) == 8 for k in runs_cols["k"] if k)
 
     md = (out / "report.md").read_text()
     assert "| **Total** |" in md and "2530.7 s, is a typo" in md
@@ -148,6 +146,50 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
     assert "![error per scenario](fig7_error.png)" in md
     assert "| DE time (s) | DE err. (%) | DE PC (%) | PSO time (s) |" in md
 
+
+#: The CSV files of a report, and their text columns (every other column is numeric).
+CSV_FILES = ("table3_single_faults.csv", "table4_multiple_faults.csv", "per_scenario.csv",
+             "paper_comparison.csv", "runs.csv")
+TEXT_COLUMNS = {"mode", "scenario", "magnitude", "algorithm", "optimizer", "status", "reason",
+                "run_key", "version", "error_text"}
+#: Numeric columns holding space-separated vectors.
+VECTOR_COLUMNS = {"k", "k_true", "spawn_key"}
+PLAIN_NUMBER = re.compile(r"^-?(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?$|^-?inf$")
+
+
+def numeric_columns(path) -> dict[str, list]:
+    """Every numeric column of a report CSV, parsed: each cell is empty (n/a) or a plain
+    decimal number (a vector column: numbers separated by spaces). Fails on anything else,
+    e.g. ``np.float64(57.42)``."""
+    header, *rows = _read_csv(path)
+    assert rows, path
+    cols = {}
+    for j, name in enumerate(header):
+        if name in TEXT_COLUMNS:
+            continue
+        values = []
+        for r in rows:
+            cell = r[j]
+            parts = cell.split(" ") if name in VECTOR_COLUMNS else [cell]
+            bad = [x for x in parts if x and not PLAIN_NUMBER.match(x)]
+            assert not bad, f"{path.name}, column {name}: {bad[0]!r} is not a plain number"
+            values.append([float(x) for x in parts if x] if name in VECTOR_COLUMNS
+                          else (float(cell) if cell else None))
+        cols[name] = values
+    return cols
+
+
+def test_the_committed_results_hold_plain_numbers():
+    """docs/results (the paper campaign's report) as the reader gets it."""
+    from pathlib import Path
+
+    results = Path(__file__).resolve().parents[1] / "docs" / "results"
+    for name in CSV_FILES:
+        cols = numeric_columns(results / name)
+        assert all(v is None or np.isfinite(v) for c, vs in cols.items()
+                   if c not in VECTOR_COLUMNS for v in vs), name
+    runs = numeric_columns(results / "runs.csv")
+    assert len(runs["fitness"]) == 330                    # 3 algorithms x 11 scenarios x 10 runs
 
 def test_report_with_baselines_failures_and_missing_runs(tmp_path):
     spec = paper_spec(runs=2, algorithms=parse_algorithms("pso,cmaes"))
