@@ -100,6 +100,8 @@ from emaphm.cli import main
 
 AFTER, HOW = int(sys.argv[1]), sys.argv[2]
 commit, done = CampaignStore.commit, []
+# Ctrl-C as in a terminal: a test run from a background job inherits SIGINT ignored
+signal.signal(signal.SIGINT, signal.default_int_handler)
 
 def commit_then_signal(self, result):
     written = commit(self, result)
