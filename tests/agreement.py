@@ -57,3 +57,33 @@ def assert_traces_agree(candidate: dict, reference, well, horizon) -> None:
         for name, ref in traces(reference).items():
             np.testing.assert_allclose(candidate[name][j, :h], ref[j, :h], rtol=TOL, atol=TOL,
                                        err_msg=f"{name}, candidate {j}, first {h} steps")
+
+
+# ----------------------------------------------------------------------------- campaign runs
+#: Relative tolerance on the float fields of one run computed by two processes.
+RUN_RTOL = 1e-12
+
+
+def assert_same_outcome(got: dict, want: dict, key: str = "") -> None:
+    """Two outcomes (``RunResult.outcome()``) of the same run computed by two processes:
+    keys, seeds, counts, reasons and statuses exactly; fitness, errors, k and the history to
+    ``RUN_RTOL``.
+
+    Every process runs the kernels Numba compiled into its on-disk cache, and that cache
+    does not track the physics modules a kernel inlines (see
+    :mod:`emaphm.models.monitoring_simd`). A process that loads a kernel cached before an
+    edit of those modules and one that compiles it anew (when another process rewrites the
+    cache meanwhile) run the same model with different rounding: a history once differed in
+    its 16th digit that way. Same runs, seeds and evaluation counts are what an executor
+    must guarantee; bit-identical arithmetic across processes is not ours to promise.
+    """
+    assert got.keys() == want.keys(), key
+    for name, w in want.items():
+        g = got[name]
+        floats = isinstance(w, float) or (isinstance(w, (tuple, list)) and len(w) > 0
+                                          and all(isinstance(x, float) for x in w))
+        if floats and g is not None:
+            np.testing.assert_allclose(np.asarray(g, dtype=float), np.asarray(w, dtype=float),
+                                       rtol=RUN_RTOL, atol=0.0, err_msg=f"{key}: {name}")
+        else:
+            assert g == w, (key, name, g, w)

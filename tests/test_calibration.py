@@ -3,6 +3,7 @@
 from dataclasses import replace
 
 import pytest
+from figures import assert_png_of
 
 from emaphm.acquisition import Sensors
 from emaphm.calibration import (PARAMETERS, CalibrationError, apply_deviations, calibrate)
@@ -52,6 +53,35 @@ def test_twin_calibration_recovers_the_unit(twin_result):
     # the calibrated parameters carry their provenance
     cal = r.params.calibration
     assert cal.sources == ("a", "b") and {n for n, _, _ in cal.estimates} == set(r.estimates)
+
+
+def test_the_calibration_figure_shows_the_fit_and_its_residual(twin_result, tmp_path):
+    import numpy as np
+    from figures import legend_texts
+
+    from emaphm.plots import plot_calibration
+
+    fig = plot_calibration(twin_result, source=1, path=tmp_path / "cal.png")
+    assert_png_of(tmp_path / "cal.png", fig)
+    t, meas, model = twin_result.fits[1]
+    axes = fig.axes
+    assert [ax.get_ylabel() for ax in axes] == ["i_a [A]", "i_b [A]", "i_c [A]",
+                                                "measured - model [A]"]
+    assert axes[-1].get_xlabel() == "time [s]"
+    for j, ax in enumerate(axes[:3]):           # measured under the calibrated model
+        assert len(ax.lines) == 2 and legend_texts(ax) == ["measured", "calibrated model"]
+        np.testing.assert_array_equal(ax.lines[0].get_ydata(), meas[:, j])
+        np.testing.assert_array_equal(ax.lines[1].get_ydata(), model[:, j])
+        y0, y1 = ax.get_ylim()
+        assert y0 <= meas[:, j].min() and y1 >= meas[:, j].max()
+    assert len(axes[3].lines) == 3 and legend_texts(axes[3]) == ["i_a", "i_b", "i_c"]
+    for j in range(3):
+        np.testing.assert_array_equal(axes[3].lines[j].get_ydata(), meas[:, j] - model[:, j])
+    x0, x1 = axes[3].get_xlim()
+    assert x0 <= t[0] and x1 >= t[-1]
+    title = fig._suptitle.get_text()
+    assert title.startswith(f"calibration on b: fit {twin_result.fit_ratio['b']:.2f}x the noise floor")
+    assert all(name in title for name in twin_result.estimates)
 
 
 def test_inertia_and_flux_cannot_be_told_apart_on_the_profile():
@@ -107,7 +137,7 @@ def test_cli_calibrate_writes_parameters_diagnose_reads(tmp_path, capsys):
     # the common mode of the gains trades with inertia and flux (all scale the current);
     # their differences are separable: 1.02 / 0.99 (measured 0.0305)
     assert p.sensors.gain[0] / p.sensors.gain[1] == pytest.approx(1.02 / 0.99, abs=0.005)
-    assert (tmp_path / "cal.png").stat().st_size > 10_000
+    assert_png_of(tmp_path / "cal.png", (10, 9))        # plot_calibration's size
     # a missing trace is refused with the reason
     assert main(["calibrate", str(tmp_path / "nope.csv"), "--out", str(out)]) == 2
     assert "does not exist" in capsys.readouterr().err

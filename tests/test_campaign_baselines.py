@@ -7,6 +7,7 @@ reproducible, pure (``tell`` leaves its input state alone), checkpointable, and 
 from __future__ import annotations
 
 import copy
+import inspect
 import pickle
 
 import numpy as np
@@ -23,12 +24,17 @@ BOX = ([-5.12] * 6, [5.12] * 6)
 NAMES = sorted(BASELINES)
 
 
+def DE_RNG(rng) -> dict:
+    """scipy's keyword for a Generator: ``rng`` from 1.15 on, ``seed`` before (our floor 1.13)."""
+    return {"rng" if "rng" in inspect.signature(differential_evolution).parameters else "seed": rng}
+
+
 def test_scipy_de_adapter_is_scipys_own_run():
     opt = ScipyDE(pop_size=20)
     res = minimize(rastrigin, BOX, opt, seed=5, termination=MaxIterations(40))
     rng = child_rng(np.random.default_rng(5))                 # what init derives from the seed
     init = opt.initial_population(as_bounds(BOX), rng)
-    ref = differential_evolution(lambda x: rastrigin(x.T), list(zip(*BOX)), init=init, rng=rng,
+    ref = differential_evolution(lambda x: rastrigin(x.T), list(zip(*BOX)), init=init, **DE_RNG(rng),
                                  maxiter=39, tol=0, atol=0, polish=False, vectorized=True,
                                  updating="deferred")
     assert np.array_equal(res.x, ref.x) and res.fun == ref.fun

@@ -9,18 +9,20 @@ the paper's numbers back.
 from __future__ import annotations
 
 import csv
+import re
 import sqlite3
 
 import numpy as np
 import pytest
+from figures import assert_png_of, legend_texts
 
 from emaphm.campaign import CampaignStore, RunResult, paper_spec
-from emaphm.campaign.report import (PAPER_TABLE3, PAPER_TOTALS, performance_coefficient,
-                                    single_fault_table, summarize, write_report)
+from emaphm.campaign.report import (PAPER_TABLE3, PAPER_TOTALS, bar_figure, convergence_figure,
+                                    performance_coefficient, single_fault_table, summarize,
+                                    write_report)
 from emaphm.campaign.spec import parse_algorithms
 from emaphm.cli import main
 
-PNG = b"\x89PNG\r\n\x1a\n"
 ALGOS = ("de", "pso", "gwo")
 
 
@@ -109,8 +111,9 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
                      "fig8_time.png", "convergence.png"}
     for p in paths:
         assert p.parent == out and p.stat().st_size > 0
-        if p.suffix == ".png":
-            assert p.read_bytes()[:8] == PNG
+    assert_png_of(out / "fig7_error.png", (max(8.0, 0.9 * 11), 4.8))
+    assert_png_of(out / "fig8_time.png", (max(8.0, 0.9 * 11), 4.8))
+    assert_png_of(out / "convergence.png", (11, 3.2 * 2))
     conn = sqlite3.connect(f"file:{paper_store}?mode=ro", uri=True)
     assert list(conn.iterdump()) == before, "a report must not write to the store"
     conn.close()
@@ -130,15 +133,12 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
     assert set(comp) == set(ALGOS)
     assert float(comp["gwo"][4]) == 2630.7                    # paper_time_s, typo corrected
 
-    # every cell of a numeric column parses as a plain number (no "np.float64(...)")
-    for name in ("table3_single_faults.csv", "table4_multiple_faults.csv", "per_scenario.csv",
-                 "paper_comparison.csv"):
-        rows = _read_csv(out / name)
-        for r in rows[1:]:
-            for cell in r:
-                if cell and not cell.replace("-", "").replace("_", "").isalpha():
-                    float(cell)
-                assert "np." not in cell, (name, cell)
+    # every cell of every numeric column parses as a plain number (no "np.float64(...)")
+    for name in CSV_FILES:
+        numeric_columns(out / name)
+    runs_cols = numeric_columns(out / "runs.csv")
+    assert {"seed", "fitness", "evaluations", "k", "k_true", "spawn_key"} <= set(runs_cols)
+    assert all(len(k) == 8 for k in runs_cols["k"] if k)
 
     md = (out / "report.md").read_text()
     assert "| **Total** |" in md and "2530.7 s, is a typo" in md
@@ -146,6 +146,50 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
     assert "![error per scenario](fig7_error.png)" in md
     assert "| DE time (s) | DE err. (%) | DE PC (%) | PSO time (s) |" in md
 
+
+#: The CSV files of a report, and their text columns (every other column is numeric).
+CSV_FILES = ("table3_single_faults.csv", "table4_multiple_faults.csv", "per_scenario.csv",
+             "paper_comparison.csv", "runs.csv")
+TEXT_COLUMNS = {"mode", "scenario", "magnitude", "algorithm", "optimizer", "status", "reason",
+                "run_key", "version", "error_text"}
+#: Numeric columns holding space-separated vectors.
+VECTOR_COLUMNS = {"k", "k_true", "spawn_key"}
+PLAIN_NUMBER = re.compile(r"^-?(\d+(\.\d*)?|\.\d+)([eE][-+]?\d+)?$|^-?inf$")
+
+
+def numeric_columns(path) -> dict[str, list]:
+    """Every numeric column of a report CSV, parsed: each cell is empty (n/a) or a plain
+    decimal number (a vector column: numbers separated by spaces). Fails on anything else,
+    e.g. ``np.float64(57.42)``."""
+    header, *rows = _read_csv(path)
+    assert rows, path
+    cols = {}
+    for j, name in enumerate(header):
+        if name in TEXT_COLUMNS:
+            continue
+        values = []
+        for r in rows:
+            cell = r[j]
+            parts = cell.split(" ") if name in VECTOR_COLUMNS else [cell]
+            bad = [x for x in parts if x and not PLAIN_NUMBER.match(x)]
+            assert not bad, f"{path.name}, column {name}: {bad[0]!r} is not a plain number"
+            values.append([float(x) for x in parts if x] if name in VECTOR_COLUMNS
+                          else (float(cell) if cell else None))
+        cols[name] = values
+    return cols
+
+
+def test_the_committed_results_hold_plain_numbers():
+    """docs/results (the paper campaign's report) as the reader gets it."""
+    from pathlib import Path
+
+    results = Path(__file__).resolve().parents[1] / "docs" / "results"
+    for name in CSV_FILES:
+        cols = numeric_columns(results / name)
+        assert all(v is None or np.isfinite(v) for c, vs in cols.items()
+                   if c not in VECTOR_COLUMNS for v in vs), name
+    runs = numeric_columns(results / "runs.csv")
+    assert len(runs["fitness"]) == 330                    # 3 algorithms x 11 scenarios x 10 runs
 
 def test_report_with_baselines_failures_and_missing_runs(tmp_path):
     spec = paper_spec(runs=2, algorithms=parse_algorithms("pso,cmaes"))
@@ -177,3 +221,51 @@ def test_cli_report(paper_store, tmp_path, capsys):
     assert (out / "report.md").exists() and "report.md" in capsys.readouterr().out
     assert main(["report", str(tmp_path / "none.sqlite"), "--out", str(out)]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- figures
+def test_the_bar_figures_show_the_mean_and_the_range_of_every_cell(paper_store):
+    from matplotlib.container import BarContainer
+
+    with CampaignStore.open(paper_store, readonly=True) as st:
+        spec, cells = st.spec, summarize(st.results())
+    scen = [s.name for s in spec.scenarios]
+    fig = bar_figure(spec, cells, "error", "identification error, Eq. 9 [%]", "Fig. 7")
+    (ax,) = fig.axes
+    bars = [c for c in ax.containers if isinstance(c, BarContainer)]
+    assert len(bars) == len(ALGOS) and all(len(b) == len(scen) for b in bars)
+    for b, a in zip(bars, ALGOS):
+        np.testing.assert_allclose([r.get_height() for r in b],
+                                   [cells[(s, a)].stat("error") for s in scen])
+    top = max(cells[(s, a)].stat("error", "max") for s in scen for a in ALGOS)
+    assert ax.get_ylim()[0] == 0.0 and ax.get_ylim()[1] > top       # whiskers inside
+    assert [t.get_text() for t in ax.get_xticklabels()] == scen
+    assert ax.get_ylabel() == "identification error, Eq. 9 [%]" and ax.get_title() == "Fig. 7"
+    assert legend_texts(ax) == ["DE", "PSO", "GWO"]
+    # the whiskers run from the minimum to the maximum of each cell
+    err = [c for c in ax.containers if not isinstance(c, BarContainer)]
+    assert len(err) == len(ALGOS)
+    segs = np.asarray(err[0].lines[2][0].get_segments())           # DE, one per scenario
+    np.testing.assert_allclose(segs[:, 0, 1], [cells[(s, "de")].stat("error", "min") for s in scen])
+    np.testing.assert_allclose(segs[:, 1, 1], [cells[(s, "de")].stat("error", "max") for s in scen])
+
+
+def test_the_convergence_figure_has_one_median_per_algorithm_and_scenario(paper_store):
+    with CampaignStore.open(paper_store, readonly=True) as st:
+        spec, results = st.spec, st.results()
+    fig = convergence_figure(spec, results)
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_title() for ax in shown] == ["friction-high", "short-circuit-high", "gain-high",
+                                                "multiple"]
+    for ax in shown:
+        assert len(ax.lines) == len(ALGOS) and len(ax.collections) == len(ALGOS)   # + IQR bands
+        assert legend_texts(ax) == ["DE (n=2)", "PSO (n=2)", "GWO (n=2)"]
+        assert ax.get_yscale() == "log" and ax.get_xlabel() == "evaluations"
+        assert ax.get_ylabel() == "best fitness (Eq. 4)"
+        for line in ax.lines:
+            y = np.asarray(line.get_ydata())
+            assert np.all(np.diff(y[np.isfinite(y)]) <= 0)          # best-so-far medians
+            # the synthetic runs end at 1e-4 and 2e-4 after 50 x (20 or 21) + 40 evaluations
+            assert np.nanmin(y) == pytest.approx(1.5e-4)
+            assert line.get_xdata()[-1] == pytest.approx(50 * 21 + 40)      # the longer run
+    assert convergence_figure(spec, []) is None

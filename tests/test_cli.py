@@ -11,6 +11,7 @@ import json
 
 import numpy as np
 import pytest
+from figures import assert_png_of
 
 from emaphm import __version__
 from emaphm.cli import EXIT_USAGE, main
@@ -19,7 +20,6 @@ from emaphm.params import load_params, siemens_1fk7060
 from emaphm.simulate import simulate
 from emaphm.traces import Trace, read_trace, write_trace
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
 #: What `diagnose --json` must carry (on top of the diagnosis' own fields).
 JSON_KEYS = {"algorithm", "seed", "k", "fitness", "evaluations", "iterations", "elapsed_s",
@@ -148,8 +148,7 @@ def test_simulate_plot_writes_a_png(workdir, capsys):
     out, png = workdir / "x.csv", workdir / "x.png"
     assert main(["simulate", "--scenario", "backlash-high", "--model", "monitoring",
                  "--out", str(out), "--plot", str(png)]) == 0
-    data = png.read_bytes()
-    assert data.startswith(PNG_SIGNATURE) and len(data) > 10_000
+    assert_png_of(png, (10, 9))                             # plot_trace's figure
     assert _listing(workdir) == ["x.csv", "x.png"]
 
 
@@ -214,7 +213,7 @@ def test_diagnose_trace_file_with_plot(rm_trace_file, workdir, capsys):
     assert isinstance(d["error_pct"], float)
     assert isinstance(d["history"], list) and d["history"]
     assert "identifying with DE" in err
-    assert png.read_bytes().startswith(PNG_SIGNATURE)
+    assert_png_of(png, (11, 11))                            # plot_identification's figure
     assert _listing(workdir) == ["ident.png"]
 
 

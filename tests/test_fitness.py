@@ -346,7 +346,9 @@ def test_noise_floor_is_measured_on_the_recorded_samples():
     slow = Trace.from_columns(cols, meta=full.meta)
     f_full = Eq4Objective.from_trace(full).noise_floor()
     f_slow = Eq4Objective.from_trace(slow).noise_floor()
-    assert f_slow == pytest.approx(f_full, rel=0.5)
+    # measured f_slow / f_full = 0.991 on this seed; an interpolated floor would be near 0.
+    # (Seeds 2-5 measure 1.20-1.54: the slower trace's second differences keep some signal.)
+    assert f_slow == pytest.approx(f_full, rel=0.05)
     assert f_full > 0
 
 

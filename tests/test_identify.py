@@ -58,20 +58,29 @@ def _strip_k(trace: Trace) -> Trace:
 
 
 # ----------------------------------------------------------------------------- known answers
+#: The model's own noise-free trace has fitness 0 at the truth, so each algorithm's default
+#: run gets close. Eq. 9 error measured with seed 1: DE 0.0054 %, PSO 0.012 %, GWO 0.093 %
+#: (its k2 = 0.0023 and the meaningless k7); |k8 - 0.25| 8e-7, 2.1e-5, 1.2e-4; fitness over
+#: nominal's 4e-11, 1.4e-8, 5.2e-7. The bounds are 3-6x those.
+TWIN_ERROR_PCT = {"de": 0.02, "pso": 0.05, "gwo": 0.3}
+TWIN_K8_ERROR = {"de": 5e-6, "pso": 1e-4, "gwo": 5e-4}
+TWIN_FITNESS_RATIO = {"de": 2e-10, "pso": 5e-8, "gwo": 2e-6}
+
+
 @pytest.mark.parametrize("algorithm", ALGOS)
 def test_recovers_gain_low_with_defaults(mm_gain_low, objective, algorithm):
     ident = identify(mm_gain_low, algorithm, seed=1, objective=objective)
     assert isinstance(ident, Identification)
     assert ident.algorithm == algorithm
     np.testing.assert_array_equal(ident.k_true, SCENARIOS["gain-low"])
-    assert ident.error_pct < 1.0, (algorithm, ident.k.round(4).tolist())
+    assert ident.error_pct < TWIN_ERROR_PCT[algorithm], (algorithm, ident.k.round(4).tolist())
     assert ident.error_pct == pytest.approx(error_pct(ident.k, SCENARIOS["gain-low"]))
-    assert abs(ident.k[7] - 0.25) < 0.01
+    assert abs(ident.k[7] - 0.25) < TWIN_K8_ERROR[algorithm]
     # the identified k is where the objective is smallest: its own fitness, below nominal's
     # (to round-off of the noise-free fit: k alone runs in the scalar kernel, the search's
     # populations in the SIMD one; they agree to ~1e-12 A, so here to ~1e-10 relative)
     assert ident.fitness == pytest.approx(objective(ident.k)[0], rel=1e-8, abs=1e-300)
-    assert ident.fitness < 1e-3 * objective(SCENARIOS["nominal"])[0]
+    assert ident.fitness < TWIN_FITNESS_RATIO[algorithm] * objective(SCENARIOS["nominal"])[0]
     assert np.all((ident.k >= 0.0) & (ident.k <= 1.0))
     assert ident.reason in ("max_iterations", "stall")
     assert 1 <= ident.iterations <= len(ident.history)    # the polish's polls come after

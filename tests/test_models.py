@@ -501,8 +501,8 @@ def test_monitoring_model_agrees_with_reference_model(mm, mm_physical, rm_traces
     """NRMS of MM (n_sub = 1) minus RM (PWM, 1 us) currents.
 
     On the MM's own mechanics (rigid backlash, two-level friction) the RM differs by its
-    switching inverter and winding integration only: below 2 % (measured 0.30 % to
-    0.62 %). The plant adds what the MM lacks (Stribeck friction, a compliant contact at
+    switching inverter and winding integration only: below 1 % (measured 0.30 %
+    (turn-short-5pct) to 0.62 % (backlash-high): a 1.6x margin). The plant adds what the MM lacks (Stribeck friction, a compliant contact at
     about 500 Hz): measured 1.2 % (gain-high) to 8.3 % (backlash-high; backlash-low 4.3 %,
     every other scenario 1.2-2.6 %), and always more than the rigid RM's, so the plant is
     no twin. Angles stay within 2.6e-3 rad of the MM's.
@@ -512,7 +512,7 @@ def test_monitoring_model_agrees_with_reference_model(mm, mm_physical, rm_traces
     rigid = rm_rigid_traces[name]
     np.testing.assert_array_equal(m.t, r["t"])
     err_rigid = nrms(m.i_abc[0], rigid["i_abc"])
-    assert err_rigid < 0.02, (name, err_rigid)
+    assert err_rigid < 0.01, (name, err_rigid)
     assert np.abs(m.theta_m[0] - rigid["theta_m"]).max() < 0.01       # rad
     err = nrms(m.i_abc[0], r["i_abc"])
     assert err_rigid < err < 0.10, (name, err_rigid, err)
@@ -520,7 +520,11 @@ def test_monitoring_model_agrees_with_reference_model(mm, mm_physical, rm_traces
 
 
 LINE = np.linspace(0.0, 1.0, 41)             # step 0.025
-LANDSCAPE_TOL = 0.05
+#: The grid point of LINE nearest a true value is at most half a step away (multiple's
+#: true values are off the grid: measured 0.0117 and 0.012 there, 0 for on-grid values).
+RIGID_LANDSCAPE_TOL = 0.0125
+#: Against the plant, components other than friction: measured up to 0.05 (two steps).
+PLANT_LANDSCAPE_TOL = 0.05
 
 
 def _landscape_minima(mm, kt, target, depth):
@@ -547,15 +551,17 @@ def _landscape_minima(mm, kt, target, depth):
 @pytest.mark.parametrize("name", FAULTS)
 def test_fitness_landscape_is_minimal_at_the_true_k(mm, mm_physical, rm_rigid_traces, name):
     """Along each single-component line through the true k, the Eq. 4 weighted SSE of MM
-    against the RM on the MM's mechanics is minimal within 0.05 of the true value
-    (measured: at the true value to the 0.025 grid for every scenario and component but
-    backlash-high's backlash, +0.025, and multiple's, whose true values are off the grid)."""
+    against the RM on the MM's mechanics is minimal at the grid point nearest the true
+    value (measured: at the true value for every scenario and component but
+    backlash-high's backlash, one step (+0.025) above it, and multiple's, whose true values
+    are off the grid: within 0.012, at the nearest grid point)."""
     kt = scenario(name)
     best = _landscape_minima(mm_of(name, mm, mm_physical), kt, rm_rigid_traces[name]["i_abc"],
                              depth=10.0)                 # a real valley, not a flat line
     for c, b in enumerate(best):
         if b is not None:
-            assert abs(b - kt[c]) <= LANDSCAPE_TOL, (name, K_NAMES[c], b, kt[c])
+            tol = 0.025 if (name, c) == ("backlash-high", 1) else RIGID_LANDSCAPE_TOL
+            assert abs(b - kt[c]) <= tol + 1e-12, (name, K_NAMES[c], b, kt[c])
 
 
 @pytest.mark.parametrize("name", FAULTS)
@@ -566,7 +572,8 @@ def test_fitness_landscape_on_the_plant_is_biased_where_the_mm_lacks_physics(
     up by 0.025 to 0.25 (measured +0.125 nominal, +0.20 friction-low, +0.25 friction-high
     (the box edge), +0.0617 multiple, +0.15..0.225 elsewhere, +0.025 gain-low), and the
     compliant contact moves backlash-high's k2 minimum by -0.125. Every other component
-    keeps its minimum within 0.05 of the truth (measured: within 0.05). The valleys are
+    keeps its minimum within 0.05 of the truth (measured: 0.05 for short-circuit-high's k5
+    and gain-low's k2, at most 0.025 elsewhere). The valleys are
     shallower than on the rigid RM, the plant's misfit being a floor under them: measured
     max/min fitness 2.7-82 along backlash lines, 10-150 along friction lines, 34 and more
     elsewhere, and 1.51 along multiple's eccentricity phase (k6 = 0.012)."""
@@ -577,7 +584,7 @@ def test_fitness_landscape_on_the_plant_is_biased_where_the_mm_lacks_physics(
     for c, b in enumerate(best[1:], start=1):
         if b is None:
             continue
-        tol = 0.15 if (name, c) == ("backlash-high", 1) else LANDSCAPE_TOL
+        tol = 0.15 if (name, c) == ("backlash-high", 1) else PLANT_LANDSCAPE_TOL
         assert abs(b - kt[c]) <= tol + 1e-12, (name, K_NAMES[c], b, kt[c])
 
 

@@ -39,6 +39,8 @@ The niapy checks are skipped when niapy is not installed (test-only dependency).
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import pytest
 from scipy.optimize import differential_evolution
@@ -56,6 +58,11 @@ PROBLEMS = {
     "rastrigin": (rastrigin, ([-5.12] * N_VAR, [5.12] * N_VAR)),
     "rosenbrock": (rosenbrock, ([-5.0] * N_VAR, [10.0] * N_VAR)),
 }
+
+
+def DE_RNG(rng) -> dict:
+    """scipy's keyword for a Generator: ``rng`` from 1.15 on, ``seed`` before (our floor 1.13)."""
+    return {"rng" if "rng" in inspect.signature(differential_evolution).parameters else "seed": rng}
 
 
 def summary(values, problem: str) -> float:
@@ -122,7 +129,7 @@ def test_de_matches_scipy_rand1bin(problem):
             atol=0.0,
             vectorized=True,
             updating="deferred",
-            rng=rng,
+            **DE_RNG(rng),
         )
         ref.append(res.fun)
         ref_nfev.add(g.n)

@@ -1,5 +1,6 @@
-"""Figures (:mod:`emaphm.plots`): they only read traces and results, never simulate, and
-save atomically. Files go to ``tmp_path`` only."""
+"""Figures (:mod:`emaphm.plots`): what each panel shows (its data, limits, labels and
+legend, read back from the returned Figure); they only read traces and results, never
+simulate, and save atomically. Files go to ``tmp_path`` only."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import importlib
 
 import numpy as np
 import pytest
+from figures import assert_png_of, legend_texts
 
 matplotlib = pytest.importorskip("matplotlib")
 
@@ -16,7 +18,6 @@ from emaphm.identify import identify  # noqa: E402
 from emaphm.plots import plot_identification, plot_trace, save_figure  # noqa: E402
 from emaphm.simulate import simulate  # noqa: E402
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 # the modules themselves (a package attribute of the same name could shadow them)
 monitoring = importlib.import_module("emaphm.models.monitoring")
 simulate_mod = importlib.import_module("emaphm.simulate")
@@ -37,10 +38,11 @@ def ident(faulty):
     return identify(faulty, "pso", seed=0, budget=100, options={"pop_size": 20}, polish=False)
 
 
-def _assert_png(path):
-    data = path.read_bytes()
-    assert data.startswith(PNG_SIGNATURE)
-    assert len(data) > 10_000
+def _covers(ax, lo, hi):
+    """The x axis shows all of [lo, hi] and not much more (at most 6 % margins)."""
+    x0, x1 = ax.get_xlim()
+    assert x0 <= lo and x1 >= hi, ((x0, x1), (lo, hi))
+    assert x1 - x0 <= 1.12 * (hi - lo), ((x0, x1), (lo, hi))
 
 
 def _no_simulation(monkeypatch):
@@ -66,7 +68,14 @@ def test_plot_trace_alone(faulty, tmp_path):
     assert len(fig.axes[0].lines) == 2
     np.testing.assert_array_equal(fig.axes[1].lines[0].get_ydata(), faulty.i_abc[:, 0])
     assert "backlash-high" in fig._suptitle.get_text()
-    _assert_png(path)
+    for ax in fig.axes:
+        _covers(ax, faulty.t[0], faulty.t[-1])
+    assert fig.axes[-1].get_xlabel() == "time [s]"
+    i_a = faulty.i_abc[:, 0]
+    y0, y1 = fig.axes[1].get_ylim()
+    assert y0 <= i_a.min() and y1 >= i_a.max()             # no current cut off
+    assert legend_texts(fig.axes[0]) == ["command", "backlash-high, monitoring"]
+    assert_png_of(path, fig)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["trace.png"]
 
 
@@ -81,7 +90,8 @@ def test_plot_trace_with_overlay(faulty, nominal, tmp_path, monkeypatch):
         ydata = [np.asarray(line.get_ydata()) for line in ax.lines]
         assert any(np.array_equal(y, nominal.i_abc[:, j]) for y in ydata)
         assert any(np.array_equal(y, faulty.i_abc[:, j]) for y in ydata)
-    _assert_png(path)
+        assert legend_texts(ax) == ["nominal, monitoring", "backlash-high, monitoring"]
+    assert_png_of(path, fig)
 
 
 def test_plot_trace_without_path_writes_nothing(faulty, tmp_path, monkeypatch):
@@ -123,7 +133,20 @@ def test_plot_identification_reads_only(faulty, ident, tmp_path, monkeypatch):
     title = fig._suptitle.get_text()
     assert "PSO seed 0" in title and f"{ident.evaluations} evaluations" in title
     assert "(Eq. 9)" in title
-    _assert_png(path)
+    assert [a.get_ylabel() for a in fig.axes] == ["i_a [A]", "i_b [A]", "i_c [A]",
+                                                  "measured - model [A]", "best fitness (Eq. 4)"]
+    for ax in fig.axes[:4]:
+        _covers(ax, faulty.t[0], faulty.t[-1])
+        assert legend_texts(ax)                             # every panel says what it shows
+    assert legend_texts(fig.axes[0]) == ["measured", "monitoring model at k"]
+    assert legend_texts(res) == ["i_a", "i_b", "i_c", "+-2 sigma of the noise"]
+    # the convergence axis runs over the iterations (no polish here), no further
+    _covers(conv, 1, ident.history.size)
+    assert ident.polish_evaluations == 0 and ident.iterations == ident.history.size
+    assert conv.get_xlabel() == "iteration (then polish poll)"
+    y0, y1 = conv.get_ylim()
+    assert y0 <= ident.history.min() and y1 >= ident.history.max()
+    assert_png_of(path, fig)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ident.png"]
 
 
@@ -185,4 +208,4 @@ def test_save_figure_returns_the_path(faulty, tmp_path):
     fig = plot_trace(faulty)
     out = save_figure(fig, str(tmp_path / "z.png"))
     assert out == tmp_path / "z.png"
-    _assert_png(out)
+    assert_png_of(out, fig)

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from figures import assert_png_of
 
 from emaphm.cli import main
 from emaphm.fitness import Eq4Objective
@@ -76,7 +77,7 @@ def test_cli_loop(run, tmp_path, capsys):
                "--threshold", "friction=0.45"])
     out, _ = capsys.readouterr()
     assert rc == 0 and "first to fail: friction" in out
-    assert (tmp_path / "p.png").stat().st_size > 1000
+    assert_png_of(tmp_path / "p.png", (10, 3.2 * 1 + 0.6))  # one growing indicator: friction
     rc = main(["prognose", "EMA-CLI", "--db", db, "--json", "--indicator", "friction"])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["thresholds"]["friction"] == 0.5 and d["n_inspections"] == 3
@@ -129,6 +130,8 @@ def test_demo_degradation_cli_synthetic(capsys, tmp_path):
     assert rc == 0 and d[0]["coverage_from_midlife"] >= 0.8
     assert sorted(p.name for p in out.iterdir()) == ["gain-drift-alpha-lambda.png",
                                                    "gain-drift-prognosis.png"]
+    assert_png_of(out / "gain-drift-alpha-lambda.png", (7, 4.5))
+    assert_png_of(out / "gain-drift-prognosis.png", (10, 3.8))
     assert main(["demo-degradation", "--scenario", "rust"]) == 2
     (tmp_path / "afile").write_text("x")
     assert main(["demo-degradation", "--synthetic", "--plot-dir", str(tmp_path / "afile")]) == 2

@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 import pytest
+from figures import assert_png_of, legend_texts
 
 from emaphm.cli import EXIT_USAGE, main
 from emaphm.faults import K_NOMINAL
@@ -277,7 +278,7 @@ def test_cli_show_and_list(store, capsys, tmp_path):
     db = str(store.path)
     rc, out, _ = _run(["history", "show", "EMA-1", "--db", db, "--plot", str(tmp_path / "h.png")], capsys)
     assert rc == 0 and "2 inspections" in out and "friction" in out
-    assert (tmp_path / "h.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert_png_of(tmp_path / "h.png", (11, 9))             # plot_history's figure
     rc, out, _ = _run(["history", "list", "--db", db], capsys)
     assert rc == 0 and "EMA-1" in out and "left aileron" in out
     rc, out, _ = _run(["history", "show", "EMA-1", "--db", db, "--json"], capsys)
@@ -366,6 +367,7 @@ def test_history_plot_colours_each_component_by_its_own_verdict(tmp_path):
 
     from emaphm.diagnosis import diagnose
     from emaphm.prognosis.plots import component_status, plot_history
+    from emaphm.prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT
 
     with HealthHistory(tmp_path / "h.sqlite") as h:
         h.register("EMA-P")
@@ -392,7 +394,22 @@ def test_history_plot_colours_each_component_by_its_own_verdict(tmp_path):
     # k7 without eccentricity: hollow points, no trend line
     hollow = [line for line in axes[6].lines if line.get_mfc() == "none"]
     assert len(hollow) == 1 and tuple(hollow[0].get_xdata()) == (10.0, 20.0, 30.0)
-    assert all(ax.get_ylabel().startswith("k") for ax in axes)
+    assert [ax.get_ylabel() for ax in axes] == [f"k{j} [-]" for j in range(1, 9)]
+    assert [ax.get_xlabel() for ax in axes[-2:]] == ["time [flight hours]"] * 2
+    # each component's failure threshold (k8: the band around nominal 0.5)
+    thr = {INDICATOR_COMPONENT[n]: DEFAULT_FAILURE_THRESHOLDS.for_indicator(n)
+           for n in INDICATOR_COMPONENT}
+    for j, ax in enumerate(axes):
+        flat = sorted(ln.get_ydata()[0] for ln in ax.lines if ln.get_linestyle() == "--")
+        want = [] if j not in thr else [0.5 - thr[j], 0.5 + thr[j]] if j == 7 else [thr[j]]
+        assert flat == pytest.approx(want), j
+        # every point is inside the axes, with its interval
+        y0, y1 = ax.get_ylim()
+        assert y0 <= data.K_lo[:, j].min() and y1 >= data.K_hi[:, j].max()
+        x0, x1 = ax.get_xlim()
+        assert x0 < 10.0 and x1 > 30.0
+    assert legend_texts(axes[0]) == ["healthy", "faulty", "unexplained", "failure threshold"]
+    assert legend_texts(axes[6])[0] == "no eccentricity: phase meaningless"
 
 
 def test_a_damaged_history_is_refused_unchanged(tmp_path):

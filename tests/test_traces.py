@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from emaphm import traces
+from emaphm.traces import csv_format
 from emaphm.traces import (
     COLUMNS,
     OPTIONAL_COLUMNS,
@@ -495,7 +495,7 @@ def test_failure_mid_parquet_write_keeps_old_file(tmp_path, monkeypatch, trace):
 def test_failure_mid_csv_write_keeps_old_file(tmp_path, monkeypatch, trace):
     path = write_trace(trace, tmp_path / "run.csv")
     before = path.read_bytes()
-    original = traces._csv_chunks
+    original = csv_format._csv_chunks
 
     def chunks_then_fail(tr, *args, **kwargs):
         for k, chunk in enumerate(original(tr, *args, **kwargs)):
@@ -503,7 +503,7 @@ def test_failure_mid_csv_write_keeps_old_file(tmp_path, monkeypatch, trace):
                 raise Boom("killed")
             yield chunk
 
-    monkeypatch.setattr(traces, "_csv_chunks", chunks_then_fail)
+    monkeypatch.setattr(csv_format, "_csv_chunks", chunks_then_fail)
     with pytest.raises(Boom):
         write_trace(trace.with_meta(model="new"), path)
     assert [p.name for p in tmp_path.iterdir()] == ["run.csv"]

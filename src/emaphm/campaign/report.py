@@ -38,15 +38,19 @@ import os
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Iterable, Sequence
 
 import numpy as np
 
 from .._files import atomic_write_text
 from .store import CampaignStore, RunResult
 
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
 __all__ = ["PAPER_TOTALS", "PAPER_TABLE3", "Cell", "performance_coefficient", "summarize",
-           "single_fault_table", "multiple_fault_table", "paper_comparison", "write_report"]
+           "single_fault_table", "multiple_fault_table", "paper_comparison", "write_report",
+           "bar_figure", "convergence_figure"]
 
 #: The paper's Table 3 (single faults, mean of the two magnitudes): mode -> algorithm ->
 #: (time s, error %, PC %). Intel i7-8750H, Simulink models.
@@ -255,14 +259,14 @@ def _wide_csv_header(algorithms: Sequence[str]) -> list[str]:
 # ----------------------------------------------------------------------------- figures
 
 
-def _bars(spec: Any, cells: dict[tuple[str, str], Cell], field: str, ylabel: str, title: str,
-          path: Path) -> Path:
+def bar_figure(spec: Any, cells: dict[tuple[str, str], Cell], field: str, ylabel: str,
+               title: str) -> "Figure":
+    """Grouped bars of the mean of ``field`` (``"error"``, ``"time"``...) per scenario and
+    algorithm, whiskers from the minimum to the maximum over the runs (Figs. 7 and 8)."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
-
-    from emaphm.plots import save_figure
 
     scen = [s.name for s in spec.scenarios]
     algos = [a.label for a in spec.algorithms]
@@ -284,7 +288,7 @@ def _bars(spec: Any, cells: dict[tuple[str, str], Cell], field: str, ylabel: str
     ax.set_title(title, fontsize=10)
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=8, ncols=min(n_a, 5))
-    return save_figure(fig, path)
+    return fig
 
 
 def _curve(r: RunResult) -> tuple[np.ndarray, np.ndarray]:
@@ -301,13 +305,13 @@ def _curve(r: RunResult) -> tuple[np.ndarray, np.ndarray]:
     return x, h
 
 
-def _convergence(spec: Any, results: list[RunResult], path: Path) -> Path | None:
+def convergence_figure(spec: Any, results: list[RunResult]) -> "Figure | None":
+    """Median best fitness against evaluations over the runs of up to four scenarios, one
+    line and a 25-75 % band per algorithm; None when no run has a history."""
     import matplotlib
 
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
-
-    from emaphm.plots import save_figure
 
     names = [s.name for s in spec.scenarios]
     preferred = [n for n in ("friction-high", "short-circuit-high", "gain-high", "multiple") if n in names]
@@ -351,7 +355,7 @@ def _convergence(spec: Any, results: list[RunResult], path: Path) -> Path | None
         ax.set_visible(False)
     fig.suptitle("Convergence: median best fitness over the runs, band from the 25th to the "
                  "75th percentile", fontsize=10)
-    return save_figure(fig, path)
+    return fig
 
 
 # ----------------------------------------------------------------------------- report
@@ -485,19 +489,22 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
          (r.error_text or "").splitlines()[-1] if r.error_text else ""] for r in results]))
 
     if figures and ok:
+        from emaphm.plots import save_figure
+
         md.append("## Figures\n")
-        p = _bars(spec, cells, "error", "identification error, Eq. 9 [%]",
-                  "Mean error per scenario and algorithm; whiskers: min to max over the runs (cf. the paper's Fig. 7)",
-                  out / "fig7_error.png")
+        p = save_figure(bar_figure(spec, cells, "error", "identification error, Eq. 9 [%]",
+                                   "Mean error per scenario and algorithm; whiskers: min to max "
+                                   "over the runs (cf. the paper's Fig. 7)"), out / "fig7_error.png")
         written.append(p)
         md.append(f"![error per scenario]({p.name})\n")
-        p = _bars(spec, cells, "time", "identification time [s]",
-                  "Mean time per scenario and algorithm; whiskers: min to max over the runs (cf. the paper's Fig. 8)",
-                  out / "fig8_time.png")
+        p = save_figure(bar_figure(spec, cells, "time", "identification time [s]",
+                                   "Mean time per scenario and algorithm; whiskers: min to max "
+                                   "over the runs (cf. the paper's Fig. 8)"), out / "fig8_time.png")
         written.append(p)
         md.append(f"![time per scenario]({p.name})\n")
-        p = _convergence(spec, ok, out / "convergence.png")
-        if p is not None:
+        conv = convergence_figure(spec, ok)
+        if conv is not None:
+            p = save_figure(conv, out / "convergence.png")
             written.append(p)
             md.append(f"![convergence]({p.name})\n")
 

@@ -45,10 +45,12 @@ from ..faults import as_k, check_fault_model
 from ..params import ActuatorParams, siemens_1fk7060
 from ..profiles import Profile, diagnostic
 from ._jit import jit
+from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
+                                 STATUS_TRIPPED, _check_step)
 from .controller import control_step
 from .inverter import modulate, overcurrent
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
-                     C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX,
+                     C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, P_C_L, P_C_M, P_I_MAX,
                      P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
                      P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
                      PopulationPacker)
@@ -59,26 +61,12 @@ from .pmsm import (back_emf_coeffs, phase_currents, torque_loops, winding_input,
 __all__ = ["MonitoringModel", "PopulationResult", "simulate_reference", "I_DIVERGED",
            "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
 
-I_DIVERGED = 1e4        # A
-OMEGA_DIVERGED = 1e5    # rad/s
-STATUS_OK = 0
-STATUS_DIVERGED = 1
-STATUS_TRIPPED = 2
-
 #: Candidates left over after the SIMD kernel's full blocks that :class:`MonitoringModel`
 #: runs in the scalar kernel instead: one alone costs about half a block of vector lanes
-#: (``benchmarks/bench_models.py`` measures both side by side), so a lone remainder (a
-#: least-squares step, a finite-difference Jacobian of 8 plus its centre) is cheaper
+#: (``benchmarks/bench_models.py --small-batches-only`` measures it), so a lone remainder
+#: (a least-squares step, a finite-difference Jacobian of 8 plus its centre) is cheaper
 #: outside the lanes.
 SCALAR_TAIL = 1
-
-
-@jit
-def _check_step(P, n_sub):
-    """The electrics in CP were packed for the sub-step ``T_s / n_sub``."""
-    if P[P_DT] != P[P_T_S] / n_sub:
-        raise ValueError("CP holds the winding step for another n_sub: pack the population "
-                         "with the n_sub the kernel runs")
 
 
 @jit
@@ -349,7 +337,7 @@ class MonitoringModel:
         if self.kernel == "scalar":
             parts = [(slice(0, n_pop), _kernel)]
         else:
-            from .monitoring_simd import LANES, _kernel as simd   # imports this module's constants
+            from .monitoring_simd import LANES, _kernel as simd
             # full blocks of LANES in vector lanes; a remainder of SCALAR_TAIL or fewer
             # candidates one by one (a block costs about as much as two of them alone)
             tail = n_pop % LANES

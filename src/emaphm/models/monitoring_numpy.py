@@ -41,7 +41,7 @@ from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAM
                      C_MU_A, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI,
                      P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
                      P_V_DC, P_THETA0, P_I_TRIP)
-from .monitoring import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
+from ._monitoring_common import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
 from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
                    winding_step)
 

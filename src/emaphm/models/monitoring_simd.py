@@ -68,8 +68,8 @@ from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_F
                      C_GAMMA, C_KP, C_MU_A, C_PHI, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_J_L, P_J_M,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
                      P_T_MAX, P_T_S, P_THETA0, P_V_DC)
-from .monitoring import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED,
-                         _check_step)
+from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
+                                 STATUS_TRIPPED, _check_step)
 from .pmsm import COS_2PI_3, SIN_2PI_3
 
 #: Compile a function into its caller at Numba IR level. LLVM's inliner leaves the larger

@@ -183,14 +183,15 @@ def _history_table(data: Any) -> str:
     from ..faults import K_NAMES
 
     unit = data.actuator.time_unit
-    head = f"{'time [' + unit + ']':>12s}  " + " ".join(f"{n[:9]:>9s}" for n in K_NAMES) + "  verdict"
+    w = max(len(n) for n in K_NAMES)                 # full names: ecc_modulus, not ecc_modul
+    head = f"{'time [' + unit + ']':>12s}  " + " ".join(f"{n:>{w}s}" for n in K_NAMES) + "  verdict"
     lines = [head]
     for ins in data.inspections:
-        row = f"{ins.time:12g}  " + " ".join(f"{x:9.4f}" for x in ins.k)
+        row = f"{ins.time:12g}  " + " ".join(f"{x:{w}.4f}" for x in ins.k)
         verdict = "-" if ins.healthy is None else ("healthy" if ins.healthy else "FAULTY: " + ", ".join(
             sorted({f["mode"] for f in (ins.diagnosis or {}).get("faults", [])})))
         lines.append(row + "  " + verdict)
-        lines.append(f"{'':12s}  " + " ".join(f"{'+-' + format(0.5 * (h - l), '.4f'):>9s}"
+        lines.append(f"{'':12s}  " + " ".join(f"{'+-' + format(0.5 * (h - l), '.4f'):>{w}s}"
                                                for l, h in zip(ins.k_lo, ins.k_hi)))
     return "\n".join(lines)
 

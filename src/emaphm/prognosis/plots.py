@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from .history import HistoryData
     from .trends import Prognosis, RULTrack
 
-__all__ = ["plot_history", "plot_prognosis", "plot_alpha_lambda"]
+__all__ = ["plot_history", "plot_prognosis", "plot_alpha_lambda", "ALPHA_LAMBDA_Y_MAX"]
 
 
 def _figure(width: float, height: float) -> "Figure":
@@ -174,7 +174,7 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
                      fontsize=9)
         top = max(p.threshold * 1.25, float(np.nanmax(series[name])) * 1.1)
         ax.set_ylim(min(0.0, float(np.nanmin(series[name])) - 0.01), top)
-        ax.set_ylabel(name + (" (k8 - 0.5, signed)" if name == "gain_drift" else ""))
+        ax.set_ylabel(name + (" (k8 - 0.5, signed)" if name == "gain_drift" else "") + " [-]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="upper left")
     axes[-1].set_xlabel(f"time [{_unit(prog.time_unit)}]")
@@ -185,42 +185,101 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
     return fig
 
 
+#: Highest RUL / EoL the alpha-lambda plot draws: larger values (and intervals without an
+#: upper bound) are clipped to the top edge, drawn as up-triangles and counted in a note.
+ALPHA_LAMBDA_Y_MAX = 2.5
+
+
 def plot_alpha_lambda(tracks: Sequence["RULTrack"], eol: float | Sequence[float], *,
                       alpha: float = 0.2, labels: Sequence[str] | None = None,
                       time_unit: str = "h", ax: Any = None, title: str | None = None,
-                      path: str | os.PathLike[str] | None = None) -> "Figure":
+                      path: str | os.PathLike[str] | None = None,
+                      y_max: float = ALPHA_LAMBDA_Y_MAX) -> "Figure":
     """Alpha-lambda plot: predicted RUL (median and interval) against the true RUL and
     its ``(1 +- alpha)`` cone, for one or several tracks (the same scenario's histories).
 
-    The time axis is the share of life ``lambda = t / EoL`` so that tracks of
-    different lives overlay.
+    The time axis is the share of life ``t / EoL`` so that tracks of different lives
+    overlay; the RUL axis is ``RUL / EoL``. A dotted line marks mid-life (``t = EoL / 2``),
+    from which the coverage of the true RUL is counted. Nothing leaves the axes silently:
+    the axes reach every finite value up to ``y_max`` (and every prediction time); a
+    median or an upper bound above ``y_max``, an upper bound that is infinite (no upper
+    bound) and a median that is infinite (the threshold not reached) are drawn at the top
+    edge as up-triangles, and a note on the panel says how many.
     """
+
     eols = np.broadcast_to(np.asarray(eol, dtype=float), (len(tracks),))
     if ax is None:
         fig = _figure(7, 4.5)
         ax = fig.subplots()
     else:
         fig = ax.figure
+    xs, meds, los, his = [], [], [], []
+    for tr, e in zip(tracks, eols):
+        xs.append(np.asarray(tr.times, dtype=float) / e)
+        meds.append(np.asarray(tr.median, dtype=float) / e)   # +inf: threshold not reached
+        los.append(np.asarray(tr.lo, dtype=float) / e)
+        his.append(np.asarray(tr.hi, dtype=float) / e)         # +inf: no upper bound
+    finite = [v[np.isfinite(v)] for v in (*meds, *los, *his)]
+    finite = np.concatenate(finite) if finite else np.zeros(0)
+    top = 1.3 if finite.size == 0 else float(min(max(1.3, 1.05 * finite.max()), y_max))
+    bottom = 0.0 if finite.size == 0 else float(min(0.0, 1.05 * finite.min()))
+    x_right = max([1.0] + [float(x.max()) * 1.02 for x in xs if x.size])
+    edge = top - 0.01 * (top - bottom)                # where clipped values are drawn
+
     lam = np.linspace(0, 1, 50)
     ax.plot(lam, 1 - lam, color="k", lw=1.2, label="true RUL")
     ax.fill_between(lam, (1 - alpha) * (1 - lam), (1 + alpha) * (1 - lam), color="0.5", alpha=0.2,
-                    lw=0, label=f"alpha = {alpha:g} cone")
-    for i, (tr, e) in enumerate(zip(tracks, eols)):
-        x = tr.times / e
-        lo = np.where(np.isfinite(tr.lo), tr.lo, np.nan) / e
-        hi = np.where(np.isfinite(tr.hi), tr.hi, 2 * e) / e
-        med = np.where(np.isfinite(tr.median), tr.median, np.nan) / e
-        lab = labels[i] if labels is not None else None
+                    lw=0, label=f"alpha = {alpha:g} cone: true RUL +-{alpha:.0%}")
+    n_med_out = n_med_inf = n_hi_out = n_hi_inf = 0
+    many = len(tracks) >= 5
+    for i, (tr, x, med, lo, hi) in enumerate(zip(tracks, xs, meds, los, his)):
         c = f"C{i % 10}" if len(tracks) <= 10 else "C0"
-        ax.errorbar(x + 0.002 * (i - len(tracks) / 2), med,
-                    yerr=np.vstack([np.clip(med - lo, 0, None), np.clip(hi - med, 0, None)]),
-                    fmt="o", ms=3, color=c, ecolor=c, elinewidth=0.8, alpha=0.8 if len(tracks) < 5 else 0.35,
+        if labels is not None:
+            lab = labels[i]
+        elif i == 0:
+            lab = (f"predicted RUL: median, {tr.level:.0%} interval"
+                   + (f" ({len(tracks)} histories)" if len(tracks) > 1 else ""))
+        else:
+            lab = None
+        x = x + 0.002 * (i - len(tracks) / 2)
+        med_in = np.isfinite(med) & (med <= top)
+        med_up = ~med_in & ~np.isnan(med)              # above the axis or not reached
+        n_med_out += int(np.sum(med_up & np.isfinite(med)))
+        n_med_inf += int(np.sum(np.isinf(med)))
+        hi_up = ~(np.isfinite(hi) & (hi <= top))
+        n_hi_out += int(np.sum(hi_up & np.isfinite(hi)))
+        n_hi_inf += int(np.sum(np.isinf(hi)))
+        y = np.where(med_in, med, np.where(med_up, edge, np.nan))
+        hi_c = np.where(hi_up, edge, hi)
+        lo_c = np.where(np.isfinite(lo), np.minimum(lo, edge), y)
+        ax.errorbar(x[med_in], y[med_in],
+                    yerr=np.vstack([np.clip(y - lo_c, 0, None), np.clip(hi_c - y, 0, None)])[:, med_in],
+                    fmt="o", ms=3, color=c, ecolor=c, elinewidth=0.8, alpha=0.35 if many else 0.8,
                     label=lab)
-    ax.axvline(0.5, color="C3", ls=":", lw=0.8)
-    ax.set_xlim(0, 1)
-    ax.set_ylim(0, 1.3)
-    ax.set_xlabel("share of life t / EoL")
-    ax.set_ylabel("RUL / EoL")
+        if med_up.any():
+            ax.vlines(x[med_up], lo_c[med_up], edge, color=c, lw=0.8, alpha=0.35 if many else 0.8)
+        clipped = med_up | (med_in & hi_up)
+        if clipped.any():
+            ax.plot(x[clipped], np.full(int(clipped.sum()), edge), "^", ms=5, color=c,
+                    alpha=0.5 if many else 0.9)
+    ax.axvline(0.5, color="C3", ls=":", lw=0.8, label="mid-life (t = EoL / 2)")
+    ax.set_xlim(0, x_right)
+    ax.set_ylim(bottom, top)
+    if n_med_out + n_med_inf + n_hi_out + n_hi_inf:
+        ax.plot([], [], "^", ms=5, color="0.3", label=f"off the axis (above {top:.2g})")
+        parts = []
+        if n_med_out or n_med_inf:
+            parts.append(f"{n_med_out + n_med_inf} median{'s' if n_med_out + n_med_inf != 1 else ''}"
+                         + (f" ({n_med_inf} threshold not reached)" if n_med_inf else ""))
+        if n_hi_out or n_hi_inf:
+            parts.append(f"{n_hi_out + n_hi_inf} upper bound{'s' if n_hi_out + n_hi_inf != 1 else ''}"
+                         + (f" ({n_hi_inf} unbounded)" if n_hi_inf else ""))
+        ax.text(0.01, 0.02, "above the axis, drawn at its edge: " + ", ".join(parts),
+                transform=ax.transAxes, ha="left", va="bottom", fontsize=7, color="0.2")
+    same = len(tracks) > 0 and bool(np.all(eols == eols[0]))
+    life = f"; EoL = {eols[0]:g} {_unit(time_unit)}" if same else ""
+    ax.set_xlabel(f"share of life t / EoL [-]{life}")
+    ax.set_ylabel("RUL / EoL [-]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=7, loc="upper right")
     if title:

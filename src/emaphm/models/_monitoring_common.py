@@ -1,0 +1,31 @@
+"""What the monitoring model's kernels share: the physical range a candidate must stay
+in, the status codes a candidate ends with, and the check that the packed parameters
+fit the kernel's step. :mod:`~emaphm.models.monitoring` (the scalar kernel and the
+model), :mod:`~emaphm.models.monitoring_simd` and :mod:`~emaphm.models.monitoring_numpy`
+import them from here, so no kernel module imports another for them."""
+
+from __future__ import annotations
+
+from ._jit import jit
+from .layout import P_DT, P_T_S
+
+__all__ = ["I_DIVERGED", "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
+
+#: A candidate whose phase current exceeds this [A] has diverged (frozen, fitness inf).
+I_DIVERGED = 1e4
+#: A candidate whose motor speed exceeds this [rad/s] has diverged.
+OMEGA_DIVERGED = 1e5
+#: Status of a candidate: ran to the end within the physical range.
+STATUS_OK = 0
+#: Status: left the physical range (or went non-finite) and was frozen there.
+STATUS_DIVERGED = 1
+#: Status: the drive tripped on overcurrent and went on in active short circuit.
+STATUS_TRIPPED = 2
+
+
+@jit
+def _check_step(P, n_sub):
+    """The electrics in CP were packed for the sub-step ``T_s / n_sub``."""
+    if P[P_DT] != P[P_T_S] / n_sub:
+        raise ValueError("CP holds the winding step for another n_sub: pack the population "
+                         "with the n_sub the kernel runs")

@@ -1,0 +1,397 @@
+"""The trace container: :class:`Trace`, its columns and units, its JSON metadata, and
+:func:`resample` (a trace on another time grid). Validation lives in
+:mod:`emaphm.traces.validation`, the file formats in :mod:`emaphm.traces.files`."""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import json
+import math
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["COLUMNS", "OPTIONAL_COLUMNS", "UNITS", "TraceError", "Trace", "resample"]
+
+COLUMNS: tuple[str, ...] = ("t", "theta_ref", "theta_m", "omega_m", "i_a", "i_b", "i_c")
+OPTIONAL_COLUMNS: tuple[str, ...] = ("torque",)
+UNITS: dict[str, str] = {
+    "t": "s",
+    "theta_ref": "rad",
+    "theta_m": "rad",
+    "omega_m": "rad/s",
+    "i_a": "A",
+    "i_b": "A",
+    "i_c": "A",
+    "torque": "N m",
+}
+
+
+_FIELDS_1D = ("t", "theta_ref", "theta_m", "omega_m")
+
+
+class TraceError(ValueError):
+    """A trace, or a trace file, that cannot be used as it is.
+
+    The message says what is wrong, where (column, first bad row and its time) and how to
+    fix it.
+    """
+
+
+def _expected_columns() -> str:
+    req = ", ".join(f"{c} [{UNITS[c]}]" for c in COLUMNS)
+    opt = ", ".join(f"{c} [{UNITS[c]}]" for c in OPTIONAL_COLUMNS)
+    return f"{req} (optional: {opt})"
+
+
+# --------------------------------------------------------------------------------------
+# JSON metadata
+# --------------------------------------------------------------------------------------
+
+
+def _jsonable(obj: Any, where: str = "meta") -> Any:
+    """Return ``obj`` as plain JSON types (dict with str keys, list, str, int, float, bool, None).
+
+    numpy arrays become (nested) lists and numpy scalars Python scalars; tuples become
+    lists; dataclass instances become dicts of their fields; paths become strings; enums
+    their value. Anything else raises :class:`TraceError` naming the key path.
+    """
+    if obj is None or isinstance(obj, (bool, str)):
+        return obj
+    if isinstance(obj, int):
+        return int(obj)
+    if isinstance(obj, float):
+        return float(obj)
+    if isinstance(obj, np.ndarray):
+        if obj.dtype.kind not in "biuf":
+            raise TraceError(
+                f"{where} is a numpy array of dtype {obj.dtype}, which cannot be stored as "
+                "JSON metadata; store a real-valued array (or a list of str) instead"
+            )
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        if isinstance(obj, np.bool_):
+            return bool(obj)
+        if isinstance(obj, np.integer):
+            return int(obj)
+        if isinstance(obj, np.floating):
+            return float(obj)
+        if isinstance(obj, np.str_):
+            return str(obj)
+        raise TraceError(
+            f"{where} is a numpy {type(obj).__name__}, which cannot be stored as JSON "
+            "metadata; convert it to a float, int, str or bool"
+        )
+    if isinstance(obj, enum.Enum):
+        return _jsonable(obj.value, where)
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        obj = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
+    if isinstance(obj, Mapping):
+        out = {}
+        for key, value in obj.items():
+            if not isinstance(key, str):
+                raise TraceError(
+                    f"{where} has the key {key!r} of type {type(key).__name__}; JSON "
+                    f"metadata keys must be str, use {str(key)!r} instead"
+                )
+            out[key] = _jsonable(value, f"{where}[{key!r}]")
+        return out
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v, f"{where}[{i}]") for i, v in enumerate(obj)]
+    raise TraceError(
+        f"{where} is a {type(obj).__module__}.{type(obj).__qualname__}, which cannot be "
+        "stored as JSON metadata; store plain data instead (str, int, float, bool, None, "
+        "lists, dicts with str keys, numpy arrays or scalars, dataclasses of those)"
+    )
+
+
+# --------------------------------------------------------------------------------------
+# Trace
+# --------------------------------------------------------------------------------------
+
+
+def _as_readonly(name: str, value: Any, ndim: int) -> np.ndarray:
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and not value.flags.writeable:
+        arr = value  # already frozen (e.g. taken from another Trace): share it
+    else:
+        try:
+            arr = np.array(value, dtype=np.float64, copy=True)
+        except (TypeError, ValueError) as exc:
+            raise TraceError(
+                f"Trace.{name} cannot be converted to a float64 array ({exc}); pass a "
+                "real-valued numeric array"
+            ) from None
+        arr.setflags(write=False)
+    if arr.ndim != ndim:
+        shape = "(n,)" if ndim == 1 else "(n, 3)"
+        raise TraceError(
+            f"Trace.{name} has shape {arr.shape}, expected {shape}; pass a "
+            f"{ndim}-D array"
+        )
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Trace:
+    """Signals of one actuator run on one uniform time grid (SI units).
+
+    ===========  ========  =======  ==============================================
+    field        shape     unit     meaning
+    ===========  ========  =======  ==============================================
+    t            (n,)      s        time, uniform and strictly increasing
+    theta_ref    (n,)      rad      position command
+    theta_m      (n,)      rad      motor position
+    omega_m      (n,)      rad/s    motor speed
+    i_abc        (n, 3)    A        phase currents a, b, c
+    torque       (n,)      N m      motor torque T_m, or None (measured traces)
+    meta         dict               JSON metadata, see below
+    ===========  ========  =======  ==============================================
+
+    Arrays are copied to float64 and made read-only (an input that already is a read-only
+    float64 array is shared, not copied). Construction checks shapes only; use
+    :func:`validate` for the physics checks.
+
+    ``meta`` is normalised to plain JSON types on construction (numpy arrays -> lists,
+    numpy scalars -> Python scalars, tuples -> lists, dataclasses -> dicts), so a trace
+    and its written-and-read copy carry equal metadata. Conventional keys: ``"model"``
+    (str), ``"k"`` (8 floats or None), ``"parameters"`` (nested dict), ``"profile"``
+    (str or dict), ``"seed"`` (int or None), ``"units"`` (column -> unit string, checked
+    by :func:`validate`); anything else is allowed.
+
+    Two traces compare equal when all arrays are bitwise equal (NaN equal to NaN) and the
+    metadata is equal.
+    """
+
+    t: np.ndarray
+    theta_ref: np.ndarray
+    theta_m: np.ndarray
+    omega_m: np.ndarray
+    i_abc: np.ndarray
+    torque: np.ndarray | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for name in _FIELDS_1D:
+            object.__setattr__(self, name, _as_readonly(name, getattr(self, name), 1))
+        n = self.t.shape[0]
+        for name in _FIELDS_1D[1:]:
+            if getattr(self, name).shape != (n,):
+                raise TraceError(
+                    f"Trace.{name} has {getattr(self, name).shape[0]} samples but t has "
+                    f"{n}; all signals must share the time grid t"
+                )
+        i_abc = _as_readonly("i_abc", self.i_abc, 2)
+        if i_abc.shape != (n, 3):
+            raise TraceError(
+                f"Trace.i_abc has shape {i_abc.shape}, expected ({n}, 3) (one column per "
+                "phase a, b, c, one row per sample of t); stack the phases with "
+                "numpy.column_stack([i_a, i_b, i_c])"
+            )
+        object.__setattr__(self, "i_abc", i_abc)
+        if self.torque is not None:
+            torque = _as_readonly("torque", self.torque, 1)
+            if torque.shape != (n,):
+                raise TraceError(
+                    f"Trace.torque has {torque.shape[0]} samples but t has {n}; pass a "
+                    "torque sampled on t, or None"
+                )
+            object.__setattr__(self, "torque", torque)
+        if not isinstance(self.meta, Mapping):
+            raise TraceError(
+                f"Trace.meta is a {type(self.meta).__name__}, expected a dict; pass e.g. "
+                "meta={'model': 'reference'}"
+            )
+        object.__setattr__(self, "meta", _jsonable(self.meta))
+
+    # ----------------------------------------------------------------------- properties
+    @property
+    def n(self) -> int:
+        """Number of samples."""
+        return int(self.t.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """Mean time step (t[-1] - t[0]) / (n - 1), s; NaN when n < 2."""
+        if self.n < 2:
+            return math.nan
+        return float((self.t[-1] - self.t[0]) / (self.n - 1))
+
+    @property
+    def duration(self) -> float:
+        """t[-1] - t[0], s (0 for fewer than two samples)."""
+        if self.n < 2:
+            return 0.0
+        return float(self.t[-1] - self.t[0])
+
+    @property
+    def i_a(self) -> np.ndarray:
+        """Phase current a, A (read-only view of ``i_abc[:, 0]``)."""
+        return self.i_abc[:, 0]
+
+    @property
+    def i_b(self) -> np.ndarray:
+        """Phase current b, A (read-only view of ``i_abc[:, 1]``)."""
+        return self.i_abc[:, 1]
+
+    @property
+    def i_c(self) -> np.ndarray:
+        """Phase current c, A (read-only view of ``i_abc[:, 2]``)."""
+        return self.i_abc[:, 2]
+
+    # -------------------------------------------------------------------------- helpers
+    def columns(self) -> dict[str, np.ndarray]:
+        """The signals as 1-D read-only arrays: :data:`COLUMNS` order, then ``torque`` if set."""
+        cols = {name: getattr(self, name) for name in COLUMNS}
+        if self.torque is not None:
+            cols["torque"] = self.torque
+        return cols
+
+    @classmethod
+    def from_columns(cls, columns: Mapping[str, Any], meta: Mapping | None = None) -> Trace:
+        """Build a trace from a mapping of column name -> 1-D array.
+
+        Needs every name of :data:`COLUMNS`; ``torque`` is used when present; other keys
+        are ignored.
+        """
+        _require_columns(columns.keys())
+        try:
+            phases = [np.asarray(columns[p], dtype=np.float64) for p in ("i_a", "i_b", "i_c")]
+        except (TypeError, ValueError) as exc:
+            raise TraceError(
+                f"phase current columns cannot be converted to float64 arrays ({exc}); "
+                "pass real-valued numeric arrays"
+            ) from None
+        if any(p.ndim != 1 for p in phases) or len({p.shape for p in phases}) != 1:
+            shapes = {p: np.shape(columns[p]) for p in ("i_a", "i_b", "i_c")}
+            raise TraceError(
+                f"phase current columns must be 1-D arrays of one length, got shapes "
+                f"{shapes}; pass one array of shape (n,) per phase"
+            )
+        i_abc = np.column_stack(phases)
+        return cls(
+            t=columns["t"],
+            theta_ref=columns["theta_ref"],
+            theta_m=columns["theta_m"],
+            omega_m=columns["omega_m"],
+            i_abc=i_abc,
+            torque=columns.get("torque"),
+            meta=dict(meta) if meta is not None else {},
+        )
+
+    def with_meta(self, **updates: Any) -> Trace:
+        """A copy with ``meta`` updated by ``updates`` (arrays are shared, not copied)."""
+        return dataclasses.replace(self, meta={**self.meta, **updates})
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Trace):
+            return NotImplemented
+        if (self.torque is None) != (other.torque is None):
+            return False
+        names = ("t", "theta_ref", "theta_m", "omega_m", "i_abc", "torque")
+        for name in names:
+            a, b = getattr(self, name), getattr(other, name)
+            if a is None:
+                continue
+            if a.shape != b.shape or not _bitwise_equal(a, b):
+                return False
+        return json.dumps(self.meta, sort_keys=True) == json.dumps(other.meta, sort_keys=True)
+
+    __hash__ = None  # type: ignore[assignment]  # holds arrays and a dict
+
+    def __repr__(self) -> str:
+        torque = "yes" if self.torque is not None else "no"
+        return (
+            f"Trace(n={self.n}, dt={self.dt:.6g} s, duration={self.duration:.6g} s, "
+            f"torque={torque}, meta keys={sorted(self.meta)})"
+        )
+
+
+def _bitwise_equal(a: np.ndarray, b: np.ndarray) -> bool:
+    nan_a, nan_b = np.isnan(a), np.isnan(b)
+    if not np.array_equal(nan_a, nan_b):
+        return False
+    keep = ~nan_a
+    return bool(np.array_equal(a[keep].view(np.uint64), b[keep].view(np.uint64)))
+
+
+def _require_columns(found: Any, source: str = "") -> None:
+    found = list(found)
+    missing = [c for c in COLUMNS if c not in found]
+    if missing:
+        prefix = f"{source}: " if source else ""
+        raise TraceError(
+            f"{prefix}missing column(s) {missing}; found {found}. A trace needs the "
+            f"columns {_expected_columns()}; rename the columns of the export to these "
+            "names (units as given in brackets)"
+        )
+
+
+# --------------------------------------------------------------------------------------
+# Resampling
+# --------------------------------------------------------------------------------------
+
+
+def resample(trace: Trace, t_new: Any) -> Trace:
+    """Linearly interpolate every signal of ``trace`` onto the time grid ``t_new`` (s).
+
+    ``t_new`` must be 1-D, finite, strictly increasing and lie inside
+    ``[t[0], t[-1]]`` give or take half a mean step; points in that margin are
+    extrapolated linearly from the end segment. ``trace.t`` must be strictly increasing
+    (uniformity is not needed: this is how irregular bench traces are put on a uniform
+    grid). The metadata is kept unchanged.
+    """
+    if not isinstance(trace, Trace):
+        raise TypeError(f"resample() needs a Trace, got {type(trace).__name__}")
+    t = trace.t
+    if trace.n < 2:
+        raise TraceError(
+            f"cannot resample a trace of {trace.n} sample(s); at least 2 are needed"
+        )
+    if not np.all(np.isfinite(t)) or not np.all(np.diff(t) > 0):
+        raise TraceError(
+            "cannot resample: trace.t must be finite and strictly increasing; sort the "
+            "samples by time and drop duplicated or non-finite time stamps first"
+        )
+    try:
+        t_new = np.array(t_new, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise TraceError(f"t_new cannot be converted to a float64 array ({exc})") from None
+    if t_new.ndim != 1 or t_new.shape[0] == 0:
+        raise TraceError(f"t_new must be a non-empty 1-D array, got shape {t_new.shape}")
+    if not np.all(np.isfinite(t_new)) or not np.all(np.diff(t_new) > 0):
+        raise TraceError(
+            "t_new must be finite and strictly increasing; build it with e.g. "
+            "numpy.linspace(trace.t[0], trace.t[-1], n)"
+        )
+    half = 0.5 * trace.dt
+    lo, hi = t[0] - half, t[-1] + half
+    if t_new[0] < lo or t_new[-1] > hi:
+        raise TraceError(
+            f"t_new spans [{t_new[0]:.9g}, {t_new[-1]:.9g}] s, outside the trace "
+            f"[{t[0]:.9g}, {t[-1]:.9g}] s (tolerance half a step, {half:.3g} s); "
+            "resampling does not extrapolate, keep t_new inside the recorded time"
+        )
+    idx = np.clip(np.searchsorted(t, t_new, side="right") - 1, 0, trace.n - 2)
+    t0, t1 = t[idx], t[idx + 1]
+    w = ((t_new - t0) / (t1 - t0))[:, None]
+    signals = np.column_stack(
+        [trace.theta_ref, trace.theta_m, trace.omega_m, trace.i_abc]
+        + ([trace.torque] if trace.torque is not None else [])
+    )
+    y0, y1 = signals[idx], signals[idx + 1]
+    out = np.where(w == 1.0, y1, y0 + w * (y1 - y0))
+    return Trace(
+        t=t_new,
+        theta_ref=out[:, 0],
+        theta_m=out[:, 1],
+        omega_m=out[:, 2],
+        i_abc=out[:, 3:6],
+        torque=out[:, 6] if trace.torque is not None else None,
+        meta=trace.meta,
+    )

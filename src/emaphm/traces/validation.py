@@ -1,0 +1,368 @@
+"""Validation of a trace (:func:`validate`): SI units (declared, and judged from the
+signals: time in s, currents in A, speed against the derivative of the position), enough
+clean samples on a uniform grid, one revolution of motion, a star connection."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from .container import UNITS, Trace, TraceError, _expected_columns
+
+__all__ = ["MIN_SAMPLES", "validate"]
+
+#: Fewest samples :func:`validate` accepts.
+MIN_SAMPLES = 100
+
+# Unit heuristics of validate().
+_MAX_TIME_STEP = 0.01  # s; a larger step suggests milliseconds
+_MAX_DURATION = 1e3  # s; a longer trace suggests milliseconds
+_MAX_CURRENT = 1e3  # A; a larger current suggests milliamperes
+_MIN_SPEED_CORRELATION = 0.9  # omega_m vs d(theta_m)/dt must be this collinear to judge units
+_RATIO_TOLERANCE = 0.10  # relative distance of a speed ratio to a known factor
+_RATIO_BAND = (0.5, 2.0)  # ratios outside this band (and not a known factor) are an error
+# Star connection checks of validate().
+_STAR_MEAN_LIMIT = 0.10  # |mean(i_a+i_b+i_c)| / RMS phase current
+_STAR_AC_LIMIT = 0.25  # RMS of the noise-free part of the sum / that of the phase currents
+
+
+# --------------------------------------------------------------------------------------
+# Units
+# --------------------------------------------------------------------------------------
+
+_SI_SPELLINGS: dict[str, set[str]] = {
+    "s": {"s", "sec", "second", "seconds"},
+    "rad": {"rad", "radian", "radians"},
+    "rad/s": {"rad/s", "rad/sec", "rad s^-1", "rad*s^-1", "rad s-1", "rad.s-1", "rad s⁻¹"},
+    "A": {"a", "amp", "amps", "ampere", "amperes"},
+    "N m": {"n m", "nm", "n*m", "n.m", "n·m", "n-m", "newton metre", "newton meter"},
+}
+# unit (lower case) -> (SI unit, factor to SI, how to write the factor)
+_NON_SI: dict[str, tuple[str, float, str]] = {
+    "ms": ("s", 1e-3, "0.001 (divide by 1000)"),
+    "us": ("s", 1e-6, "1e-6"),
+    "µs": ("s", 1e-6, "1e-6"),
+    "μs": ("s", 1e-6, "1e-6"),
+    "min": ("s", 60.0, "60"),
+    "h": ("s", 3600.0, "3600"),
+    "deg": ("rad", math.pi / 180, "pi/180"),
+    "degree": ("rad", math.pi / 180, "pi/180"),
+    "degrees": ("rad", math.pi / 180, "pi/180"),
+    "°": ("rad", math.pi / 180, "pi/180"),
+    "rev": ("rad", 2 * math.pi, "2*pi"),
+    "revs": ("rad", 2 * math.pi, "2*pi"),
+    "revolutions": ("rad", 2 * math.pi, "2*pi"),
+    "turn": ("rad", 2 * math.pi, "2*pi"),
+    "turns": ("rad", 2 * math.pi, "2*pi"),
+    "rpm": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
+    "r/min": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
+    "rev/min": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
+    "1/min": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
+    "rps": ("rad/s", 2 * math.pi, "2*pi"),
+    "rev/s": ("rad/s", 2 * math.pi, "2*pi"),
+    "deg/s": ("rad/s", math.pi / 180, "pi/180"),
+    "°/s": ("rad/s", math.pi / 180, "pi/180"),
+    "degree/s": ("rad/s", math.pi / 180, "pi/180"),
+    "degrees/s": ("rad/s", math.pi / 180, "pi/180"),
+    "ma": ("A", 1e-3, "0.001 (divide by 1000)"),
+    "ka": ("A", 1e3, "1000"),
+    "mn m": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "mnm": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "mn*m": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "mn.m": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "mn·m": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "n mm": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "n*mm": ("N m", 1e-3, "0.001 (divide by 1000)"),
+    "nmm": ("N m", 1e-3, "0.001 (divide by 1000)"),
+}
+
+
+def _unbracket(unit: str) -> str:
+    unit = unit.strip()
+    if len(unit) >= 2 and unit[0] + unit[-1] in ("[]", "()"):
+        unit = unit[1:-1].strip()
+    return unit
+
+
+def _normalise_unit(unit: str) -> str:
+    return " ".join(_unbracket(unit).split()).lower()
+
+
+def _check_unit(column: str, unit: Any, source: str) -> None:
+    """Raise TraceError unless ``unit`` is empty or an SI spelling of ``UNITS[column]``."""
+    expected = UNITS[column]
+    if not isinstance(unit, str):
+        raise TraceError(
+            f"{source}: the unit of column '{column}' is {unit!r}, expected the string "
+            f"'{expected}'"
+        )
+    u = _normalise_unit(unit)
+    if u in ("", "-"):
+        return
+    if u in _SI_SPELLINGS[expected]:
+        return
+    if u in _NON_SI:
+        si, _factor, how = _NON_SI[u]
+        if si == expected:
+            raise TraceError(
+                f"{source}: column '{column}' is in '{_unbracket(unit)}', emaphm needs SI "
+                f"units ({expected}); multiply the column by {how} to convert it to "
+                f"{expected} and change its unit to '{expected}'"
+            )
+    for si, spellings in _SI_SPELLINGS.items():
+        if u in spellings or (u in _NON_SI and _NON_SI[u][0] == si):
+            raise TraceError(
+                f"{source}: column '{column}' has the unit '{_unbracket(unit)}' (a unit of "
+                f"{si}), but '{column}' must be in {expected}; check the column "
+                f"assignment ({_expected_columns()})"
+            )
+    raise TraceError(
+        f"{source}: column '{column}' has the unrecognised unit '{_unbracket(unit)}'; "
+        f"convert the column to {expected} and write its unit as '{expected}'"
+    )
+
+
+def _check_declared_units(units: Any, source: str) -> None:
+    if units is None:
+        return
+    if not isinstance(units, Mapping):
+        raise TraceError(
+            f"{source}: meta['units'] is a {type(units).__name__}, expected a mapping "
+            "of column name to unit string, e.g. {'t': 's', 'omega_m': 'rad/s'}"
+        )
+    for name, unit in units.items():
+        if name == "i_abc":
+            _check_unit("i_a", unit, source)
+        elif name in UNITS:
+            _check_unit(name, unit, source)
+
+
+# --------------------------------------------------------------------------------------
+# Validation
+# --------------------------------------------------------------------------------------
+
+
+def _where(trace: Trace, index: int) -> str:
+    t = trace.t[index] if 0 <= index < trace.n else math.nan
+    return f"row {index} (t = {t:.9g} s)" if math.isfinite(t) else f"row {index}"
+
+
+_SPEED_FACTORS: tuple[tuple[float, str], ...] = (
+    (60 / (2 * math.pi), "omega_m looks like rpm: multiply omega_m by 2*pi/60 to get rad/s"),
+    (180 / math.pi, "omega_m looks like deg/s: multiply omega_m by pi/180 to get rad/s"),
+    (math.pi / 180, "theta_m looks like degrees: multiply theta_m and theta_ref by pi/180 "
+     "to get rad"),
+    (1 / 6, "theta_m looks like degrees and omega_m like rpm: multiply theta_m and "
+     "theta_ref by pi/180 and omega_m by 2*pi/60"),
+    (2 * math.pi, "theta_m looks like revolutions: multiply theta_m and theta_ref by 2*pi "
+     "to get rad"),
+    (60.0, "theta_m looks like revolutions and omega_m like rpm: multiply theta_m and "
+     "theta_ref by 2*pi and omega_m by 2*pi/60"),
+    (360.0, "theta_m looks like revolutions and omega_m like deg/s: multiply theta_m and "
+     "theta_ref by 2*pi and omega_m by pi/180"),
+)
+
+
+def _check_speed_units(trace: Trace) -> None:
+    theta, omega = trace.theta_m, trace.omega_m
+    if np.ptp(theta) == 0.0:
+        return
+    d_theta = np.gradient(theta, trace.t)
+    sdd = float(np.dot(d_theta, d_theta))
+    sww = float(np.dot(omega, omega))
+    if sdd == 0.0 or sww == 0.0 or not (math.isfinite(sdd) and math.isfinite(sww)):
+        return
+    swd = float(np.dot(omega, d_theta))
+    cosine = swd / math.sqrt(sdd * sww)
+    if abs(cosine) < _MIN_SPEED_CORRELATION:
+        return  # too noisy (or too little motion) to judge the units
+    ratio = swd / sdd  # least squares: omega_m ~ ratio * d(theta_m)/dt
+    lead = (
+        f"omega_m does not match the time derivative of theta_m: the least-squares "
+        f"ratio omega_m / (d theta_m/dt) is {ratio:.4g}, expected 1"
+    )
+    if ratio < 0:
+        if abs(math.log(-ratio)) < math.log1p(_RATIO_TOLERANCE):
+            raise TraceError(
+                f"{lead}; omega_m has the opposite sign to d theta_m/dt: negate omega_m "
+                "(or theta_m and theta_ref) so that both use the same positive direction"
+            )
+        raise TraceError(
+            f"{lead}; the sign is opposite too. Check that both are motor-side signals "
+            "in rad and rad/s with the same positive direction"
+        )
+    if abs(math.log(ratio)) < math.log1p(_RATIO_TOLERANCE):
+        return
+    near = sorted(
+        (abs(math.log(ratio / factor)), factor, text) for factor, text in _SPEED_FACTORS
+    )
+    hits = [
+        f"{text} (expected ratio {factor:.4g})"
+        for distance, factor, text in near
+        if distance < math.log1p(_RATIO_TOLERANCE)
+    ]
+    if hits:
+        raise TraceError(f"{lead}, a units error; " + "; or ".join(hits))
+    if not _RATIO_BAND[0] <= ratio <= _RATIO_BAND[1]:
+        raise TraceError(
+            f"{lead}. Check that theta_m and omega_m are both motor-side (not load-side "
+            "through the gear ratio), in rad and rad/s, and come from the same run"
+        )
+
+
+def _lag1_power(x: np.ndarray) -> float:
+    """mean(x[k] x[k+1]): the power of the smooth part of ``x``; white noise averages out."""
+    return float(np.mean(x[:-1] * x[1:]))
+
+
+def _check_star(trace: Trace) -> None:
+    i_abc = trace.i_abc
+    i_rms = float(np.sqrt(np.mean(i_abc * i_abc)))
+    if i_rms == 0.0:
+        return
+    s = i_abc.sum(axis=1)
+    worst = int(np.argmax(np.abs(s)))
+    hint = (
+        "Check for a swapped or missing phase, a wrong sign on one phase or a current "
+        "sensor offset; if only two phases were measured, set i_c = -(i_a + i_b)"
+    )
+    flat = [p for k, p in enumerate(("i_a", "i_b", "i_c")) if np.ptp(i_abc[:, k]) == 0.0]
+    if flat:
+        hint = f"{', '.join(flat)} is constant throughout (a missing phase?). " + hint
+    mean = float(np.mean(s))
+    where = (
+        f"largest |i_a + i_b + i_c| = {abs(s[worst]):.4g} A at {_where(trace, worst)}"
+    )
+    if abs(mean) > _STAR_MEAN_LIMIT * i_rms:
+        raise TraceError(
+            f"the phase currents do not sum to zero as a star connection requires: "
+            f"mean(i_a + i_b + i_c) = {mean:.4g} A is {abs(mean) / i_rms:.0%} of the RMS "
+            f"phase current {i_rms:.4g} A (limit {_STAR_MEAN_LIMIT:.0%}); {where}. {hint}"
+        )
+    # Compare the smooth (noise-free) parts only, so that white measurement noise, which
+    # does not cancel in the sum, is not mistaken for a wiring error; demand that the
+    # excess stands well above the estimator's own scatter (5 sigma for white noise).
+    s_ac = s - mean
+    p_phase = float(np.mean([_lag1_power(i_abc[:, k]) for k in range(3)]))
+    p_sum = _lag1_power(s_ac)
+    scatter = float(np.mean(s_ac * s_ac)) / math.sqrt(trace.n - 1)
+    if p_phase <= 0.0 or p_sum <= _STAR_AC_LIMIT**2 * p_phase + 5.0 * scatter:
+        return
+    ratio = math.sqrt(p_sum / p_phase)
+    if ratio > _STAR_AC_LIMIT:
+        raise TraceError(
+            f"the phase currents do not sum to zero as a star connection requires: the "
+            f"RMS of i_a + i_b + i_c is {ratio:.0%} of the RMS phase current (limit "
+            f"{_STAR_AC_LIMIT:.0%}); {where}. {hint}"
+        )
+
+
+def validate(
+    trace: Trace, *, min_rotation: float = 2 * np.pi, rtol_dt: float = 1e-3
+) -> Trace:
+    """Check that ``trace`` can be diagnosed; return it unchanged, or raise :class:`TraceError`.
+
+    Checks, in order: declared units (``meta["units"]``) are SI; at least
+    :data:`MIN_SAMPLES` samples; all values finite; ``t`` strictly increasing, in
+    seconds (step <= 0.01 s and duration <= 1000 s) and uniform (relative spread of the
+    steps <= ``rtol_dt``); currents in A (|i| <= 1000 A); ``omega_m`` consistent with
+    the derivative of ``theta_m`` (catches rpm, deg/s, degrees, revolutions and sign
+    errors when there is clear motion); rotation range ``max(theta_m) - min(theta_m) >=
+    min_rotation`` (rad, 0 disables); phase currents summing to about zero (star
+    connection).
+
+    ==============  =====  ==========================================================
+    argument        unit   meaning
+    ==============  =====  ==========================================================
+    min_rotation    rad    least motor rotation range; one revolution by default
+    rtol_dt         1      largest (max step - min step) / mean step
+    ==============  =====  ==========================================================
+    """
+    if not isinstance(trace, Trace):
+        raise TypeError(f"validate() needs a Trace, got {type(trace).__name__}")
+    if not (math.isfinite(min_rotation) and min_rotation >= 0):
+        raise ValueError(f"min_rotation must be finite and >= 0 rad, got {min_rotation!r}")
+    if not (math.isfinite(rtol_dt) and rtol_dt > 0):
+        raise ValueError(f"rtol_dt must be finite and > 0, got {rtol_dt!r}")
+
+    _check_declared_units(trace.meta.get("units"), "meta['units']")
+
+    n = trace.n
+    if n < MIN_SAMPLES:
+        raise TraceError(
+            f"trace too short: {n} samples, at least {MIN_SAMPLES} are needed; record a "
+            "longer profile, e.g. the default diagnostic profile "
+            "emaphm.profiles.diagnostic()"
+        )
+
+    for name, values in trace.columns().items():
+        bad = ~np.isfinite(values)
+        if bad.any():
+            first = int(np.argmax(bad))
+            kind = "NaN" if np.isnan(values[first]) else "inf"
+            raise TraceError(
+                f"column '{name}' holds {int(bad.sum())} non-finite value(s), the first "
+                f"({kind}) at {_where(trace, first)}; remove or interpolate the bad "
+                "samples (or cut the trace before them)"
+            )
+
+    t = trace.t
+    steps = np.diff(t)
+    bad = steps <= 0
+    if bad.any():
+        first = int(np.argmax(bad)) + 1
+        raise TraceError(
+            f"column 't' is not strictly increasing: t[{first}] = {t[first]:.9g} s <= "
+            f"t[{first - 1}] = {t[first - 1]:.9g} s ({_where(trace, first)}); sort the "
+            "samples by time and drop duplicated time stamps"
+        )
+
+    dt, duration = trace.dt, trace.duration
+    if dt > _MAX_TIME_STEP or duration > _MAX_DURATION:
+        raise TraceError(
+            f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, "
+            f"duration {duration:.6g} (a trace in seconds has a step <= {_MAX_TIME_STEP} s "
+            f"and lasts <= {_MAX_DURATION:g} s); divide t by 1000. If it really is in "
+            "seconds, resample it finer or split it into shorter windows"
+        )
+
+    spread = float((steps.max() - steps.min()) / dt)
+    if spread > rtol_dt:
+        first = int(np.argmax(np.abs(steps - dt) > 0.5 * rtol_dt * dt)) + 1
+        raise TraceError(
+            f"column 't' is not uniform: the time steps spread by {spread:.3g} of the mean "
+            f"step {dt:.6g} s (tolerance rtol_dt = {rtol_dt:g}); the first irregular step "
+            f"ends at {_where(trace, first)}. Resample onto a uniform grid: "
+            "emaphm.traces.resample(trace, numpy.linspace(trace.t[0], trace.t[-1], "
+            "trace.n)) (read files with read_trace(path, validate=False) first)"
+        )
+
+    for k, name in enumerate(("i_a", "i_b", "i_c")):
+        column = trace.i_abc[:, k]
+        big = np.abs(column) > _MAX_CURRENT
+        if big.any():
+            first = int(np.argmax(big))
+            raise TraceError(
+                f"column '{name}' looks like mA, not A: |{name}| = {abs(column[first]):.6g} "
+                f"> {_MAX_CURRENT:g} at {_where(trace, first)}; divide the phase currents "
+                "by 1000"
+            )
+
+    _check_speed_units(trace)
+
+    if min_rotation > 0:
+        rotation = float(np.ptp(trace.theta_m))
+        if rotation < min_rotation:
+            raise TraceError(
+                f"trace too short in rotation: max(theta_m) - min(theta_m) = "
+                f"{rotation:.4g} rad is below min_rotation = {min_rotation:.4g} rad; "
+                "eccentricity identification needs at least one full mechanical "
+                "revolution. Record a longer profile, e.g. the default diagnostic profile "
+                "emaphm.profiles.diagnostic(), or pass min_rotation=0 to skip this check"
+            )
+
+    _check_star(trace)
+    return trace
