@@ -11,6 +11,7 @@ from __future__ import annotations
 import io
 import os
 import shutil
+import sys
 import tempfile
 
 import numpy as np
@@ -100,6 +101,7 @@ def site(tmp_path_factory):
 @pytest.fixture(scope="module")
 def driver():
     chromium, chromedriver = _browser()
+    offline = os.environ.get("SE_OFFLINE")
     os.environ["SE_OFFLINE"] = "true"                 # Selenium Manager must not download
     from selenium import webdriver
     from selenium.webdriver.chrome.options import Options
@@ -119,6 +121,10 @@ def driver():
     finally:
         d.quit()
         shutil.rmtree(profile, ignore_errors=True)
+        if offline is None:
+            os.environ.pop("SE_OFFLINE", None)
+        else:
+            os.environ["SE_OFFLINE"] = offline
 
 
 def _open(driver, path):
@@ -275,3 +281,13 @@ def test_printing_drops_the_controls_and_keeps_the_table(site, driver):
 
     pdf = base64.b64decode(driver.print_page(PrintOptions()))
     assert pdf[:5] == b"%PDF-" and len(pdf) > 10_000
+
+
+def test_without_a_browser_the_test_skips_and_says_why_unless_ci_requires_it(monkeypatch):
+    monkeypatch.setattr(sys.modules[__name__], "_find", lambda *names: None)
+    monkeypatch.delenv("EMAPHM_REQUIRE_BROWSER", raising=False)
+    with pytest.raises(pytest.skip.Exception, match="chromium, chromedriver.*apt-get install"):
+        _browser()
+    monkeypatch.setenv("EMAPHM_REQUIRE_BROWSER", "1")
+    with pytest.raises(pytest.fail.Exception, match="EMAPHM_REQUIRE_BROWSER is set"):
+        _browser()
