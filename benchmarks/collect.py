@@ -11,7 +11,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).parent
 ORDER = ["plant.md", "commissioning.md", "pipeline.md", "identification.md", "identification_twin.md",
-         "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md"]
+         "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
+         "fleet.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
 CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
 HEADER = """# Benchmarks
@@ -42,6 +43,7 @@ model that shared the monitoring model's equations; their scripts re-run them.
 | optimizers vs scipy and library baselines | `benchmarks/bench_optim.py` |
 | the paper's full campaign | `benchmarks/run_paper_campaign.py` |
 | prognosis: RUL coverage and error | `benchmarks/bench_prognosis.py` (figures in `docs/prognosis.md`) |
+| fleet health site: build time | `benchmarks/bench_fleet.py` |
 
 """
 

@@ -371,9 +371,10 @@ def test_the_cli_starts_without_the_heavy_modules():
                               check=True).stdout.split())
     heavy = {"scipy.optimize", "scipy.stats", "matplotlib", "numba", "emaphm.models.monitoring",
              "emaphm.models.monitoring_simd", "emaphm.prognosis.trends",
-             "emaphm.prognosis.uncertainty", "emaphm.campaign.runner", "emaphm.identify"}
+             "emaphm.prognosis.uncertainty", "emaphm.campaign.runner", "emaphm.identify",
+             "emaphm.fleet.site", "emaphm.fleet.demo", "emaphm.fleet.status"}
     assert not (heavy & mods), sorted(heavy & mods)
-    assert "emaphm.prognosis.cli" in mods and "emaphm.campaign.cli" in mods
+    assert {"emaphm.prognosis.cli", "emaphm.campaign.cli", "emaphm.fleet.cli"} <= mods
 
 
 def test_the_error_boundary_names_the_path_of_an_os_error_and_exits_2(monkeypatch, capsys):

@@ -314,6 +314,13 @@ def test_a_recalibration_is_an_event_and_later_inspections_use_it(tmp_path):
         t, got = h.calibration("EMA-C", at=200.0)
         assert t == 100.0 and got == cal
         assert h.calibration("EMA-C")[1].motor.J_m == 9.0e-4
+        recs = h.calibrations("EMA-C")                 # every one, in time order
+        assert [(r.time, r.sources, r.actuator) for r in recs] == [
+            (100.0, ("h1.csv",), "EMA-C"), (300.0, (), "EMA-C")]
+        assert recs[0].params == cal and recs[1].params.motor.J_m == 9.0e-4
+        assert recs[0].recorded_utc <= recs[1].recorded_utc
+        with pytest.raises(HistoryError, match="register"):
+            h.calibrations("EMA-X")
         with pytest.raises(HistoryError, match="register"):
             h.calibrate("EMA-X", 1.0, cal)
         with pytest.raises(HistoryError, match="finite number"):

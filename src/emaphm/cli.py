@@ -7,6 +7,7 @@
     emaphm params     write the default parameters as a TOML file to edit
     emaphm campaign, report                   (emaphm.campaign.cli)
     emaphm history, prognose, demo-degradation (emaphm.prognosis.cli)
+    emaphm fleet report, fleet demo           (emaphm.fleet.cli)
 
 Bad input exits with status 2 and a message that says what to fix.
 """
@@ -418,8 +419,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", required=True)
     p.set_defaults(func=cmd_params)
 
-    # subcommands of the campaign and prognosis layers live beside their code
-    for module in ("emaphm.campaign.cli", "emaphm.prognosis.cli"):
+    # subcommands of the campaign, prognosis and fleet layers live beside their code
+    for module in ("emaphm.campaign.cli", "emaphm.prognosis.cli", "emaphm.fleet.cli"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as exc:

@@ -25,6 +25,7 @@ from .._lazy import lazy_exports
 #: that importing one submodule (e.g. the CLI's) does not load every other one.
 _EXPORTS = {
     "Actuator": "history",
+    "CalibrationRecord": "history",
     "DuplicateInspectionError": "history",
     "HealthHistory": "history",
     "HistoryData": "history",
@@ -67,7 +68,8 @@ _EXPORTS = {
 __getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
 
 __all__ = [
-    "HealthHistory", "HistoryData", "Inspection", "Actuator", "inspect", "trace_fingerprint",
+    "HealthHistory", "HistoryData", "Inspection", "Actuator", "CalibrationRecord", "inspect",
+    "trace_fingerprint",
     "HistoryError", "UnknownActuatorError", "TimeOrderError", "DuplicateInspectionError",
     "identify_with_spread", "Assessment", "KInterval",
     "FailureThresholds", "DEFAULT_FAILURE_THRESHOLDS", "INDICATORS",

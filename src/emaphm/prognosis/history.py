@@ -58,7 +58,7 @@ from ..faults import as_k
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError",
            "TimeOrderError", "DuplicateInspectionError", "Actuator", "Inspection", "HistoryData",
-           "HealthHistory", "trace_fingerprint", "inspect", "DEFAULT_DB"]
+           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "inspect", "DEFAULT_DB"]
 
 SCHEMA_VERSION = 2
 TIME_UNITS = ("h", "cycles")
@@ -220,6 +220,18 @@ class HistoryData:
     @property
     def n(self) -> int:
         return int(self.times.size)
+
+
+@dataclass(frozen=True)
+class CalibrationRecord:
+    """A recorded calibration: the actuator's ``params`` (:class:`emaphm.params.ActuatorParams`)
+    from ``time`` on, the ``sources`` (trace paths) it was fitted on, when it was recorded."""
+
+    actuator: str
+    time: float
+    params: Any
+    sources: tuple
+    recorded_utc: str
 
 
 def trace_fingerprint(trace: Any) -> str:
@@ -391,6 +403,19 @@ class HealthHistory:
             return None
         return float(row[0]), ActuatorParams.from_dict(json.loads(row[1]),
                                                        source=f"calibration of {actuator_id}")
+
+    def calibrations(self, actuator_id: str) -> list[CalibrationRecord]:
+        """Every calibration of ``actuator_id``, in time order."""
+        from ..params import ActuatorParams
+
+        self.actuator(actuator_id)
+        rows = self._con.execute("SELECT time, params, sources, recorded_utc FROM calibrations "
+                                 "WHERE actuator = ? ORDER BY time, id", (actuator_id,)).fetchall()
+        return [CalibrationRecord(actuator=actuator_id, time=float(t),
+                                  params=ActuatorParams.from_dict(
+                                      json.loads(p), source=f"calibration of {actuator_id}"),
+                                  sources=tuple(str(x) for x in json.loads(src)), recorded_utc=rec)
+                for t, p, src, rec in rows]
 
     # ------------------------------------------------------------------ actuators
     def register(self, actuator_id: str, *, description: str = "", time_unit: str = "h") -> Actuator:
