@@ -234,6 +234,7 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     ``fit_limit`` times its noise floor) or cannot be used.
     """
     from scipy.optimize import least_squares
+    from threadpoolctl import threadpool_limits
 
     base = params if params is not None else siemens_1fk7060()
     traces = list(traces)
@@ -315,10 +316,13 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     def fit(names: list[str], x0: np.ndarray):
         lo = np.array([PARAMETERS[n][0] for n in names])
         hi = np.array([PARAMETERS[n][1] for n in names])
-        return least_squares(residual, np.clip(x0, lo, hi), jac=jacobian, args=(names,),
-                             bounds=(lo, hi), method="trf",
-                             x_scale=np.maximum(hi - lo, 1e-3) / 10,
-                             xtol=1e-8, ftol=1e-8, max_nfev=60)
+        # SciPy's SVD of the tall Jacobian on one BLAS thread: a thread pool spinning beside
+        # busy cores made it many times slower (the same as in emaphm.optim.lsq)
+        with threadpool_limits(limits=1, user_api="blas"):
+            return least_squares(residual, np.clip(x0, lo, hi), jac=jacobian, args=(names,),
+                                 bounds=(lo, hi), method="trf",
+                                 x_scale=np.maximum(hi - lo, 1e-3) / 10,
+                                 xtol=1e-8, ftol=1e-8, max_nfev=60)
 
     names = list(free)
     fixed: list[str] = []
