@@ -70,7 +70,7 @@ def run_unit(task: tuple[int, int]) -> dict:
                for s in (1, 2, 3)]
 
     def verdict(trace, params):
-        ident = identify(trace, "pso", seed=0, params=params)
+        ident = identify(trace, ALGORITHM, seed=0, params=params)
         d = diagnose(ident.k, params=params, fault_model="physical", fit_ratio=fit_ratio_of(ident))
         return ident, d
 
@@ -125,7 +125,7 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
            f"Machine: {machine()}; load "
            f"average {os.getloadavg()[0]:.2f} at the end; {n} units (seeds {UNIT_SEED0}+) in "
            f"{wall / 60:.1f} min wall on {workers} workers. Plant traces, physical fault model, "
-           "PSO with identify's defaults.", "",
+           f"{ALGORITHM} with identify's defaults.", "",
            "| | result |", "|---|---|",
            f"| healthy unit, data-sheet parameters: verdict faulty | "
            f"{sum(r['uncal_verdict'] == 'faulty' for r in rows)}/{n} "
@@ -157,14 +157,22 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
     return "\n".join(x for x in out) + "\n"
 
 
+#: The identification algorithm (``--algorithm``; set before the worker processes fork).
+ALGORITHM = "lsq"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
+    ap.add_argument("--algorithm", default="lsq",
+                    help="identification algorithm (default lsq, identify's default)")
     ap.add_argument("--units", type=int, default=100)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--tune", action="store_true",
                     help="units from the tuning seeds (30000+): print each parameter's model "
                          "discrepancy (RMS of estimate - truth) for emaphm.calibration")
     args = ap.parse_args()
+    global ALGORITHM
+    ALGORITHM = args.algorithm
     seed0 = TUNE_SEED0 if args.tune else UNIT_SEED0
     _warm()
     t0 = time.perf_counter()

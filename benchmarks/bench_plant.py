@@ -84,7 +84,7 @@ def run_one(task: dict) -> dict:
     sim_cpu = time.process_time() - t0
     # the monitoring model assumes the data sheet, and its own fault resistance
     t0 = time.process_time()
-    ident = identify(trace, "pso", seed=task["seed"], params=nominal)
+    ident = identify(trace, ALGORITHM, seed=task["seed"], params=nominal)
     cpu = time.process_time() - t0
     diag = diagnose(ident.k, params=nominal, fault_model="physical",
                     fit_ratio=fit_ratio_of(ident))
@@ -200,7 +200,7 @@ def report(summary: dict, wall: float, workers: int) -> str:
     out = [f"## Plant traces beside twin traces ({now:%Y-%m-%d %H:%M} UTC)", "",
            f"Machine: {machine()}; "
            f"load average {load:.2f} at the end; {wall / 60:.1f} min wall on {workers} workers. "
-           "Algorithm: PSO with identify's defaults (polish, restarts), fault model physical; "
+           f"Algorithm: {ALGORITHM} with identify's defaults, fault model physical; "
            "the monitoring model assumes the data sheet and R_f = 0.15 ohm. Test seeds (0+), "
            "disjoint from the tuning seeds (10000+) the thresholds were set on.", "",
            "| | plant | twin |", "|---|---|---|"]
@@ -240,14 +240,22 @@ def report(summary: dict, wall: float, workers: int) -> str:
     return "\n".join(out) + "\n"
 
 
+#: The identification algorithm (``--algorithm``; set before the worker processes fork).
+ALGORITHM = "lsq"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
+    ap.add_argument("--algorithm", default="lsq",
+                    help="identification algorithm (default lsq, identify's default)")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--healthy", type=int, default=100)
     ap.add_argument("--cases", default="short,modes,healthy")
     ap.add_argument("--models", default="reference,monitoring")
     ap.add_argument("--tune", action="store_true", help="healthy plant on the tuning seeds only")
     args = ap.parse_args()
+    global ALGORITHM
+    ALGORITHM = args.algorithm
     if args.tune:
         todo = [t for c in args.cases.split(",") for t in tasks(c, "reference", TUNE_SEED0,
                                                                  args.healthy)]

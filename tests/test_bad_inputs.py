@@ -133,6 +133,14 @@ def _(d, b):
     return ["diagnose", str(d / "deep.csv")]
 
 
+@case("huge-metadata-csv", "above the 1,048,576 a trace's metadata can be")
+def _(d, b):
+    lines = b.csv.read_text().splitlines(keepends=True)
+    lines[0] = "# emaphm-trace 1 {\"x\": \"" + "a" * 2_000_000 + "\"}\n"
+    (d / "huge.csv").write_text("".join(lines))
+    return ["diagnose", str(d / "huge.csv")]
+
+
 @case("deep-metadata-parquet", "metadata is nested too deeply")
 def _(d, b):
     _deep_parquet(b, d / "deep.parquet")

@@ -12,6 +12,10 @@ __all__ = ["FORMAT_VERSION"]
 #: Format version written in the CSV first line and the Parquet schema metadata.
 FORMAT_VERSION = 1
 
+#: Largest metadata accepted: emaphm writes a few kB (parameters, profile, sensors), so a
+#: larger block is not ours, or damaged, and is refused before it is parsed.
+MAX_METADATA_BYTES = 1 << 20
+
 
 def _dumps(meta: dict) -> str:
     # ensure_ascii keeps the CSV metadata on one ASCII line whatever the strings hold.
@@ -19,6 +23,12 @@ def _dumps(meta: dict) -> str:
 
 
 def _loads(text: str | bytes, source: str) -> dict:
+    if len(text) > MAX_METADATA_BYTES:
+        raise TraceError(
+            f"{source}: the emaphm metadata is {len(text):,} bytes, above the "
+            f"{MAX_METADATA_BYTES:,} a trace's metadata can be; it is not emaphm's or it is "
+            "damaged: delete it (the data columns can still be read without it)"
+        )
     try:
         meta = json.loads(text)
     except json.JSONDecodeError as exc:
