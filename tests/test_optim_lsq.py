@@ -141,3 +141,13 @@ def test_deterministic():
     b, _ = multistart_least_squares(two_basins, starts, BOX, accept=1e-8)
     np.testing.assert_array_equal(a.x, b.x)
     assert a.fun == b.fun and a.nfev == b.nfev
+
+
+def test_the_history_shows_the_descent_of_each_pass():
+    """The best fitness after each Jacobian, from the start's down to the final one (not
+    the final value throughout)."""
+    res, info = multistart_least_squares(rosenbrock, [np.array([-1.2, 1.0])], BOX, polish_evals=0)
+    h = res.history
+    assert h[0] == pytest.approx(24.2, rel=1e-9)              # ||r(-1.2, 1)||^2 = 19.36 + 4.84
+    assert h[-1] == pytest.approx(res.fun) and h[-1] < 1e-10
+    assert np.all(np.diff(h) <= 0.0) and len(set(h.tolist())) > 5

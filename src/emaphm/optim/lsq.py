@@ -239,9 +239,10 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
                                   max_seconds=seconds, callback=None if callback is None else each)
         nfev += r.nfev
         nit += r.nit
+        before = np.inf if best is None else best.fun
         if best is None or r.fun < best.fun:
             best = r
-        history.extend(np.minimum(r.history, best.fun).tolist())
+        history.extend(np.minimum(r.history, before).tolist())   # best so far at each step
         if r.reason in ("max_evaluations", "wall_clock", "callback"):
             reason = r.reason
             return False
