@@ -183,8 +183,8 @@ def _table(ident, diag) -> str:
                  f"{ident.iterations} iterations in {ident.elapsed_s:.2f} s "
                  f"({ident.evals_per_s:.0f} evals/s, {100 * ident.kernel_s / max(ident.elapsed_s, 1e-12):.0f}% "
                  f"in the model kernel), stop: {ident.reason}"
-                 + (f"; plus {ident.compile_s:.1f} s compiling the model kernels (first run only)"
-                    if ident.compile_s > 0.5 else ""))
+                 + (f"; plus {ident.compile_s:.1f} s compiling or loading the model kernels "
+                    "(first run of a process)" if ident.compile_s > 0.5 else ""))
     ratio = ident.fitness / ident.noise_floor if ident.noise_floor > 0 else float("nan")
     lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}"
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
