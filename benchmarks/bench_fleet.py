@@ -81,7 +81,8 @@ def _parts(db: Path) -> dict:
     from emaphm.fleet.site import FIGURE_DPI
     from emaphm.fleet.status import assess
     from emaphm.prognosis.history import HealthHistory
-    from emaphm.prognosis.plots import _interesting, plot_history, plot_prognosis
+    from emaphm.prognosis.plots import _interesting, moved_components, plot_history, plot_prognosis
+    from emaphm.prognosis.thresholds import INDICATOR_COMPONENT
 
     with HealthHistory(db, create=False) as h:
         datas = [h.data(a.id) for a in h.actuators()]
@@ -95,7 +96,8 @@ def _parts(db: Path) -> dict:
         s = assess(d, seed=0)
         parts["prognosis (assess)"] += time.process_time() - c
         c = time.process_time()
-        fig = plot_history(d)
+        always = [INDICATOR_COMPONENT[s.worst]] if s.worst in INDICATOR_COMPONENT else []
+        fig = plot_history(d, components=moved_components(d, always=always))   # as the site
         parts["history figure: build"] += time.process_time() - c
         c = time.process_time()
         fig.savefig(io.BytesIO(), format="png", dpi=FIGURE_DPI)

@@ -435,3 +435,38 @@ def test_a_damaged_history_is_refused_unchanged(tmp_path):
     with pytest.raises(HistoryError, match="damaged|not an emaphm health history"):
         HealthHistory(p, create=False)
     assert p.read_bytes() == before
+
+
+def test_history_plot_of_the_components_that_moved(tmp_path):
+    """``moved_components``: what reached a quarter of its threshold or was named faulty
+    (the eccentricity phase beside its modulus); ``plot_history(components=...)`` draws
+    just those panels, says how many it left out, and refuses indices outside k."""
+    from emaphm.diagnosis import diagnose
+    from emaphm.prognosis.plots import MOVED_SHARE, moved_components, plot_history
+    from emaphm.prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS
+
+    thr_f = DEFAULT_FAILURE_THRESHOLDS.for_indicator("friction")
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-M")
+        ks = [[0.0, 0.0, 0, 0, 0, 0.0, 0.5, 0.5],
+              [0.5 * thr_f, 0.0, 0, 0, 0, 0.3, 0.2, 0.5],
+              [1.1 * MOVED_SHARE * thr_f, 0.0, 0, 0, 0, 0.3, 0.2, 0.5]]
+        for t, k in zip((1.0, 2.0, 3.0), ks):
+            h.add("EMA-M", t, k, diagnosis=diagnose(k, fit_ratio=1.2).to_dict())
+        data = h.data("EMA-M")
+        h.register("EMA-Q")
+        h.add("EMA-Q", 1.0, [0, 0, 0, 0, 0, 0, 0.5, 0.5])
+        quiet = h.data("EMA-Q")
+    assert moved_components(data) == [0, 5, 6]             # friction, eccentricity and its phase
+    assert moved_components(data, always=[3]) == [0, 3, 5, 6]
+    assert moved_components(quiet) == [0]                  # nothing moved: friction alone
+    fig = plot_history(data, components=moved_components(data))
+    shown = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_ylabel() for ax in shown] == ["k1 [-]", "k6 [-]", "k7 [-]"]
+    assert len(fig.axes) == 4 and not fig.axes[3].get_visible()     # 2 x 2, one cell empty
+    assert tuple(fig.get_size_inches()) == pytest.approx((11, 1.2 + 1.95 * 2))
+    assert "5 other components not shown" in fig._suptitle.get_text()
+    assert [ax.get_xlabel() for ax in shown[-2:]] == ["time [flight hours]"] * 2
+    assert tuple(plot_history(data).get_size_inches()) == pytest.approx((11, 9))
+    with pytest.raises(ValueError, match="indices of k in 0..7"):
+        plot_history(data, components=[8])

@@ -196,7 +196,8 @@ def _assess_and_draw(job: _Job) -> tuple[ActuatorStatus, dict]:
     """One actuator's status, and its figures written into ``job.folder``: name -> (width,
     height) in pixels. Runs in a worker process."""
     from ..plots import save_figure
-    from ..prognosis.plots import _interesting, plot_history, plot_prognosis
+    from ..prognosis.plots import _interesting, moved_components, plot_history, plot_prognosis
+    from ..prognosis.thresholds import INDICATOR_COMPONENT
 
     status = assess(job.data, thresholds=job.thresholds, seed=job.seed, level=job.level)
     if job.reuse is not None:
@@ -204,7 +205,11 @@ def _assess_and_draw(job: _Job) -> tuple[ActuatorStatus, dict]:
     figures = {}
     hist_name, prog_name = _figure_names(job.stem)
     if status.n_inspections:
-        fig = plot_history(job.data, thresholds=job.thresholds)
+        # the components that moved (and the worst): a panel per flat line of a healthy
+        # component cost most of a fresh site's drawing time
+        always = [INDICATOR_COMPONENT[status.worst]] if status.worst in INDICATOR_COMPONENT else []
+        fig = plot_history(job.data, thresholds=job.thresholds,
+                           components=moved_components(job.data, job.thresholds, always))
         save_figure(fig, Path(job.folder) / hist_name, dpi=FIGURE_DPI)
         figures["history"] = (hist_name, *_pixels(fig))
     prog = status.prognosis

@@ -52,21 +52,32 @@ def _unit(unit: str) -> str:
 
 
 def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
-                 path: str | os.PathLike[str] | None = None) -> "Figure":
+                 path: str | os.PathLike[str] | None = None,
+                 components: Sequence[int] | None = None) -> "Figure":
     """Each component of k over the inspections, with its interval and failure threshold.
+
+    ``components``: the indices of k to draw (default all eight), e.g.
+    :func:`moved_components` for a page that shows only what changed.
 
     A point is red where that inspection named a fault on *that* component, green where
     it did not, grey where the verdict was ``unexplained`` (no fault named). The
     eccentricity phase k7 means nothing without eccentricity: its points are drawn
     hollow, without a line, where k6 is below its detection threshold.
     """
-    fig = _figure(11, 9)
-    axes = fig.subplots(4, 2, sharex=True,
-                        gridspec_kw=_grid(fig, 4, 2, wgap=0.85, hgap=0.4)).ravel()
+    shown = list(range(8)) if components is None else sorted({int(c) for c in components})
+    if not shown or not all(0 <= c < 8 for c in shown):
+        raise ValueError(f"components must be indices of k in 0..7, got {components!r}")
+    nrows = (len(shown) + 1) // 2
+    fig = _figure(11, 1.2 + 1.95 * nrows)          # 9 in for all eight
+    grid = fig.subplots(nrows, 2, sharex=True, squeeze=False,
+                        gridspec_kw=_grid(fig, nrows, 2, wgap=0.85, hgap=0.4)).ravel()
+    for ax in grid[len(shown):]:                 # an odd count leaves one cell empty
+        ax.set_visible(False)
+    axes = grid[:len(shown)]
     t = data.times
     thr = {INDICATOR_COMPONENT[n]: thresholds.for_indicator(n) for n in INDICATOR_COMPONENT}
     status = component_status(data)
-    for j, ax in enumerate(axes):
+    for j, ax in zip(shown, axes):
         if data.n:
             err = np.vstack([data.K[:, j] - data.K_lo[:, j], data.K_hi[:, j] - data.K[:, j]])
             show = np.ones(data.n, dtype=bool)
@@ -94,12 +105,41 @@ def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT
             ax.legend(fontsize=6, loc="best")
     for ax in axes[-2:]:
         ax.set_xlabel(f"time [{_unit(data.actuator.time_unit)}]")
+        ax.xaxis.set_tick_params(labelbottom=True)
+    hidden = 8 - len(shown)
     fig.suptitle(f"health history of {data.actuator.id}"
                  + (f" ({data.actuator.description})" if data.actuator.description else "")
-                 + f": {data.n} inspections", fontsize=10)
+                 + f": {data.n} inspections"
+                 + (f"; {hidden} other components not shown (each stayed below "
+                    f"{MOVED_SHARE:.0%} of its threshold)" if hidden and components is not None
+                    and set(shown) >= set(moved_components(data, thresholds)) else
+                    f"; {hidden} components not shown" if hidden else ""), fontsize=10)
     if path is not None:
         save_figure(fig, path)
     return fig
+
+
+#: A component "moved" when it reached this share of its failure threshold (for the
+#: gain drift: of its distance from 0.5) at some inspection, or was named faulty.
+MOVED_SHARE = 0.25
+
+
+def moved_components(data: "HistoryData", thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
+                     always: Sequence[int] = ()) -> list[int]:
+    """The indices of k worth a panel: those that reached :data:`MOVED_SHARE` of their
+    failure threshold or were named faulty at some inspection, with the eccentricity phase
+    beside a moved eccentricity and ``always``; the friction alone when nothing moved."""
+    out = {int(c) for c in always}
+    if data.n:
+        status = component_status(data)
+        for name, c in INDICATOR_COMPONENT.items():
+            x = data.K[:, c] - (0.5 if c == 7 else 0.0)
+            if np.any(np.abs(x) >= MOVED_SHARE * thresholds.for_indicator(name)) \
+                    or np.any(status[:, c] == "faulty"):
+                out.add(c)
+    if 5 in out:
+        out.add(6)
+    return sorted(out) or [0]
 
 
 def component_status(data: "HistoryData") -> np.ndarray:
