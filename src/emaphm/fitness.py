@@ -330,13 +330,8 @@ class Eq4Objective:
         pop = self.model.simulate_population(K)
         i = equivalent_current(pop.i_abc)[..., None] if self.mode == "equivalent" else pop.i_abc
         R = (np.sqrt(self.weights)[None] * (i - self.target[None])).reshape(K.shape[0], -1)
-        diverged = pop.status == STATUS_DIVERGED
-        R[diverged] = np.inf
-        s = self.stats
-        s.kernel_s += time.perf_counter() - t0
-        s.calls += 1
-        s.evaluations += K.shape[0]
-        s.diverged += int(np.count_nonzero(diverged))
+        R[pop.status == STATUS_DIVERGED] = np.inf
+        self._count(t0, pop.status)
         return R
 
     def __call__(self, K: np.ndarray) -> np.ndarray:
@@ -350,9 +345,13 @@ class Eq4Objective:
             f = np.sum(self.weights[None, :, 0] * d * d, axis=1)
             status = pop.status
             f[status == STATUS_DIVERGED] = np.inf
+        self._count(t0, status)
+        return f
+
+    def _count(self, t0: float, status: np.ndarray) -> None:
+        """Book one call started at ``t0`` of ``status.size`` candidates into :attr:`stats`."""
         s = self.stats
         s.kernel_s += time.perf_counter() - t0
         s.calls += 1
-        s.evaluations += K.shape[0]
+        s.evaluations += status.size
         s.diverged += int(np.count_nonzero(status == STATUS_DIVERGED))
-        return f

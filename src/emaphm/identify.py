@@ -7,6 +7,7 @@ the box ``[0, 1]^8``) to an optimizer of :mod:`emaphm.optim` and returns an
 
 from __future__ import annotations
 
+import itertools
 import json
 import re
 import time
@@ -313,7 +314,7 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
     accept = misfit_limit(LSQ_ACCEPT_P) * floor
     box = (np.zeros(n_var), np.ones(n_var))
     res, info = multistart_least_squares(
-        lambda Z: objective.residuals(full(Z)), _limited(starts(), 1 + restarts), box,
+        lambda Z: objective.residuals(full(Z)), itertools.islice(starts(), 1 + restarts), box,
         accept=accept, settle=limit, polish_evals=POLISH_LSQ_EVALUATIONS if polish else 0,
         max_evals=max_evals, max_seconds=max_seconds, callback=callback,
         fitness=lambda Z: objective(full(Z)))
@@ -323,13 +324,6 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
                          algorithm=DEFAULT_ALGORITHM)
     return _Run(raw, res.x, float(res.fun), res.history, info["polish_evaluations"],
                 info["polish_s"]), info["starts"]
-
-
-def _limited(it, n: int):
-    for i, x in enumerate(it):
-        if i >= n:
-            return
-        yield x
 
 
 def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
