@@ -17,7 +17,7 @@ import pytest
 from emaphm.faults import K_NAMES, SCENARIOS, error_pct
 from emaphm.fitness import Eq4Objective
 from emaphm.identify import Identification, identify, parse_budget
-from emaphm.identify import DEFAULT_ALGORITHM
+from emaphm.identify import DEFAULT_ALGORITHM, LSQ_RESTARTS
 from emaphm.models.monitoring import MonitoringModel
 from emaphm.optim import ALGORITHMS, MaxEvaluations, MaxIterations, WallClock
 from emaphm.simulate import DEFAULT_SENSORS, simulate
@@ -64,7 +64,7 @@ def _strip_k(trace: Trace) -> Trace:
 #: nominal's 4e-11, 1.4e-8, 5.2e-7. The bounds are 3-6x those.
 TWIN_ERROR_PCT = {"de": 0.02, "pso": 0.05, "gwo": 0.3}
 TWIN_K8_ERROR = {"de": 5e-6, "pso": 1e-4, "gwo": 5e-4}
-TWIN_FITNESS_RATIO = {"de": 2e-10, "pso": 5e-8, "gwo": 2e-6}
+TWIN_FITNESS_RATIO = {"de": 2e-9, "pso": 5e-8, "gwo": 2e-6}      # de measured 7.2e-10
 
 
 @pytest.mark.parametrize("algorithm", ALGOS)
@@ -356,12 +356,15 @@ def test_a_resistance_drift_is_searched_beside_k_not_read_as_a_fault():
 # ----------------------------------------------------------------- the default pipeline (lsq)
 def test_default_pipeline_is_least_squares_and_exact_on_the_models_own_trace(mm_gain_low, objective):
     """Noise-free twin trace: the fitness is zero at the truth and least squares gets there
-    (measured: Eq. 9 error 5e-5 %, fitness 3e-15 in 300 evaluations from the healthy start,
-    against 1e-3 at the healthy k; 100x margins)."""
+    (measured: Eq. 9 error 2.6e-5 %, fitness 1e-14 in 775 evaluations, against 1e-3 at the
+    healthy k. The healthy start alone stops at 4e-13, above the acceptance of a noise-free
+    trace: the backlash contact's clip and stick decisions leave kinks in the residual at
+    that level, so the pipeline takes its further starts; it took none before the MM had
+    the compliant contact)."""
     ident = identify(mm_gain_low, seed=1, objective=objective)
     assert ident.algorithm == DEFAULT_ALGORITHM == "lsq"
     assert ident.error_pct < 5e-3 and ident.fitness < 3e-13
-    assert ident.restarts == 0 and ident.reason == "converged"
+    assert ident.restarts <= LSQ_RESTARTS and ident.reason == "converged"
     assert ident.evaluations < 1000                    # the metaheuristics' defaults: ~5,000
     assert ident.options["search"] == "ecc-xy"         # the paper's fault model
     assert ident.polish_evaluations > 0 and ident.fitness <= ident.fitness_raw
@@ -374,6 +377,9 @@ def test_default_pipeline_warm_start_and_budget(mm_gain_low, objective):
     assert warm.error_pct < 5e-3 and warm.evaluations < cold.evaluations
     capped = identify(mm_gain_low, seed=1, objective=objective, budget=100)
     assert capped.evaluations <= 100 and capped.reason == "max_evaluations"
+    # the seeded sample that chooses further starts is charged to the budget too
+    sampled = identify(mm_gain_low, seed=1, objective=objective, budget=200)
+    assert sampled.restarts >= 1 and sampled.evaluations <= 200
     with pytest.raises(ValueError, match="start .* is an option of 'lsq', not of 'pso'"):
         identify(mm_gain_low, "pso", seed=1, objective=objective, start=SCENARIOS["gain-low"])
     with pytest.raises(ValueError, match="takes no optimizer options"):
@@ -392,7 +398,8 @@ def test_default_pipeline_is_deterministic_and_restarts_from_the_sample(monkeypa
     assert a.evaluations == b.evaluations and a.error_pct < 1.0     # measured 0.32 %
     monkeypatch.setattr(identify_module, "misfit_limit", lambda p=None: 0.0)
     c = identify(trace, seed=4, restarts=2, suspect_ratio=3.0)
-    assert c.restarts == 2 and c.evaluations > a.evaluations
+    # further starts until one gains less than 1 % below the suspect limit (measured: 1)
+    assert 1 <= c.restarts <= 2 and c.evaluations > a.evaluations
     assert c.fitness <= a.fitness * (1 + 1e-6)   # the first start is among them (refined alike)
 
 

@@ -76,12 +76,12 @@ def rm_traces():
 
 
 @pytest.fixture(scope="module")
-def rm_rigid_traces():
-    """The same RM on the MM's mechanics (rigid, momentum-conserving backlash contact and
-    two-level Borello friction): what is left of its difference to the MM is the switching
-    inverter and the winding integration."""
+def rm_mm_traces():
+    """The same RM on the MM's mechanics (the backlash contact stepped as the MM steps it,
+    two-level Borello friction without the Stribeck drop): what is left of its difference
+    to the MM is the switching inverter, the winding integration and the step."""
     return {name: _run(PARAMS, k, PROFILE, fault_model=scenario_fault_model(name), n_sub=128,
-                       pwm=True, extra_load=0.0, rigid=True)
+                       pwm=True, extra_load=0.0, mm_mechanics=True)
             for name, k in SCENARIOS.items()}
 
 
@@ -182,8 +182,9 @@ def test_reference_torque_is_sum_c_i(rm_traces):
 
 @pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "multiple"])
 def test_monitoring_model_converges_with_the_step(name):
-    """MM at n_sub = 1..16 against n_sub = 64: RMS current error at about first order
-    (measured order 1.10 nominal, 0.93 short circuit, 1.26 multiple)."""
+    """MM at n_sub = 1..16 against n_sub = 64: RMS current error at about first order,
+    about 1 % at the MM's step (measured 0.0104 A on short-circuit-high with the compliant
+    backlash contact)."""
     k = scenario(name)
     ref = MonitoringModel(PARAMS, PROFILE, n_sub=64).simulate(k).i_abc[0]
     n_subs = np.array([1, 2, 4, 8, 16])
@@ -192,7 +193,7 @@ def test_monitoring_model_converges_with_the_step(name):
     order = fitted_order(T_S / n_subs, errs)
     assert order > 0.8, (name, order, errs)
     assert np.all(np.diff(errs) < 0), errs
-    assert errs[0] < 0.01                       # A rms at the MM's step, on about 1 A rms
+    assert errs[0] < 0.012                      # A rms at the MM's step, on about 1 A rms
 
 
 @pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "multiple"])
@@ -212,9 +213,9 @@ def test_reference_model_converges_with_the_step(name):
 
 @pytest.mark.parametrize("name", ["nominal", "short-circuit-high", "eccentricity-high", "multiple",
                                   "turn-short-15pct"])
-def test_averaged_reference_model_on_rigid_mechanics_is_the_monitoring_model(name):
+def test_averaged_reference_model_on_mm_mechanics_is_the_monitoring_model(name):
     """The MM is the RM without switching and without the plant's mechanics: on the MM's
-    rigid mechanics (private ``rigid=True``) and at the same step, they differ only by the
+    mechanics (private ``mm_mechanics=True``) and at the same step, they differ only by the
     winding integrator (the RM's Crank-Nicolson against the MM's exact step), a difference
     that falls at second order (measured max current difference 2.8e-5 A at n_sub = 2 and
     1.7e-6 A at 8 on the paper's scenarios, 8.7e-4 and 5.4e-5 A with the 15 % fault loop)."""
@@ -223,7 +224,7 @@ def test_averaged_reference_model_on_rigid_mechanics_is_the_monitoring_model(nam
     diff = {}
     for n_sub in (2, 8):
         r = _run(PARAMS, k, PROFILE, fault_model=fm, n_sub=n_sub, pwm=False, extra_load=0.0,
-                 rigid=True)
+                 mm_mechanics=True)
         m = MonitoringModel(PARAMS, PROFILE, n_sub=n_sub, fault_model=fm).simulate(k)
         diff[n_sub] = np.abs(m.i_abc[0] - r["i_abc"]).max()
         np.testing.assert_allclose(m.theta_m[0], r["theta_m"], rtol=0, atol=1e-5)
@@ -239,6 +240,11 @@ def test_step_arguments_are_validated():
 
 
 # =========================================================================== kernel == reference
+
+#: Agreement [A] of two implementations of the MM that round differently (see
+#: test_batched_kernel_equals_python_reference).
+ROUND_OFF_A = 5e-8
+
 
 def _random_k(rng, n):
     K = rng.random((n, 8))
@@ -256,12 +262,15 @@ def test_batched_kernel_equals_python_reference(n_sub, fault_model):
     res = model.simulate_population(K)
     assert res.status.tolist() == [STATUS_OK] * len(K)
     assert res.i_abc.shape == (len(K), PROFILE.grid(T_S).size, 3)
+    # The compiled kernel contracts multiply-adds (FMA) where Python rounds twice; the
+    # backlash contact's clip and Borello's stick decisions amplify that round-off near
+    # the impacts to a few nA (measured max 5.1e-9 A; 1e-12 A away from them).
     for j, k in enumerate(K):
         ref = simulate_reference(PARAMS, k, PROFILE, n_sub=n_sub, fault_model=fault_model)
-        np.testing.assert_allclose(res.i_abc[j], ref["i_abc"], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(res.i_abc[j], ref["i_abc"], rtol=0, atol=ROUND_OFF_A)
         np.testing.assert_allclose(res.theta_m[j], ref["theta_m"], rtol=0, atol=1e-9)
-        np.testing.assert_allclose(res.omega_m[j], ref["omega_m"], rtol=0, atol=1e-9)
-        np.testing.assert_allclose(res.torque[j], ref["torque"], rtol=0, atol=1e-9)
+        np.testing.assert_allclose(res.omega_m[j], ref["omega_m"], rtol=0, atol=1e-7)
+        np.testing.assert_allclose(res.torque[j], ref["torque"], rtol=0, atol=ROUND_OFF_A)
     np.testing.assert_array_equal(res.t, ref["t"])
     np.testing.assert_array_equal(res.theta_ref, ref["theta_ref"])
 
@@ -269,7 +278,8 @@ def test_batched_kernel_equals_python_reference(n_sub, fault_model):
 def test_population_order_does_not_matter(mm):
     """A candidate's traces do not depend on where it stands in the population: bit for bit
     within the SIMD kernel's full blocks, and to round-off for a lone remainder, which runs
-    in the scalar kernel (``SCALAR_TAIL``; the two kernels agree to ~1e-12 A)."""
+    in the scalar kernel (``SCALAR_TAIL``; the two kernels agree to ~1e-12 A, a few nA
+    near the backlash impacts)."""
     rng = np.random.default_rng(3)
     K = _random_k(rng, 16)
     perm = rng.permutation(len(K))
@@ -280,9 +290,9 @@ def test_population_order_does_not_matter(mm):
     # a ninth candidate runs alone in the scalar kernel; a candidate alone too
     c = mm.simulate_population(K[:9])
     np.testing.assert_array_equal(c.i_abc[:8], a.i_abc[:8])
-    np.testing.assert_allclose(c.i_abc[8], a.i_abc[8], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(c.i_abc[8], a.i_abc[8], rtol=0, atol=ROUND_OFF_A)
     solo = mm.simulate(K[4])
-    np.testing.assert_allclose(solo.i_abc[0], a.i_abc[4], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(solo.i_abc[0], a.i_abc[4], rtol=0, atol=ROUND_OFF_A)
     np.testing.assert_allclose(solo.theta_m[0], a.theta_m[4], rtol=0, atol=1e-12)
 
 
@@ -497,32 +507,36 @@ def test_motion_covers_a_revolution_and_a_reversal(mm):
 
 @pytest.mark.parametrize("name", list(SCENARIOS))
 def test_monitoring_model_agrees_with_reference_model(mm, mm_physical, rm_traces,
-                                                     rm_rigid_traces, name):
+                                                     rm_mm_traces, name):
     """NRMS of MM (n_sub = 1) minus RM (PWM, 1 us) currents.
 
-    On the MM's own mechanics (rigid backlash, two-level friction) the RM differs by its
-    switching inverter and winding integration only: below 1 % (measured 0.30 %
-    (turn-short-5pct) to 0.62 % (backlash-high): a 1.6x margin). The plant adds what the MM lacks (Stribeck friction, a compliant contact at
-    about 500 Hz): measured 1.2 % (gain-high) to 8.3 % (backlash-high; backlash-low 4.3 %,
-    every other scenario 1.2-2.6 %), and always more than the rigid RM's, so the plant is
-    no twin. Angles stay within 2.6e-3 rad of the MM's.
+    On the MM's own mechanics (Borello friction, the backlash contact) the RM differs by
+    its switching inverter, its winding integration and the step at which the contact is
+    resolved: below 2 % (measured 0.65 % (gain-low) to 0.90 % (backlash-low), and 1.78 %
+    on backlash-high, whose impacts the MM's 125 us step resolves coarsely). The plant
+    adds what the MM lacks (the Stribeck drop): measured 0.73 % (gain-low) to 1.85 %
+    (backlash-high), and always more than the RM on the MM's mechanics, so the plant is
+    no twin. (Before the MM had the compliant contact: 1.2 % to 8.3 %.) Angles stay
+    within 2.9e-3 rad of the MM's.
     """
     m = mm_of(name, mm, mm_physical).simulate(scenario(name))
     r = rm_traces[name]
-    rigid = rm_rigid_traces[name]
+    on_mm = rm_mm_traces[name]
     np.testing.assert_array_equal(m.t, r["t"])
-    err_rigid = nrms(m.i_abc[0], rigid["i_abc"])
-    assert err_rigid < 0.01, (name, err_rigid)
-    assert np.abs(m.theta_m[0] - rigid["theta_m"]).max() < 0.01       # rad
+    err_mm = nrms(m.i_abc[0], on_mm["i_abc"])
+    assert err_mm < 0.02, (name, err_mm)
+    assert np.abs(m.theta_m[0] - on_mm["theta_m"]).max() < 0.01       # rad
     err = nrms(m.i_abc[0], r["i_abc"])
-    assert err_rigid < err < 0.10, (name, err_rigid, err)
+    assert err_mm < err < 0.03, (name, err_mm, err)
     assert np.abs(m.theta_m[0] - r["theta_m"]).max() < 0.01           # rad
 
 
 LINE = np.linspace(0.0, 1.0, 41)             # step 0.025
-#: The grid point of LINE nearest a true value is at most half a step away (multiple's
-#: true values are off the grid: measured 0.0117 and 0.012 there, 0 for on-grid values).
-RIGID_LANDSCAPE_TOL = 0.0125
+#: Against the RM on the MM's mechanics, a minimum is at most one grid step from the truth:
+#: the MM resolves the backlash contact at its coarse step (measured: one step on
+#: friction-low's and gain-high's backlash, 0.0133 on multiple's friction, whose true
+#: values are off the grid, at the true value elsewhere).
+MM_LANDSCAPE_TOL = 0.025
 #: Against the plant, components other than friction: measured up to 0.05 (two steps).
 PLANT_LANDSCAPE_TOL = 0.05
 
@@ -549,18 +563,16 @@ def _landscape_minima(mm, kt, target, depth):
 
 
 @pytest.mark.parametrize("name", FAULTS)
-def test_fitness_landscape_is_minimal_at_the_true_k(mm, mm_physical, rm_rigid_traces, name):
+def test_fitness_landscape_is_minimal_at_the_true_k(mm, mm_physical, rm_mm_traces, name):
     """Along each single-component line through the true k, the Eq. 4 weighted SSE of MM
-    against the RM on the MM's mechanics is minimal at the grid point nearest the true
-    value (measured: at the true value for every scenario and component but
-    backlash-high's backlash, one step (+0.025) above it, and multiple's, whose true values
-    are off the grid: within 0.012, at the nearest grid point)."""
+    against the RM on the MM's mechanics is minimal within one grid step of the true value
+    (:data:`MM_LANDSCAPE_TOL`)."""
     kt = scenario(name)
-    best = _landscape_minima(mm_of(name, mm, mm_physical), kt, rm_rigid_traces[name]["i_abc"],
+    best = _landscape_minima(mm_of(name, mm, mm_physical), kt, rm_mm_traces[name]["i_abc"],
                              depth=10.0)                 # a real valley, not a flat line
     for c, b in enumerate(best):
         if b is not None:
-            tol = 0.025 if (name, c) == ("backlash-high", 1) else RIGID_LANDSCAPE_TOL
+            tol = MM_LANDSCAPE_TOL
             assert abs(b - kt[c]) <= tol + 1e-12, (name, K_NAMES[c], b, kt[c])
 
 
@@ -569,14 +581,12 @@ def test_fitness_landscape_on_the_plant_is_biased_where_the_mm_lacks_physics(
         mm, mm_physical, rm_traces, name):
     """Against the plant (no inverse crime) the MM explains the Stribeck drop, which
     raises the friction torque at low speed, with more dry friction: the k1 minimum moves
-    up by 0.025 to 0.25 (measured +0.125 nominal, +0.20 friction-low, +0.25 friction-high
-    (the box edge), +0.0617 multiple, +0.15..0.225 elsewhere, +0.025 gain-low), and the
-    compliant contact moves backlash-high's k2 minimum by -0.125. Every other component
-    keeps its minimum within 0.05 of the truth (measured: 0.05 for short-circuit-high's k5
-    and gain-low's k2, at most 0.025 elsewhere). The valleys are
-    shallower than on the rigid RM, the plant's misfit being a floor under them: measured
-    max/min fitness 2.7-82 along backlash lines, 10-150 along friction lines, 34 and more
-    elsewhere, and 1.51 along multiple's eccentricity phase (k6 = 0.012)."""
+    up by 0.025 to 0.25 (measured +0.125..0.25 on the single faults, +0.0617 multiple,
+    +0.025 gain-low). Every other component keeps its minimum within 0.05 of the truth
+    (measured: 0.05 for short-circuit-high's k5, at most 0.025 elsewhere; backlash-high's
+    k2 +0.025, where it was -0.125 before the MM had the compliant contact). The valleys
+    are shallower than on the RM with the MM's mechanics, the plant's misfit being a
+    floor under them."""
     kt = scenario(name)
     best = _landscape_minima(mm_of(name, mm, mm_physical), kt, rm_traces[name]["i_abc"],
                              depth=1.4)
@@ -584,8 +594,7 @@ def test_fitness_landscape_on_the_plant_is_biased_where_the_mm_lacks_physics(
     for c, b in enumerate(best[1:], start=1):
         if b is None:
             continue
-        tol = 0.15 if (name, c) == ("backlash-high", 1) else PLANT_LANDSCAPE_TOL
-        assert abs(b - kt[c]) <= tol + 1e-12, (name, K_NAMES[c], b, kt[c])
+        assert abs(b - kt[c]) <= PLANT_LANDSCAPE_TOL + 1e-12, (name, K_NAMES[c], b, kt[c])
 
 
 # =========================================================================== determinism

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from agreement import N_RANDOM, TOL, assert_traces_agree, conditioning, population, traces
+from agreement import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population, traces
 
 from emaphm.faults import SCENARIOS
 from emaphm.models.layout import C_KP, C_PHI, P_THETA0, pack_population
@@ -65,7 +65,7 @@ def case(request):
 def test_named_scenarios_and_most_random_candidates_are_well_conditioned(case):
     _, _, _, well, _, _ = case
     assert well[N_RANDOM:N_RANDOM + len(SCENARIOS)].all()
-    assert well[:N_RANDOM].sum() >= N_RANDOM // 2
+    assert well[:N_RANDOM].sum() >= MIN_WELL
 
 
 def test_status_agrees(case):

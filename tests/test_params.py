@@ -293,3 +293,23 @@ def test_implausible_parameter_files_are_refused_with_the_unit_slip(tmp_path, se
     p.write_text(tomli_w.dumps(data))
     with pytest.raises(ParameterError, match=words):
         load_params(p)
+
+
+def test_a_file_from_before_0_3_with_the_contact_under_plant_reads_it_into_transmission(tmp_path):
+    """Files written before the monitoring model had the backlash contact kept ``K_c`` and
+    ``D_c`` in ``[plant]``; they load, with the values in ``[transmission]``, and are
+    written back the new way."""
+    d = siemens_1fk7060().to_dict()
+    for key in ("K_c", "D_c"):
+        del d["transmission"][key]
+    d["plant"].update(K_c=2500.0, D_c=0.3)
+    p = ActuatorParams.from_dict(d)
+    assert (p.transmission.K_c, p.transmission.D_c) == (2500.0, 0.3)
+    assert "K_c" not in p.to_dict()["plant"]
+    # a partial file the same, and [transmission]'s own value wins over a stale [plant] one
+    path = tmp_path / "old.toml"
+    path.write_text("[plant]\nomega_s = 2.0\nK_c = 3000.0\n[transmission]\nD_c = 0.7\n")
+    q = load_params(path, partial=True)
+    assert (q.plant.omega_s, q.transmission.K_c, q.transmission.D_c) == (2.0, 3000.0, 0.7)
+    path.write_text("[plant]\nK_c = 3000.0\n[transmission]\nK_c = 3500.0\n")
+    assert load_params(path, partial=True).transmission.K_c == 3500.0

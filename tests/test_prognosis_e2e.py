@@ -89,7 +89,9 @@ def test_spread_methods(run):
     obj = Eq4Objective.from_trace(trace)
     res = {}
     for method in ("population", "seeds", "bootstrap"):
-        a = identify_with_spread(trace, seed=1, method=method, n_runs=2, budget=600,
+        # budget 900: at 600 one of the two seeds' PSO runs stops above the misfit limit
+        # (1.74x the floor) and "seeds" drops it
+        a = identify_with_spread(trace, seed=1, method=method, n_runs=2, budget=900,
                                  options={"pop_size": 20}, objective=obj, algorithm="pso")
         iv = a.interval
         assert np.all(iv.lo <= iv.k) and np.all(iv.k <= iv.hi)

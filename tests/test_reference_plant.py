@@ -22,6 +22,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from emaphm.faults import K_NOMINAL, scenario, scenario_fault_model
+from emaphm.models.layout import contact_resolved
 from emaphm.models.mechanics import transmission_step
 from emaphm.models.plant_mechanics import (contact_torque, plant_step, stribeck_friction_step,
                                            stribeck_torque)
@@ -63,7 +64,11 @@ def with_motor(**kw):
 
 
 def with_plant(**kw):
-    return replace(PARAMS, plant=replace(PARAMS.plant, **kw))
+    """PARAMS with plant (Stribeck) and transmission (contact) fields replaced."""
+    plant = {k: v for k, v in kw.items() if k == "omega_s"}
+    trans = {k: v for k, v in kw.items() if k != "omega_s"}
+    return replace(PARAMS, plant=replace(PARAMS.plant, **plant),
+                   transmission=replace(PARAMS.transmission, **trans))
 
 
 # =========================================================================== (a) energy identity
@@ -199,12 +204,16 @@ def test_leakage_has_no_effect_on_a_healthy_star_connected_motor():
 
 def test_stiff_contact_and_sharp_stribeck_approach_the_rigid_borello_mechanics():
     """K_c up (critically damped contact) and omega_s down: the plant's currents approach
-    those of the same RM on the MM's rigid, momentum-conserving backlash and two-level
-    Borello friction (measured NRMS on backlash-high 8.5e-2 at the defaults, then 9.3e-3,
-    4.1e-3, 3.1e-3; the rest is the O(dt) difference of the two mechanical schemes)."""
+    those of the same RM on the MM's mechanics with a rigid, momentum-conserving backlash
+    (a contact too stiff for the step to resolve, which the MM steps as rigid) and
+    two-level Borello friction (measured NRMS on backlash-high 8.5e-2 at the defaults,
+    then 9.3e-3, 4.1e-3, 3.1e-3; the rest is the O(dt) difference of the two mechanical
+    schemes)."""
     k = scenario("backlash-high")
-    rigid = _run(PARAMS, k, PROFILE, fault_model="paper", n_sub=128, pwm=True, extra_load=0.0,
-                 rigid=True)["i_abc"]
+    unresolved = with_plant(K_c=1e12)
+    assert not contact_resolved(unresolved, T_S / 128)
+    rigid = _run(unresolved, k, PROFILE, fault_model="paper", n_sub=128, pwm=True,
+                 extra_load=0.0, mm_mechanics=True)["i_abc"]
     J_red = J_M * J_L / (J_M + J_L)
     errs = [nrms(run_reference(PARAMS, k, PROFILE)["i_abc"], rigid)]
     for K_c in (1e5, 1e6, 4e6):
@@ -216,7 +225,8 @@ def test_stiff_contact_and_sharp_stribeck_approach_the_rigid_borello_mechanics()
 
 def test_stiff_contact_mechanics_alone_approach_the_rigid_step():
     """Module level: a torque reversal through a 2e-2 rad gap, plant_step (K_c = 1e6,
-    critically damped, omega_s = 1e-4) against transmission_step (measured max motor
+    critically damped, omega_s = 1e-4) against transmission_step's rigid contact
+    (``K_c = 0``; measured max motor
     angle difference 1.7e-4 rad over a 0.16 rad swing: the O(dt) difference of the two
     schemes at the impacts)."""
     dt = 1e-6
@@ -227,7 +237,7 @@ def test_stiff_contact_mechanics_alone_approach_the_rigid_step():
     for n in range(60_000):
         T = 0.8 if n < 20_000 else -0.8
         a = plant_step(*a, T, 0.0, J_M, 5e-4, FSJ, FDJ, 1e-4, J_L, 5e-4, 2e-2, K_c, D_c, dt)
-        b = transmission_step(*b, T, 0.0, J_M, 5e-4, FSJ, FDJ, J_L, 5e-4, 2e-2, dt)
+        b = transmission_step(*b, T, 0.0, J_M, 5e-4, FSJ, FDJ, J_L, 5e-4, 2e-2, 0.0, 0.0, dt)
         th_a.append(a[0])
         th_b.append(b[0])
     th_a, th_b = np.array(th_a), np.array(th_b)

@@ -289,17 +289,25 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
     from .optim.lsq import multistart_least_squares
 
     n_var = N_K + len(nu_names)
+    ev0 = objective.stats.evaluations
     nu0 = nuisance_to_unit(np.zeros((1, len(nu_names))), nu_names) if nu_names else np.zeros((1, 0))
 
     def point(k: np.ndarray, nu_unit: np.ndarray) -> np.ndarray:
         return np.clip(np.hstack([from_k(k[None, :], search), nu_unit.reshape(1, -1)])[0], 0.0, 1.0)
+
+    max_evals = _remaining_evaluations(termination, 0, np.iinfo(np.int64).max)
+    sampled = [0]                       # the sample's evaluations, charged to the budget
 
     def starts():
         if start is not None:
             yield point(start, nu0)
         yield point(K_NOMINAL, nu0)
         # the best of a seeded space-filling sample, drawn in the metaheuristics' space
-        # (short circuits sparse), only when the first starts were not good enough
+        # (short circuits sparse), only when the first starts were not good enough and
+        # the budget leaves room for it and one more start
+        if max_evals - objective.stats.evaluations + ev0 < LSQ_SAMPLE + n_var + 1:
+            return
+        sampled[0] = LSQ_SAMPLE
         sample_space = default_search(fault_model)
         Z = qmc.Sobol(n_var, scramble=True, seed=seed).random(LSQ_SAMPLE)
         K = to_k(Z[:, :N_K], sample_space)
@@ -309,7 +317,6 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
             if np.isfinite(f[i]):
                 yield point(K[i], Z[i, N_K:])
 
-    max_evals = _remaining_evaluations(termination, 0, np.iinfo(np.int64).max)
     max_seconds = _remaining_seconds(termination, 0.0)
     accept = misfit_limit(LSQ_ACCEPT_P) * floor
     box = (np.zeros(n_var), np.ones(n_var))
@@ -317,7 +324,7 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
         lambda Z: objective.residuals(full(Z)), itertools.islice(starts(), 1 + restarts), box,
         accept=accept, settle=limit, polish_evals=POLISH_LSQ_EVALUATIONS if polish else 0,
         max_evals=max_evals, max_seconds=max_seconds, callback=callback,
-        fitness=lambda Z: objective(full(Z)))
+        fitness=lambda Z: objective(full(Z)), charged=lambda: sampled[0])
     raw = OptimizeResult(x=info["x_raw"], fun=info["f_raw"],
                          nfev=res.nfev - info["polish_evaluations"], nit=res.nit,
                          history=res.history, reason=res.reason, elapsed_s=res.elapsed_s,

@@ -36,11 +36,11 @@ field                      unit                meaning
 ``Transmission.FSJ``       N m                 static (breakaway) dry friction torque
 ``Transmission.FDJ``       N m                 dynamic (Coulomb) dry friction torque
 ``Transmission.backlash``  rad                 total backlash width
+``Transmission.K_c``       N m/rad             torsional stiffness of the backlash contact
+``Transmission.D_c``       N m s/rad           damping of the backlash contact
 ``Load.J_l``               kg m^2              load inertia behind the backlash
 ``Load.C_l``               N m s/rad           load viscous damping
 ``Plant.omega_s``          rad/s               Stribeck velocity of the dry friction
-``Plant.K_c``              N m/rad             backlash contact stiffness
-``Plant.D_c``              N m s/rad           backlash contact damping
 ``CurrentSensors.gain``    --                  per-phase current sensor gain (calibrated)
 ``CurrentSensors.offset``  A                   per-phase current sensor offset (calibrated)
 ``CurrentSensors.aa_*``    --, Hz              declared anti-alias filter order, cut-off
@@ -49,8 +49,10 @@ field                      unit                meaning
 =========================  ==================  =====================================
 
 ``[plant]`` holds physics that only the reference plant has (the monitoring
-model uses Borello's two-level friction and a rigid, momentum-conserving
-backlash contact); ``Motor.mu``/``Motor.R_f`` describe an inter-turn short
+model uses Borello's two-level friction without the Stribeck drop); both models
+close the backlash on the compliant contact ``K_c``, ``D_c`` (the monitoring
+model on a rigid one where its step does not resolve the contact, see
+:mod:`emaphm.models.mechanics`); ``Motor.mu``/``Motor.R_f`` describe an inter-turn short
 circuit (healthy: ``mu = 0``), see :mod:`emaphm.models.windings`.
 
 The default preset :func:`siemens_1fk7060` describes the paper's test bench
@@ -326,16 +328,23 @@ class Controller:
 
 @dataclass(frozen=True)
 class Transmission:
-    """Dry friction (Borello's discontinuous stick/slip) and backlash."""
+    """Dry friction (Borello's discontinuous stick/slip), backlash, and the contact
+    that closes it: the gear train's torsional stiffness ``K_c`` and damping ``D_c``
+    (defaults ``4000 N m/rad`` and ``0.5 N m s/rad``: a well-damped two-mass
+    resonance near 500 Hz with the preset's inertias)."""
 
     FSJ: float = 0.12
     FDJ: float = 0.08
     backlash: float = 2e-4
+    K_c: float = 4000.0
+    D_c: float = 0.5
 
     def __post_init__(self) -> None:
         o = "Transmission"
         for name in ("FSJ", "FDJ", "backlash"):
             object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0, strict_lo=False))
+        object.__setattr__(self, "K_c", _check(o, "K_c", self.K_c, lo=0.0))
+        object.__setattr__(self, "D_c", _check(o, "D_c", self.D_c, lo=0.0, strict_lo=False))
         if self.FDJ > self.FSJ:
             raise ParameterError(
                 f"Transmission.FDJ [N m] = {self.FDJ:g} exceeds Transmission.FSJ [N m] = "
@@ -438,23 +447,15 @@ class Plant:
     """Physics that only the reference plant has (the monitoring model lacks it).
 
     Dry friction falls from ``FSJ`` to ``FDJ`` with speed (Stribeck):
-    ``T_f = FDJ + (FSJ - FDJ) exp(-(omega/omega_s)^2)`` while moving;
-    backlash closes on a compliant, damped contact of stiffness ``K_c`` and
-    damping ``D_c`` (the transmission's torsional compliance) instead of a
-    rigid impact. Defaults: ``omega_s = 1 rad/s``; ``K_c = 4000 N m/rad`` and
-    ``D_c = 0.5 N m s/rad``, a well-damped two-mass resonance near 500 Hz
-    with the preset's inertias.
+    ``T_f = FDJ + (FSJ - FDJ) exp(-(omega/omega_s)^2)`` while moving; default
+    ``omega_s = 1 rad/s``. (Files written before 0.3 also held the backlash
+    contact's ``K_c`` and ``D_c`` here; they are read into ``[transmission]``.)
     """
 
     omega_s: float = 1.0
-    K_c: float = 4000.0
-    D_c: float = 0.5
 
     def __post_init__(self) -> None:
-        o = "Plant"
-        for name in ("omega_s", "K_c"):
-            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
-        object.__setattr__(self, "D_c", _check(o, "D_c", self.D_c, lo=0.0, strict_lo=False))
+        object.__setattr__(self, "omega_s", _check("Plant", "omega_s", self.omega_s, lo=0.0))
 
 
 _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
@@ -465,6 +466,7 @@ _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
 #: the defaults (a healthy winding, the default plant physics, ideal sensors, no calibration).
 _OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
 _OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
+                    "transmission": {"K_c", "D_c"},
                     "sensors": {"aa_order", "aa_cutoff", "delay"}}
 
 
@@ -509,6 +511,7 @@ class ActuatorParams:
             raise ParameterError(
                 f"{source}: unknown section(s) {sorted(unknown)}; expected "
                 f"{sorted(_SECTIONS)}")
+        data = _moved_contact(data)
         parts: dict[str, Any] = {}
         for sec, klass in _SECTIONS.items():
             given = data.get(sec)
@@ -544,6 +547,20 @@ class ActuatorParams:
         params = cls(name=str(name), **parts)
         check_plausible(params, source=source)
         return params
+
+
+def _moved_contact(data: dict[str, Any]) -> dict[str, Any]:
+    """``data`` with a file's ``[plant] K_c, D_c`` (where files before 0.3 kept the backlash
+    contact) moved to ``[transmission]``, unless that section gives them itself."""
+    plant = data.get("plant")
+    if not isinstance(plant, dict) or not ({"K_c", "D_c"} & set(plant)):
+        return data
+    data = dict(data)
+    data["plant"] = {k: v for k, v in plant.items() if k not in ("K_c", "D_c")}
+    tr = data.get("transmission")
+    if tr is None or isinstance(tr, dict):
+        data["transmission"] = {**{k: plant[k] for k in ("K_c", "D_c") if k in plant}, **(tr or {})}
+    return data
 
 
 def check_plausible(params: ActuatorParams, *, source: str = "parameters") -> None:

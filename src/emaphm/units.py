@@ -24,6 +24,8 @@ field                default         what it scales
 ``sensor_gain``      -3 .. +3 %      each phase's current sensor gain, independently
 ``sensor_offset``    -20 .. +20 mA   each phase's current sensor offset, independently
 ``load``             -0.1 .. +0.1    constant load torque [N m] the bench does not report
+``stiffness``        -15 .. +15 %    backlash contact stiffness K_c (the gear train's)
+``damping``          -30 .. +30 %    backlash contact damping D_c
 ===================  ==============  ==============================================
 
 The drive keeps its data-sheet settings (``Controller.k_T``): a unit's flux
@@ -61,6 +63,8 @@ class Tolerances:
     sensor_gain: Interval = (-0.03, 0.03)
     sensor_offset: Interval = (-0.02, 0.02)
     load: Interval = (-0.1, 0.1)
+    stiffness: Interval = (-0.15, 0.15)
+    damping: Interval = (-0.30, 0.30)
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -154,11 +158,14 @@ def draw_unit(params: ActuatorParams, seed: int,
          "sensor_gain": [float(x) for x in u(t.sensor_gain, 3)],
          "sensor_offset": [float(x) for x in u(t.sensor_offset, 3)],
          "load": float(u(t.load))}
+    d["stiffness"] = float(u(t.stiffness))     # drawn last: the draws above keep their values
+    d["damping"] = float(u(t.damping))
     m, tr, ld = params.motor, params.transmission, params.load
     motor = replace(m, J_m=m.J_m * (1 + d["J"]), c0=tuple(c * (1 + d["flux"]) for c in m.c0),
                     R=tuple(r * (1 + d["R"]) for r in m.R), L=tuple(x * (1 + d["L"]) for x in m.L),
                     C_m=m.C_m * (1 + d["viscous"]))
-    trans = replace(tr, FSJ=tr.FSJ * (1 + d["friction"]), FDJ=tr.FDJ * (1 + d["friction"]))
+    trans = replace(tr, FSJ=tr.FSJ * (1 + d["friction"]), FDJ=tr.FDJ * (1 + d["friction"]),
+                    K_c=tr.K_c * (1 + d["stiffness"]), D_c=tr.D_c * (1 + d["damping"]))
     load = replace(ld, J_l=ld.J_l * (1 + d["J"]))
     unit_params = replace(params, motor=motor, transmission=trans, load=load)
     return Unit(params=unit_params, sensor_gain=tuple(1 + g for g in d["sensor_gain"]),

@@ -27,6 +27,7 @@ fault model        winding circuit of a candidate (``s`` = shorted fraction)
 
 from __future__ import annotations
 
+import math
 from collections import OrderedDict
 
 import numpy as np
@@ -34,12 +35,14 @@ import numpy as np
 from ..faults import (as_k, backlash_scale, check_fault_model, eccentricity_phase,
                       friction_scale, gain_scale, shorted_fraction, N_K)
 from ..params import ActuatorParams
+from .mechanics import CONTACT_RESOLVED
 from .windings import N_Z, reduced, winding_matrices, zoh
 
 # shared parameters P[...]
 (P_POLES, P_J_M, P_C_M, P_T_MAX, P_I_MAX, P_V_DC, P_T_S, P_KP_I, P_KI_I, P_KI, P_KD,
- P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT) = range(20)
-N_P = 20
+ P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT,
+ P_K_C, P_D_C) = range(22)
+N_P = 22
 
 # per-candidate parameters CP[:, ...]
 (C_KP, C_FSJ, C_FDJ, C_BACKLASH, C_R_A, C_R_B, C_R_C, C_L_A, C_L_B, C_L_C,
@@ -94,8 +97,11 @@ def _sub_step(params: ActuatorParams, n_sub: int) -> float:
 def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> np.ndarray:
     """The shared parameter vector P; ``theta0`` [rad] is the initial motor
     (and load) angle, at rest (a recorded trace need not start at zero);
-    ``P[P_DT] = T_s / n_sub`` the sub-step the electrics are packed for."""
+    ``P[P_DT] = T_s / n_sub`` the sub-step the electrics are packed for;
+    ``P[P_K_C], P[P_D_C]`` the backlash contact the kernels step, ``K_c = 0`` (rigid)
+    where ``dt`` does not resolve it (:func:`contact_resolved`)."""
     m, inv, ctl, load = params.motor, params.inverter, params.controller, params.load
+    tr = params.transmission
     P = np.empty(N_P)
     P[P_POLES] = m.p
     P[P_J_M] = m.J_m
@@ -117,7 +123,18 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> 
     P[P_THETA0] = theta0
     P[P_I_TRIP] = inv.I_trip
     P[P_DT] = _sub_step(params, n_sub)
+    resolved = contact_resolved(params, P[P_DT])
+    P[P_K_C] = tr.K_c if resolved else 0.0
+    P[P_D_C] = tr.D_c if resolved else 0.0
     return P
+
+
+def contact_resolved(params: ActuatorParams, dt: float) -> bool:
+    """Whether a step ``dt`` [s] resolves the backlash contact's two-mass resonance
+    ``omega_c = sqrt(K_c (J_m + J_l) / (J_m J_l))``: ``omega_c dt <=``
+    :data:`~emaphm.models.mechanics.CONTACT_RESOLVED` (0.4 for the preset at 8 kHz)."""
+    J_m, J_l, K_c = params.motor.J_m, params.load.J_l, params.transmission.K_c
+    return math.sqrt(K_c * (J_m + J_l) / (J_m * J_l)) * dt <= CONTACT_RESOLVED
 
 
 def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper", *,
@@ -273,5 +290,5 @@ def _population_matrices(R, L, sigma, mu, R_f, dt):
     return Phi, Gamma
 
 
-__all__ = ["pack", "pack_shared", "pack_population", "PopulationPacker", "winding_step_matrices", "MU_MIN", "N_P",
+__all__ = ["pack", "pack_shared", "contact_resolved", "pack_population", "PopulationPacker", "winding_step_matrices", "MU_MIN", "N_P",
            "N_CP", "NUISANCE", "as_k"]

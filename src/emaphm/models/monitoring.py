@@ -51,7 +51,7 @@ from .controller import control_step
 from .inverter import modulate, overcurrent
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
                      C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, P_C_L, P_C_M, P_I_MAX,
-                     P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
+                     P_D_C, P_J_L, P_J_M, P_K_C, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
                      P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
                      PopulationPacker)
 from .mechanics import transmission_step
@@ -90,6 +90,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     T_s = P[P_T_S]
     dt = T_s / n_sub
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
+    K_c, D_c = P[P_K_C], P[P_D_C]
     V_dc = P[P_V_DC]
     Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
     T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
@@ -160,7 +161,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                                                 mu_a, mu_b, mu_c))
                 thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
                                                      CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
-                                                     CP[j, C_BACKLASH], dt)
+                                                     CP[j, C_BACKLASH], K_c, D_c, dt)
             if not (abs(ia) < I_DIVERGED and abs(ib) < I_DIVERGED and abs(ic) < I_DIVERGED
                     and abs(wm) < OMEGA_DIVERGED and abs(thm) < 1e9):
                 status[j] = STATUS_DIVERGED
@@ -190,7 +191,7 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
     t = profile.grid(T_s)
     ref = profile.theta_ref(t)
     T_load = profile.load_torque(t)
-    _, cp = pack(faulty, theta0, fault_model, n_sub=n_sub)
+    P, cp = pack(faulty, theta0, fault_model, n_sub=n_sub)
     Phi = tuple(cp[0, C_PHI:C_GAMMA])                 # row by row
     Gam = tuple(cp[0, C_GAMMA:C_GAMMA + 25])
     thm = thl = theta0
@@ -229,7 +230,7 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
             T_m = 0.5 * (T_0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu))
             thm, wm, thl, wl = transmission_step.py_func(
                 thm, wm, thl, wl, T_m, T_load[n], m.J_m, m.C_m, tr.FSJ, tr.FDJ, ld.J_l, ld.C_l,
-                tr.backlash, dt)
+                tr.backlash, P[P_K_C], P[P_D_C], dt)
     out.update(t=t, theta_ref=ref)
     return out
 

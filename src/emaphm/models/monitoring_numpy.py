@@ -40,7 +40,7 @@ import numpy as np
 from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAMMA, C_KP,
                      C_MU_A, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI,
                      P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
-                     P_V_DC, P_THETA0, P_I_TRIP)
+                     P_V_DC, P_THETA0, P_I_TRIP, P_K_C, P_D_C)
 from ._monitoring_common import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
 from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
                    winding_step)
@@ -136,9 +136,23 @@ def _friction_step(omega, T_act, FSJ, FDJ, J, dt):
     return np.where(moving, w, breakaway)
 
 
+def _contact_torque(gap, gap_rate, backlash, K_c, D_c):
+    """mechanics.contact_torque: zero in the dead band, a spring-damper that only pushes."""
+    half = 0.5 * backlash
+    push = np.maximum(K_c * (gap - half) + D_c * gap_rate, 0.0)
+    pull = np.minimum(K_c * (gap + half) + D_c * gap_rate, 0.0)
+    return np.where(gap > half, push, np.where(gap < -half, pull, 0.0))
+
+
 def _transmission_step(theta_m, omega_m, theta_l, omega_l, T_m, T_l,
-                       J_m, C_m, FSJ, FDJ, J_l, C_l, backlash, dt):
-    """mechanics.transmission_step: free motion, or the coupled body where the gap closes."""
+                       J_m, C_m, FSJ, FDJ, J_l, C_l, backlash, K_c, D_c, dt):
+    """mechanics.transmission_step: the compliant contact (``K_c > 0``, shared by the
+    population), or free motion / the coupled body where a rigid gap closes."""
+    if K_c > 0.0:
+        T_c = _contact_torque(theta_m - theta_l, omega_m - omega_l, backlash, K_c, D_c)
+        w_m = _friction_step(omega_m, T_m - C_m * omega_m - T_c, FSJ, FDJ, J_m, dt)
+        w_l = omega_l + dt * (T_c - C_l * omega_l - T_l) / J_l
+        return theta_m + dt * w_m, w_m, theta_l + dt * w_l, w_l
     w_m = _friction_step(omega_m, T_m - C_m * omega_m, FSJ, FDJ, J_m, dt)
     w_l = omega_l + dt * (-T_l - C_l * omega_l) / J_l
     th_m = theta_m + 0.5 * dt * (w_m + omega_m)
@@ -245,7 +259,8 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
             ia, ib, ic = phase_currents.py_func(z[0], z[1])
             T_m = 0.5 * (tq0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *mu))
             thm, wm, thl, wl = _transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
-                                                  FSJ, FDJ, J_l, C_l, backlash, dt)
+                                                  FSJ, FDJ, J_l, C_l, backlash,
+                                                  P[P_K_C], P[P_D_C], dt)
         ok = ((np.abs(ia) < I_DIVERGED) & (np.abs(ib) < I_DIVERGED) & (np.abs(ic) < I_DIVERGED)
               & (np.abs(wm) < OMEGA_DIVERGED) & (np.abs(thm) < 1e9))
         newly = alive & ~ok

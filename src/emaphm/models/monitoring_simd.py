@@ -65,7 +65,7 @@ from . import inverter as _inverter
 from . import mechanics as _mechanics
 from . import pmsm as _pmsm
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
-                     C_GAMMA, C_KP, C_MU_A, C_PHI, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_J_L, P_J_M,
+                     C_GAMMA, C_KP, C_MU_A, C_PHI, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_D_C, P_J_L, P_J_M, P_K_C,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
                      P_T_MAX, P_T_S, P_THETA0, P_V_DC)
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
@@ -127,7 +127,9 @@ winding_step = _inlined(_pmsm.winding_step)
 phase_currents = _inlined(_pmsm.phase_currents)
 torque_loops = _inlined(_pmsm.torque_loops)
 friction_step = _inlined(_mechanics.friction_step)
-transmission_step = _inlined(_mechanics.transmission_step, friction_step=friction_step)
+contact_torque = _inlined(_mechanics.contact_torque)
+transmission_step = _inlined(_mechanics.transmission_step, friction_step=friction_step,
+                             contact_torque=contact_torque)
 
 __all__ = ["_kernel", "sincos", "LANES", "TRIG_LIMIT"]
 
@@ -290,11 +292,11 @@ def _plant(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g,
     """One sub-step of the plant of one candidate: back-EMF, winding circuit, transmission.
 
     ``c0, mu``: per-phase tuples; ``Phi, Gam``: tuples of the 25 entries of the winding
-    step; ``mech = (T_l, J_m, C_m, J_l, C_l, dt)``. Returns ``(theta_m, omega_m, theta_l,
+    step; ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``. Returns ``(theta_m, omega_m, theta_l,
     omega_l, z0..z4, i_a, i_b, i_c, torque at the start)``. (At most 30 arguments: past
     that CPython passes them as ``*args``, which Numba's inliner refuses.)
     """
-    T_l, J_m, C_m, J_l, C_l, dt = mech
+    T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt = mech
     c0_a, c0_b, c0_c = c0
     mu_a, mu_b, mu_c = mu
     ca, cb, cc = _back_emf(s_e, c_e, s_g, c_g, c0_a, c0_b, c0_c, ecc)
@@ -306,7 +308,7 @@ def _plant(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g,
     # the mechanics see the step's mean torque (trapezoid), as in the scalar kernel
     T_m = 0.5 * (tq + torque_loops(ja, jb, jc, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c))
     thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m, FSJ, FDJ,
-                                         J_l, C_l, backlash, dt)
+                                         J_l, C_l, backlash, K_c, D_c, dt)
     return thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc, tq
 
 
@@ -452,6 +454,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     T_s = P[P_T_S]
     dt = T_s / n_sub
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
+    K_c, D_c = P[P_K_C], P[P_D_C]
     V_dc = P[P_V_DC]
     Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
     T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
@@ -492,7 +495,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             wa, wb, wc = weights[k, 0], weights[k, 1], weights[k, 2]
         _trig_stage(B, p)
         _control_stage(B, (ta, tb, tc, wa, wb, wc, ref), ctl)
-        mech = (T_l, J_m, C_m, J_l, C_l, dt)
+        mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)
         _plant_stage(B, True, mech)
         for s in range(1, n_sub):
             _trig_stage(B, p)

@@ -1,9 +1,11 @@
 """Transmission of the reference *plant*: Stribeck dry friction and a compliant,
 damped backlash contact.
 
-The monitoring model keeps the paper's idealisation (:mod:`emaphm.models.mechanics`:
-two-level Borello friction, a rigid momentum-conserving backlash contact). The
-plant the diagnosis is judged on has physics the MM lacks:
+The monitoring model (:mod:`emaphm.models.mechanics`) has Borello's two-level
+friction and steps the same compliant contact at its coarse step (or, where that
+step does not resolve the contact, a rigid one). The plant the diagnosis is
+judged on has physics the MM lacks: the Stribeck drop, and the contact resolved
+at the plant's fine step with the unit's own stiffness (:mod:`emaphm.units`).
 
 Dry friction with a Stribeck drop (motor side)
 ----------------------------------------------
@@ -50,6 +52,7 @@ Parameters (units): angles [rad], speeds [rad/s], torques [N m], ``J`` [kg m^2],
 import math
 
 from ._jit import jit
+from .mechanics import contact_torque
 
 __all__ = ["stribeck_torque", "stribeck_friction_step", "contact_torque", "plant_step"]
 
@@ -79,22 +82,6 @@ def stribeck_friction_step(omega, T_act, FSJ, FDJ, omega_s, J, dt):
         return 0.0
     sgn = 1.0 if T_act > 0.0 else -1.0                 # breaks away
     return dt * (T_act - FSJ * sgn) / J
-
-
-@jit
-def contact_torque(gap, gap_rate, backlash, K_c, D_c):
-    """Torque the motor side passes to the load through the backlash [N m].
-
-    ``gap = theta_m - theta_l`` [rad], ``gap_rate = omega_m - omega_l`` [rad/s].
-    Zero inside the dead band ``|gap| <= backlash/2``; beyond, a spring-damper
-    on the penetration that pushes but never pulls.
-    """
-    half = 0.5 * backlash
-    if gap > half:
-        return max(K_c * (gap - half) + D_c * gap_rate, 0.0)
-    if gap < -half:
-        return min(K_c * (gap + half) + D_c * gap_rate, 0.0)
-    return 0.0
 
 
 @jit

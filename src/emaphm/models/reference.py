@@ -38,7 +38,7 @@ meaning; under ``"physical"`` the motor's own ``L_sigma`` couples them.
 Mechanics (:mod:`emaphm.models.plant_mechanics`)
 ------------------------------------------------
 Motor and load are two bodies joined by a backlash dead band closed by a
-compliant, damped contact (``Plant.K_c``, ``Plant.D_c``); the motor side has
+compliant, damped contact (``Transmission.K_c``, ``Transmission.D_c``); the motor side has
 dry friction with a Stribeck drop (``Plant.omega_s``), Borello's stick/slip at
 rest. The mechanics see the sub-step's mean air-gap torque.
 
@@ -73,6 +73,7 @@ from .inverter import modulate, on_fraction, overcurrent, triangle
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_R_A, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I,
                      P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S,
+                     P_K_C, P_D_C,
                      P_THETA0, P_V_DC, pack)
 from .mechanics import transmission_step
 from .plant_mechanics import plant_step
@@ -144,14 +145,15 @@ def electrical_step(motor: Motor, h: float, fault_model: str = "paper") -> Elect
 
 @jit
 def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, n_sub, pwm,
-               rigid, out_i, out_f, out_ripple, out_theta, out_omega, out_torque, out_energy,
+               mm_mechanics, out_i, out_f, out_ripple, out_theta, out_omega, out_torque, out_energy,
                trip_index):
     """One actuator over ``theta_ref.shape[0]`` control periods at step ``T_s/n_sub``.
 
     ``plant = [omega_s, K_c, D_c]``; ``A, B_v, G, L_r`` from :func:`electrical_step`
     at that step, ``loops`` the phases with a fault loop, ``mu, R_f`` per phase.
-    ``rigid`` swaps the plant mechanics for the monitoring model's
-    (:func:`emaphm.models.mechanics.transmission_step`; for comparisons only).
+    ``mm_mechanics`` swaps the plant mechanics for the monitoring model's
+    (:func:`emaphm.models.mechanics.transmission_step` with ``P``'s contact; for
+    comparisons only).
     ``out_ripple (n, 3)`` receives the RMS of each fault-loop current about its mean
     over the sub-step ends of control period ``k`` (the PWM ripple the samples miss).
     ``out_energy (n, 4)`` receives cumulative [input, copper and fault-loop
@@ -284,10 +286,10 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
                 f[loops[j]] = fj
                 f_sum[j] += fj
                 f_sq[j] += fj * fj
-            if rigid:
+            if mm_mechanics:
                 thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_mean, T_load[k], J_m, C_m,
                                                      cp[C_FSJ], cp[C_FDJ], J_l, C_l,
-                                                     cp[C_BACKLASH], dt)
+                                                     cp[C_BACKLASH], P[P_K_C], P[P_D_C], dt)
             else:
                 thm, wm, thl, wl = plant_step(thm, wm, thl, wl, T_mean, T_load[k], J_m, C_m,
                                               cp[C_FSJ], cp[C_FDJ], omega_s, J_l, C_l,
@@ -298,7 +300,7 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
 
 
 def _run(params: ActuatorParams, k, profile: Profile, *, fault_model: str, n_sub: int, pwm: bool,
-         extra_load: float, rigid: bool) -> dict:
+         extra_load: float, mm_mechanics: bool) -> dict:
     if isinstance(n_sub, bool) or not isinstance(n_sub, int) or n_sub < 2 or n_sub % 2:
         raise ValueError(f"reference model n_sub must be an even integer >= 2 (sub-steps per "
                          f"PWM period, so that none straddles the carrier peak), got {n_sub!r}")
@@ -310,7 +312,8 @@ def _run(params: ActuatorParams, k, profile: Profile, *, fault_model: str, n_sub
     T_s = params.inverter.T_s
     el = electrical_step(faulty.motor, T_s / n_sub, fault_model)
     pl = faulty.plant
-    plant = np.array([pl.omega_s, pl.K_c, pl.D_c])
+    tr = faulty.transmission
+    plant = np.array([pl.omega_s, tr.K_c, tr.D_c])
     t = profile.grid(T_s)
     ref = np.ascontiguousarray(profile.theta_ref(t))
     load = np.ascontiguousarray(profile.load_torque(t) + float(extra_load))
@@ -320,7 +323,7 @@ def _run(params: ActuatorParams, k, profile: Profile, *, fault_model: str, n_sub
            "omega_m": np.zeros(n), "torque": np.zeros(n), "energy": np.zeros((n, 4))}
     trip = np.full(1, -1, dtype=np.int64)
     _rm_kernel(P, CP[0], plant, el.A, el.B_v, el.G, el.L_r, el.loops, el.mu, el.R_f, ref, load,
-               n_sub, bool(pwm), bool(rigid), out["i_abc"], out["i_fault"], out["i_fault_ripple"],
+               n_sub, bool(pwm), bool(mm_mechanics), out["i_abc"], out["i_fault"], out["i_fault_ripple"],
                out["theta_m"], out["omega_m"], out["torque"], out["energy"], trip)
     out.update(t=t, theta_ref=ref, trip_time=None if trip[0] < 0 else float(t[trip[0]]))
     return out
@@ -345,4 +348,4 @@ def run_reference(params: ActuatorParams, k, profile: Profile, *, fault_model: s
     on overcurrent (None if never).
     """
     return _run(params, k, profile, fault_model=fault_model, n_sub=n_sub, pwm=pwm,
-                extra_load=extra_load, rigid=False)
+                extra_load=extra_load, mm_mechanics=False)

@@ -185,6 +185,7 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
                              callback: Callable[[LSQState], bool | None] | None = None,
                              fitness: Callable[[np.ndarray], np.ndarray] | None = None,
                              min_gain: float = 0.01, settle: float = float("inf"),
+                             charged: Callable[[], int] | None = None,
                              ) -> tuple[OptimizeResult, dict[str, Any]]:
     """Least squares from each of ``starts`` in turn until one reaches ``accept``; the
     best refined and polished.
@@ -200,7 +201,9 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
        box down to 1e-3, at most ``polish_evals`` points): derivative-free, so it
        settles what the differences could not resolve.
 
-    ``max_evals`` and ``max_seconds`` cap everything; ``callback(LSQState)`` is called
+    ``max_evals`` and ``max_seconds`` cap everything, with ``charged()`` (if given) the
+    evaluations spent outside this function meanwhile, e.g. by a lazy ``starts`` that
+    samples the function to choose its points; ``callback(LSQState)`` is called
     before each Jacobian and True stops. ``fitness(X) -> (m,)``, if given, is ``||r||^2``
     computed more cheaply for the polish (without the residual vectors). Returns ``(result, info)``: ``result.reason`` is
     why the search stopped (``"converged"`` or a budget's or the callback's), and
@@ -220,7 +223,8 @@ def multistart_least_squares(residuals: Callable[[np.ndarray], np.ndarray],
     n_run = 0
 
     def left() -> tuple[float, float]:
-        return max_evals - nfev, max_seconds - (time.perf_counter() - t0)
+        outside = charged() if charged is not None else 0
+        return max_evals - nfev - outside, max_seconds - (time.perf_counter() - t0)
 
     def run(x: np.ndarray, step: float) -> bool:
         """One pass; False when the search must stop (budget or callback)."""
