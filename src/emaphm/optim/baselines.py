@@ -23,14 +23,16 @@ beside the paper's three in :data:`emaphm.optim.ALGORITHMS`).
 How the scipy adapter works
 ---------------------------
 scipy's solver calls the objective itself, from inside ``next(solver)`` (one
-generation). The adapter inverts that control without threads: the state holds a
-snapshot of the solver taken at the start of a generation plus the fitness batches
-already told in that generation. ``ask`` replays the generation on a deep copy with an
-objective that serves the told batches and *raises* at the first batch it does not
-know, capturing the points scipy wants evaluated; ``tell`` replays with one more batch
-and, when the generation completes, keeps the copy as the new snapshot. The solver's
-random stream lives in the copied solver, so replaying is exact and ``tell`` never
-modifies its input state. The run is bit-for-bit the one
+generation). The adapter inverts that control without threads: the state holds the
+solver at the start of a generation plus the fitness batches already told in that
+generation. Asking runs the generation with an objective that serves the told batches
+and *raises* at the first batch it does not know, capturing the points scipy wants
+evaluated, and then undoes the interrupted generation (a checkpoint of the solver's
+attributes and of its random stream); ``tell`` runs it with one more batch and, when
+the generation completes, asks the next one. The solver is owned by the newest state
+and advanced in place (copy on write, :class:`_Owned`): an older state is rebuilt by
+replaying the told batches from a snapshot, so ``tell`` never changes its input state.
+The run is bit-for-bit the one
 ``differential_evolution(..., init=<the same initial population>, rng=<the same
 Generator>, vectorized=True, updating='deferred', polish=False)`` makes (tested), apart
 from the stopping rule, which is emaphm's.
