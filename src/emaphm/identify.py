@@ -500,13 +500,13 @@ def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
     elif fault_model is not None and fault_model != objective.model.fault_model:
         raise ValueError(f"fault_model {fault_model!r} differs from the prebuilt objective's "
                          f"{objective.model.fault_model!r}")
+    else:
+        validate(trace)
+        warm = False
     fault_model = objective.model.fault_model
     if search is None:
         search = (least_squares_search(fault_model) if algorithm == DEFAULT_ALGORITHM
                   else default_search(fault_model))
-    else:
-        validate(trace)
-        warm = False
     # compile (or load from the disk cache) the kernels before the clock starts; an
     # objective that has run already has them
     tc = time.perf_counter()
