@@ -132,3 +132,31 @@ def test_identify_reaches_the_baselines():
         ident = identify(trace, name, seed=0, budget=400)
         assert ident.algorithm == name and 400 <= ident.evaluations < 460
         assert np.isfinite(ident.fitness) and ident.error_pct is not None
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_telling_old_states_again_gives_the_copying_results(name):
+    # tell advances the newest state's engine in place (copy on write); an old state
+    # told again, pickled or deep-copied is rebuilt and gives what a copy per tell gave
+    opt = BASELINES[name]()
+    states = [opt.init(BOX, np.random.default_rng(7))]
+    for _ in range(45):                                   # past one snapshot period (32)
+        X = opt.ask(states[-1])
+        states.append(opt.tell(states[-1], X, rastrigin(X)))
+    copies = {j: copy.deepcopy(states[j]) for j in (0, 1, 2, 20, 33, 45)}
+    for j in (45, 0, 33, 1, 20, 2, 33, 45):
+        X = opt.ask(states[j])
+        assert np.array_equal(X, opt.ask(copies[j]))
+        y = np.sin(X).sum(axis=1)
+        once, twice = opt.tell(states[j], X, y), opt.tell(states[j], X, y)
+        ref = opt.tell(copy.deepcopy(copies[j]), X, y)
+        thawed = opt.tell(pickle.loads(pickle.dumps(states[j])), X, y)
+        for new in (twice, ref, thawed):
+            assert np.array_equal(opt.ask(once), opt.ask(new))
+            X2 = opt.ask(new)
+            assert np.array_equal(opt.ask(opt.tell(new, X2, rastrigin(X2))),
+                                  opt.ask(opt.tell(once, X2, rastrigin(X2))))
+    # the newest state still continues the uninterrupted run
+    cont = resume(rastrigin, opt, states[-1], termination=MaxIterations(60))
+    full = minimize(rastrigin, BOX, opt, seed=np.random.default_rng(7), termination=MaxIterations(60))
+    assert np.array_equal(cont.history, full.history) and np.array_equal(cont.x, full.x)

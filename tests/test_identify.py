@@ -411,3 +411,34 @@ def test_default_pipeline_on_the_physical_fault_model():
     assert ident.fault_model == "physical" and ident.options["search"] == "ecc-xy-sq"
     assert ident.k[2] == pytest.approx(0.15, abs=0.01) and ident.k[3:5].max() < 0.02
     assert ident.error_pct < 1.0 and not ident.suspect
+
+
+def test_objective_cache_is_by_value_and_changes_no_result():
+    import emaphm.identify as ident_mod
+
+    trace = simulate(scenario="gain-high", sensors=DEFAULT_SENSORS, seed=1)
+    ident_mod._OBJECTIVES.cache = None                       # cold
+    cold = identify(trace, "pso", seed=2, budget=300)
+    warm = identify(trace, "pso", seed=2, budget=300)        # the cached objective
+    assert len(ident_mod._OBJECTIVES.cache) == 1
+    assert np.array_equal(cold.k, warm.k) and cold.fitness == warm.fitness
+    assert np.array_equal(cold.history, warm.history)
+    assert cold.evaluations == warm.evaluations and cold.noise_floor == warm.noise_floor
+    assert np.array_equal(cold.model_trace.i_abc, warm.model_trace.i_abc)
+    # an equal trace (another object) hits; changed data or settings miss
+    same = Trace(trace.t, trace.theta_ref, trace.theta_m, trace.omega_m, trace.i_abc.copy(),
+                 trace.torque, dict(trace.meta))
+    identify(same, "pso", seed=2, budget=60)
+    assert len(ident_mod._OBJECTIVES.cache) == 1
+    i_abc = trace.i_abc.copy()
+    i_abc[5, 0] += 1e-3
+    other = Trace(trace.t, trace.theta_ref, trace.theta_m, trace.omega_m, i_abc, trace.torque,
+                  dict(trace.meta))
+    identify(other, "pso", seed=2, budget=60)
+    identify(trace, "pso", seed=2, budget=60, mode="equivalent")
+    assert len(ident_mod._OBJECTIVES.cache) == 3
+    bad = Trace(trace.t, trace.theta_ref, trace.theta_m, trace.omega_m,
+                np.full_like(trace.i_abc, np.nan), trace.torque, dict(trace.meta))
+    with pytest.raises(TraceError):
+        identify(bad, "pso", seed=2, budget=60)              # validated, not cached
+    assert len(ident_mod._OBJECTIVES.cache) == 3

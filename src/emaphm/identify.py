@@ -7,17 +7,21 @@ the box ``[0, 1]^8``) to an optimizer of :mod:`emaphm.optim` and returns an
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import itertools
 import json
 import re
+import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
 from .faults import K_NAMES, K_NOMINAL, N_K, as_k, error_pct
-from .fitness import Eq4Objective, misfit_limit
+from .fitness import Eq4Objective, _Stats, misfit_limit
 from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination, WallClock,
                     get_optimizer, minimize)
 from .optim.local import compass_search
@@ -264,6 +268,50 @@ def _search(fitness: Callable[[np.ndarray], np.ndarray], optimizer: Any, seed: i
     return _Run(res, z, fun, history, 0, 0.0)
 
 
+#: Objectives :func:`identify` built, kept per thread (least recently used dropped): a
+#: campaign identifies the same trace with several algorithms and seeds.
+OBJECTIVE_CACHE_SIZE = 8
+
+_OBJECTIVES = threading.local()
+
+
+def _trace_digest(trace: Trace) -> bytes:
+    """A digest of the trace's value: every array's bytes and its metadata."""
+    h = hashlib.blake2b(digest_size=20)
+    for a in (trace.t, trace.theta_ref, trace.theta_m, trace.omega_m, trace.i_abc, trace.torque):
+        h.update(b"-" if a is None else np.ascontiguousarray(a).tobytes())
+        h.update(b"|")
+    h.update(json.dumps(trace.meta, sort_keys=True, default=str).encode())
+    return h.digest()
+
+
+def _cached_objective(trace: Trace, params: ActuatorParams | None, n_sub: int, mode: str,
+                      fault_model: str | None, nuisance: tuple[str, ...]) -> tuple[Eq4Objective, bool]:
+    """``(objective, warm)``: the objective :func:`identify` builds for ``trace``, from
+    the cache (``warm``, its ``stats`` fresh) when it was built before for an equal trace
+    with equal settings.
+
+    Keyed by value (the trace's digest and the frozen parameters), so a hit is the
+    objective a fresh build would give; the trace was validated when it was built, and
+    its model has run (its kernels are compiled).
+    """
+    cache = getattr(_OBJECTIVES, "cache", None)
+    if cache is None:
+        cache = _OBJECTIVES.cache = OrderedDict()
+    key = (_trace_digest(trace), params, n_sub, mode, fault_model, nuisance)
+    hit = cache.get(key)
+    if hit is not None:
+        cache.move_to_end(key)
+        return dataclasses.replace(hit, stats=_Stats()), True
+    validate(trace)
+    objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode,
+                                        fault_model=fault_model, nuisance=nuisance)
+    cache[key] = objective
+    while len(cache) > OBJECTIVE_CACHE_SIZE:
+        cache.popitem(last=False)
+    return objective, False
+
+
 def _restart_seeds(seed: int, n: int) -> list[int]:
     """Seeds of the restarts, spawned from the identification's seed."""
     return [int(s.generate_state(1)[0] % 2**31) for s in np.random.SeedSequence([seed, 1]).spawn(n)]
@@ -448,30 +496,34 @@ def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
         optimizer = None
     else:
         optimizer = get_optimizer(algorithm, **(options or {}))
-    validate(trace)
     if objective is None:
         if nuisance is None:
             nuisance = default_nuisance(params)
-        objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode,
-                                            fault_model=fault_model, nuisance=tuple(nuisance))
+        objective, warm = _cached_objective(trace, params, n_sub, mode, fault_model,
+                                            tuple(nuisance))
     elif nuisance is not None and tuple(nuisance) != objective.model.nuisance:
         raise ValueError(f"nuisance {tuple(nuisance)} differs from the prebuilt objective's "
                          f"{objective.model.nuisance}")
     elif fault_model is not None and fault_model != objective.model.fault_model:
         raise ValueError(f"fault_model {fault_model!r} differs from the prebuilt objective's "
                          f"{objective.model.fault_model!r}")
+    else:
+        validate(trace)
+        warm = False
     fault_model = objective.model.fault_model
     if search is None:
         search = (least_squares_search(fault_model) if algorithm == DEFAULT_ALGORITHM
                   else default_search(fault_model))
-    # compile (or load from the disk cache) the kernels before the clock starts
+    # compile (or load from the disk cache) the kernels before the clock starts; an
+    # objective that has run already has them
     tc = time.perf_counter()
     if algorithm == DEFAULT_ALGORITHM:
         import scipy.optimize  # noqa: F401  (imported before the clock, like the kernels)
         import scipy.stats  # noqa: F401
-    objective.model.simulate(K_NOMINAL)                         # the scalar kernel
-    objective.model.simulate_population(                         # the SIMD one
-        np.tile(np.concatenate([K_NOMINAL, np.zeros(len(objective.model.nuisance))]), (2, 1)))
+    if not warm:
+        objective.model.simulate(K_NOMINAL)                         # the scalar kernel
+        objective.model.simulate_population(                         # the SIMD one
+            np.tile(np.concatenate([K_NOMINAL, np.zeros(len(objective.model.nuisance))]), (2, 1)))
     compile_s = time.perf_counter() - tc
     k0 = objective.stats.kernel_s
     e0 = objective.stats.diverged

@@ -23,14 +23,16 @@ beside the paper's three in :data:`emaphm.optim.ALGORITHMS`).
 How the scipy adapter works
 ---------------------------
 scipy's solver calls the objective itself, from inside ``next(solver)`` (one
-generation). The adapter inverts that control without threads: the state holds a
-snapshot of the solver taken at the start of a generation plus the fitness batches
-already told in that generation. ``ask`` replays the generation on a deep copy with an
-objective that serves the told batches and *raises* at the first batch it does not
-know, capturing the points scipy wants evaluated; ``tell`` replays with one more batch
-and, when the generation completes, keeps the copy as the new snapshot. The solver's
-random stream lives in the copied solver, so replaying is exact and ``tell`` never
-modifies its input state. The run is bit-for-bit the one
+generation). The adapter inverts that control without threads: the state holds the
+solver at the start of a generation plus the fitness batches already told in that
+generation. Asking runs the generation with an objective that serves the told batches
+and *raises* at the first batch it does not know, capturing the points scipy wants
+evaluated, and then undoes the interrupted generation (a checkpoint of the solver's
+attributes and of its random stream); ``tell`` runs it with one more batch and, when
+the generation completes, asks the next one. The solver is owned by the newest state
+and advanced in place (copy on write, :class:`_Owned`): an older state is rebuilt by
+replaying the told batches from a snapshot, so ``tell`` never changes its input state.
+The run is bit-for-bit the one
 ``differential_evolution(..., init=<the same initial population>, rng=<the same
 Generator>, vectorized=True, updating='deferred', polish=False)`` makes (tested), apart
 from the stopping rule, which is emaphm's.
@@ -74,11 +76,101 @@ from .base import (
     check_real,
     check_told,
     child_rng,
+    fork_rng,
     frozen,
     start,
 )
 
 __all__ = ["BASELINES", "CMAES", "CMAESState", "ScipyDE", "ScipyDEState"]
+
+
+# --------------------------------------------------------------------------- engine ownership
+
+
+#: A state keeps a full copy of its engine (a snapshot) every this many ``tell`` calls, so
+#: that rebuilding an old state replays at most this many steps (and a run keeps at most
+#: this many recipes alive).
+SNAPSHOT_EVERY = 32
+
+
+class _Owned:
+    """The mutable engine of one state (cma's strategy, scipy's solver), copy on write.
+
+    The third-party engines change in place, while states are values (``tell`` leaves
+    its input state alone). Copying the engine on every ``tell`` kept that promise at
+    the price of a deep copy per iteration (about 1.3 ms for cma, more than its own
+    tell and ask). Instead, the engine is *owned*: the newest state holds it *live*,
+    and ``tell`` takes it, advances it in place and hands it to the new state. The
+    state told from keeps a *recipe*: its parent and the step (the told batch) that
+    led from the parent's engine to its own. Reusing such an old state (telling it
+    again, reading ``es``/``solver``, pickling, ``copy.deepcopy``) rebuilds its engine
+    from the nearest snapshot by replaying the recorded steps: the same operations on
+    the same engine as the original run, so the result is the one copying gave, bit
+    for bit. A state whose engine has no recipe (the first state of a run, an
+    unpickled one, and every :data:`SNAPSHOT_EVERY`-th) keeps a snapshot (a deep copy)
+    when it is first told from, which also bounds both the replay and the chain of
+    recipes the newest state keeps alive.
+
+    ``replay(engine, step)`` (a module-level function, so that it pickles) advances an
+    engine in place by one recorded step.
+    """
+
+    __slots__ = ("_depth", "_live", "_lock", "_parent", "_replay", "_snapshot", "_step")
+
+    def __init__(self, engine: Any, replay: Any, parent: _Owned | None = None, step: Any = None,
+                 depth: int = 0) -> None:
+        self._live = engine
+        self._replay = replay
+        self._snapshot = None
+        self._parent = parent
+        self._step = step
+        self._depth = depth
+        self._lock = threading.Lock()
+
+    def take(self) -> Any:
+        """An engine at this state's position that the caller may change in place."""
+        with self._lock:
+            engine, self._live = self._live, None
+            if engine is not None and (self._parent is None or self._depth >= SNAPSHOT_EVERY):
+                self._snapshot = copy.deepcopy(engine)
+                self._parent = self._step = None
+                self._depth = 0
+        return engine if engine is not None else self._rebuild()
+
+    def child(self, engine: Any, step: Any) -> _Owned:
+        """The owner of ``engine`` advanced from this state by ``step``."""
+        return _Owned(engine, self._replay, self, step, self._depth + 1)
+
+    def peek(self) -> Any:
+        """The engine at this state's position, to read (not to change)."""
+        engine = self._live
+        if engine is None:
+            engine = self._rebuild()
+            with self._lock:
+                if self._live is None:
+                    self._live = engine
+                engine = self._live
+        return engine
+
+    def _rebuild(self) -> Any:
+        """A fresh copy of this state's engine: the nearest snapshot (or a live engine up
+        the chain), copied, then the recorded steps replayed from there."""
+        steps, node = [], self
+        while True:
+            with node._lock:
+                base = node._live if node._live is not None else node._snapshot
+                if base is not None:
+                    engine = copy.deepcopy(base)
+                    break
+                steps.append(node._step)
+                node = node._parent
+        for step in reversed(steps):
+            self._replay(engine, step)
+        return engine
+
+    def __reduce__(self) -> tuple:
+        # pickle and copy.deepcopy: this state's engine, as the root of a new chain
+        return (_Owned, (self.peek(), self._replay))
 
 
 # --------------------------------------------------------------------------- scipy DE
@@ -130,22 +222,55 @@ class _Feed:
     index: int = 0
 
 
-def _replay(solver: Any, batches: list) -> tuple[Any, np.ndarray | None]:
-    """Run one generation of a copy of ``solver`` on the told ``batches``.
+def _generation(solver: Any, batches: list) -> np.ndarray | None:
+    """Run one generation of ``solver``, in place, on the told ``batches``.
 
-    Returns ``(solver_after, None)`` when the generation completed, or
-    ``(None, X)`` with the points of the first batch the generation still needs.
+    Returns ``None`` when the generation completed (``solver`` is then at the start of
+    the next one), or the points ``X`` of the first batch the generation still needs;
+    ``solver`` is then left where it was (its attributes and its random stream are
+    restored, see :func:`_checkpoint`).
     """
-    work = copy.deepcopy(solver)
+    restore = _checkpoint(solver)
     previous = getattr(_FEED, "current", None)
     _FEED.current = _Feed(batches)
     try:
-        next(work)
+        next(solver)
     except _Ask as ask:
-        return None, ask.X
+        restore()
+        return ask.X
     finally:
         _FEED.current = previous
-    return work, None
+    return None
+
+
+def _checkpoint(solver: Any) -> Any:
+    """A cheap undo of an interrupted generation: returns ``restore()``.
+
+    Saves the solver's attributes (arrays copied, for the in-place updates of
+    ``population``, ``population_energies`` and the rest) and its Generator's state;
+    a deep copy of the whole solver did the same at about twenty times the cost. An
+    interrupted generation (``_Ask`` raised inside it) only reassigns attributes,
+    changes those arrays and draws from the stream.
+    """
+    saved = {name: value.copy() if isinstance(value, np.ndarray) else value
+             for name, value in vars(solver).items()}
+    rng = solver.random_number_generator
+    rng_state = rng.bit_generator.state
+
+    def restore() -> None:
+        vars(solver).clear()
+        vars(solver).update(saved)
+        rng.bit_generator.state = rng_state
+
+    return restore
+
+
+def _de_step(solver: Any, batches: list | None) -> None:
+    """Advance scipy's solver in place by one recorded step: the batches that completed
+    its generation (``None``: a step within a generation, which leaves it alone)."""
+    if batches is not None and _generation(solver, batches) is not None:
+        raise RuntimeError("ScipyDE: scipy asked for different points on replay; "
+                           "the adapter does not support this scipy version")
 
 
 @dataclass(frozen=True, eq=False)
@@ -157,8 +282,8 @@ class ScipyDEState:
     ==========  =================  ===================================================
     bounds      Bounds             search box
     rng         Generator          the stream the run was seeded from (scipy draws
-                                   from its own copy inside ``solver``)
-    solver      scipy solver       snapshot at the start of the current generation
+                                   from its own fork of it, inside the solver)
+    engine      private            owner of scipy's solver (see ``solver``)
     told        tuple              ``(X, y)`` batches told in the current generation
     pending     (pop_size, n_var)  the points scipy asks for next, problem units, as
                                    scipy made them (``ask`` clips off round-off)
@@ -168,11 +293,15 @@ class ScipyDEState:
     nit         int                iterations (``tell`` calls) so far
     history     (nit,)             best fitness after each iteration
     ==========  =================  ===================================================
+
+    ``solver``: scipy's solver at the start of the current generation; to read, not
+    to change or keep (the newest state hands it on to the next ``tell``, which
+    advances it in place; an older state's is rebuilt on demand, see :class:`_Owned`).
     """
 
     bounds: Bounds
     rng: np.random.Generator
-    solver: Any
+    engine: _Owned
     told: tuple
     pending: np.ndarray
     best_x: np.ndarray
@@ -180,6 +309,12 @@ class ScipyDEState:
     nfev: int
     nit: int
     history: np.ndarray
+
+    @property
+    def solver(self) -> Any:
+        """scipy's solver at the start of the current generation (read it; do not change
+        or keep it)."""
+        return self.engine.peek()
 
 
 @dataclass(frozen=True)
@@ -281,11 +416,13 @@ class ScipyDE:
         bounds = as_bounds(bounds)
         rng = child_rng(rng)
         init = self.initial_population(bounds, rng)
-        solver = self.solver(bounds, init, rng)
-        _, pending = _replay(solver, [])
+        # scipy draws from a fork (same stream): its solver changes in place, the state's
+        # rng must not
+        solver = self.solver(bounds, init, fork_rng(rng))
+        pending = _generation(solver, [])
         return ScipyDEState(
-            bounds=bounds, rng=rng, solver=solver, told=(), pending=frozen(pending),
-            **start(bounds))
+            bounds=bounds, rng=rng, engine=_Owned(solver, _de_step), told=(),
+            pending=frozen(pending), **start(bounds))
 
     def ask(self, state: ScipyDEState) -> np.ndarray:
         """The points scipy asks for next (problem units; clipping only removes the
@@ -298,14 +435,15 @@ class ScipyDE:
         if not np.array_equal(X, self.ask(state)):
             raise ValueError("ScipyDE.tell: X must be the array returned by ask(state)")
         batches = [*state.told, (state.pending, y)]
-        done, pending = _replay(state.solver, batches)
-        if done is not None:          # the generation is complete: new snapshot
-            solver, told = done, ()
-            _, pending = _replay(solver, [])
+        solver = state.engine.take()  # in place when state is the newest, else a rebuilt copy
+        pending = _generation(solver, batches)
+        if pending is None:           # the generation is complete: ask the next one
+            step, told = batches, ()
+            pending = _generation(solver, [])
         else:                         # scipy needs another batch in this generation
-            solver, told = state.solver, tuple(batches)
-        return dataclasses.replace(state, solver=solver, told=told, pending=frozen(pending),
-                                   **advance(state, X, y))
+            step, told = None, tuple(batches)
+        return dataclasses.replace(state, engine=state.engine.child(solver, step), told=told,
+                                   pending=frozen(pending), **advance(state, X, y))
 
 
 # --------------------------------------------------------------------------- CMA-ES
@@ -321,6 +459,13 @@ class _Randn:
         return self.rng.standard_normal(shape)
 
 
+def _cma_step(es: Any, step: tuple) -> None:
+    """Advance cma's strategy in place by one recorded ``tell`` (and its ``ask``)."""
+    solutions, fitness = step
+    es.tell([s.copy() for s in solutions], list(fitness))
+    es.ask()
+
+
 @dataclass(frozen=True, eq=False)
 class CMAESState:
     """State of a :class:`CMAES` run (a value: ``tell`` returns a new one).
@@ -330,24 +475,34 @@ class CMAESState:
     ==========  =================  ===================================================
     bounds      Bounds             search box
     rng         Generator          the stream the run was seeded from (cma draws from
-                                   its own copy inside ``es``)
-    es          CMAEvolutionStrategy  the strategy, already asked for ``pending``
+                                   its own fork of it, inside the strategy)
+    engine      private            owner of cma's strategy (see ``es``)
     pending     list of arrays     cma's solutions (unit box) awaiting their fitness
     best_x      (n_var,)           best point so far, problem units
     best_f      float              its fitness
     nfev, nit, history             as for every optimizer
     ==========  =================  ===================================================
+
+    ``es``: the ``cma.CMAEvolutionStrategy`` at this state, already asked for
+    ``pending``; to read, not to change or keep (the newest state hands it on to the
+    next ``tell``, which advances it in place; an older state's is rebuilt on demand,
+    see :class:`_Owned`).
     """
 
     bounds: Bounds
     rng: np.random.Generator
-    es: Any
+    engine: _Owned
     pending: tuple
     best_x: np.ndarray
     best_f: float
     nfev: int
     nit: int
     history: np.ndarray
+
+    @property
+    def es(self) -> Any:
+        """cma's strategy at this state (read it; do not change or keep it)."""
+        return self.engine.peek()
 
 
 @dataclass(frozen=True)
@@ -406,13 +561,16 @@ class CMAES:
             raise ValueError("CMAES: cma needs at least 2 variables, got 1")
         rng = child_rng(rng)
         x0 = np.full(bounds.n_var, 0.5) if self.x0 == "center" else rng.random(bounds.n_var)
-        opts = {"bounds": [0.0, 1.0], "randn": _Randn(rng), "verbose": -9, "verb_log": 0,
+        # cma draws from a fork (same stream): its strategy changes in place, the state's
+        # rng must not
+        opts = {"bounds": [0.0, 1.0], "randn": _Randn(fork_rng(rng)), "verbose": -9, "verb_log": 0,
                 "verb_disp": 0}
         if self.pop_size is not None:
             opts["popsize"] = self.pop_size
         es = cma.CMAEvolutionStrategy(x0, self.sigma0, opts)
         pending = tuple(np.array(s, dtype=np.float64) for s in es.ask())
-        return CMAESState(bounds=bounds, rng=rng, es=es, pending=pending, **start(bounds))
+        return CMAESState(bounds=bounds, rng=rng, engine=_Owned(es, _cma_step), pending=pending,
+                          **start(bounds))
 
     def ask(self, state: CMAESState) -> np.ndarray:
         """cma's pending solutions in problem units, shape (lambda, n_var)."""
@@ -421,11 +579,13 @@ class CMAES:
     def tell(self, state: CMAESState, X: np.ndarray, y: np.ndarray) -> CMAESState:
         """Tell cma the fitness of the pending solutions and ask for the next ones."""
         X, _, y = check_told(state, X, y, len(state.pending))
-        es = copy.deepcopy(state.es)
         big = np.finfo(np.float64).max / 1e3
-        es.tell([s.copy() for s in state.pending], np.where(np.isfinite(y), y, big).tolist())
+        step = (state.pending, np.where(np.isfinite(y), y, big).tolist())
+        es = state.engine.take()          # in place when state is the newest, else a rebuilt copy
+        es.tell([s.copy() for s in step[0]], step[1])
         pending = tuple(np.array(s, dtype=np.float64) for s in es.ask())
-        return dataclasses.replace(state, es=es, pending=pending, **advance(state, X, y))
+        return dataclasses.replace(state, engine=state.engine.child(es, step), pending=pending,
+                                   **advance(state, X, y))
 
 
 # --------------------------------------------------------------------------- registry
