@@ -5,4 +5,4 @@ a fast, batched monitoring model; identify the fault vector ``k`` of a
 recorded trace with metaheuristics (Baldo et al., Aerospace 2023, 10, 293).
 """
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
