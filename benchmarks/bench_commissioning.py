@@ -98,7 +98,7 @@ def run_unit(task: tuple[int, int]) -> dict:
                             for n, e in cal.estimates.items()}
     i1, d1 = verdict(healthy[2], cal.params)
     out.update(cal_verdict=d1.verdict, cal_fit_ratio=fit_ratio_of(i1),
-               cal_faults=[f.mode for f in d1.faults])
+               cal_faults=[f.mode for f in d1.faults], cal_k=i1.k.tolist())
     name, idx, val, mode, phase = FAULTS[i % len(FAULTS)]
     k = K_NOMINAL.copy()
     k[idx] = val
@@ -106,7 +106,7 @@ def run_unit(task: tuple[int, int]) -> dict:
     i2, d2 = verdict(faulty, cal.params)
     out.update(fault=name, fault_mode=mode, fault_phase=phase, fault_verdict=d2.verdict,
                fault_named=[(f.mode, f.phase) for f in d2.faults], fault_error_pct=i2.error_pct,
-               fault_fit_ratio=fit_ratio_of(i2),
+               fault_fit_ratio=fit_ratio_of(i2), fault_k=i2.k.tolist(), fault_index=idx,
                fault_right=[(f.mode, f.phase) for f in d2.faults] == [(mode, phase)])
     return out
 
@@ -157,6 +157,27 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
     return "\n".join(x for x in out) + "\n"
 
 
+def not_at_fault(rows: list[dict]) -> dict[str, float]:
+    """Each component's largest deviation from healthy on calibrated units where it is
+    not at fault (the third healthy trace, and every other added fault), the quantity
+    ``bench_plant.py --tune`` sets the detection thresholds from on the nominal unit."""
+    comps = {"friction": [0], "backlash": [1], "short_circuit": [2, 3, 4], "eccentricity": [5],
+             "gain_drift": [7]}
+    out = {}
+    for comp, idx in comps.items():
+        v = 0.0
+        for r in rows:
+            for key, faulted in (("cal_k", None), ("fault_k", r.get("fault_index"))):
+                if key not in r:
+                    continue
+                k = np.asarray(r[key])
+                for j in idx:
+                    if j != faulted:
+                        v = max(v, abs(k[j] - 0.5) if comp == "gain_drift" else k[j])
+        out[comp] = float(v)
+    return out
+
+
 #: The identification algorithm (``--algorithm``; set before the worker processes fork).
 ALGORITHM = "lsq"
 
@@ -188,6 +209,7 @@ def main() -> None:
                 err.setdefault(n, []).append(v - truth)
         print(json.dumps({n: {"rms": float(np.sqrt(np.mean(np.square(e)))), "n": len(e)}
                           for n, e in err.items()}, indent=1))
+        print(json.dumps({"max_not_at_fault": not_at_fault(rows)}, indent=1))
         return
     (RESULTS / "commissioning.json").write_text(json.dumps(rows, indent=1, default=float))
     text = report(rows, wall, args.workers)

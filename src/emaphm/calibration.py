@@ -90,14 +90,14 @@ MIN_EFFECT = 0.1
 #: Model discrepancy of each estimate: the RMS of (estimate - truth) over production
 #: units on the reference plant, which has physics the monitoring model lacks
 #: (``benchmarks/bench_commissioning.py --tune``: 60 units on tuning seeds; the sensor
-#: gains and offsets pooled over the phases; R, L and viscous are rarely identifiable,
-#: so theirs rest on 1-2 units). Added in quadrature to the statistical standard error,
-#: which alone covers noise, not model error. The flux and the gains' common mode trade
-#: with the inertia, hence their large values.
+#: gains and offsets pooled over the phases; the flux is separable on 8 of them; R, L and
+#: viscous were not identifiable on any, so theirs are from an earlier run on 1-2 units).
+#: Added in quadrature to the statistical standard error, which alone covers noise, not
+#: model error. The flux and the gains' common mode trade with the inertia.
 DISCREPANCY: dict[str, float] = {
-    "J": 0.050, "flux": 0.100, "R": 0.061, "L": 0.037, "friction": 0.079, "viscous": 0.54,
-    "gain_a": 0.022, "gain_b": 0.022, "gain_c": 0.022,
-    "offset_a": 0.0022, "offset_b": 0.0022, "offset_c": 0.0022, "load": 0.0029}
+    "J": 0.015, "flux": 0.036, "R": 0.061, "L": 0.037, "friction": 0.060, "viscous": 0.54,
+    "gain_a": 0.013, "gain_b": 0.013, "gain_c": 0.013,
+    "offset_a": 0.0018, "offset_b": 0.0018, "offset_c": 0.0018, "load": 0.0017}
 
 #: A pair of estimates more correlated than this is not separable on the profile.
 CORRELATION_LIMIT = 0.95

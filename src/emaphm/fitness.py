@@ -121,13 +121,14 @@ MIN_NOISE = 1e-4
 
 #: The fit ratio (Eq. 4 at the identified k over the trace's white-noise floor) of traces
 #: the monitoring model explains -- healthy and faulty reference-plant traces of the unit
-#: it is given (175 tuning runs of ``benchmarks/bench_plant.py --tune``: median 1.37,
-#: 99th percentile 2.02, largest 2.23) -- is close to lognormal with this mean and
-#: standard deviation of its logarithm. Above the white-noise value 1 because the plant
-#: has physics the model lacks (Stribeck friction, a compliant contact, PWM ripple,
-#: leakage). The test assumes nothing about the noise being white: it compares a fit
+#: it is given (174 tuning runs of ``benchmarks/bench_plant.py --tune``, wrong basins
+#: above 10x left out: median 1.31, 99th percentile 2.75) -- is close to lognormal with
+#: this mean and standard deviation of its logarithm. Above the white-noise value 1
+#: because the plant has physics the model lacks (the Stribeck drop, PWM ripple, leakage,
+#: the contact resolved at a finer step). (0.298 before the monitoring model had the
+#: compliant backlash contact.) The test assumes nothing about the noise being white: it compares a fit
 #: with the fits of actuators the model explains, recorded through the same chain.
-MISFIT_LOG_MEAN = 0.298
+MISFIT_LOG_MEAN = 0.242
 MISFIT_LOG_STD = 0.187
 #: False-alarm probability of the misfit test: a fit ratio whose upper tail probability
 #: under that lognormal is below this is ``unexplained``.
