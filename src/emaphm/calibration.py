@@ -48,7 +48,7 @@ from __future__ import annotations
 import datetime as _dt
 import math
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -138,6 +138,8 @@ class _Target:
     w: np.ndarray               # (n, 3) Eq. 4 weights
     sqrt_w: np.ndarray          # (n, 3) sqrt of the Eq. 4 weights, over the noise sigma
     floor: float                # Eq. 4 value of white noise alone
+    #: the test profile per constant load T_0 [N m]: only the load parameter changes it
+    profiles: dict = field(default_factory=dict, compare=False, repr=False)
 
 
 def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
@@ -162,8 +164,13 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
 def _model_currents(params: ActuatorParams, tg: _Target) -> np.ndarray:
     from .models.monitoring import MonitoringModel
 
-    prof = Profile.from_samples(np.arange(tg.theta_ref.size) * params.inverter.T_s, tg.theta_ref,
-                                tg.load + params.load.T_0)
+    key = (params.inverter.T_s, params.load.T_0)
+    prof = tg.profiles.get(key)
+    if prof is None:
+        if len(tg.profiles) > 16:
+            tg.profiles.clear()
+        prof = tg.profiles[key] = Profile.from_samples(
+            np.arange(tg.theta_ref.size) * params.inverter.T_s, tg.theta_ref, tg.load + params.load.T_0)
     mm = MonitoringModel(params, prof, theta0=tg.theta0, fault_model="physical")
     r = mm.simulate(K_NOMINAL)
     i = r.i_abc[0]

@@ -148,9 +148,16 @@ class Tabulated:
             raise ProfileError("Tabulated needs finite values and strictly increasing times")
         object.__setattr__(self, "t", tuple(t.tolist()))
         object.__setattr__(self, "values", tuple(v.tolist()))
+        # the same samples as arrays, for np.interp (not fields: equality, hashing and
+        # to_dict see the tuples); converting the tuples on every call cost more than
+        # the interpolation
+        t.flags.writeable = False
+        v.flags.writeable = False
+        object.__setattr__(self, "_t", t)
+        object.__setattr__(self, "_v", v)
 
     def __call__(self, t: np.ndarray) -> np.ndarray:
-        return np.interp(t, self.t, self.values)
+        return np.interp(t, self._t, self._v)
 
 
 Shape = Union[Step, Ramp, Sine, Trapezoid, Constant, Tabulated]

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from functools import lru_cache
 
 import numpy as np
 
@@ -164,11 +165,24 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     row[C_ECC_PHASE] = m.ecc_phase
     row[C_MU_A:C_MU_C + 1] = m.mu
     sigma = 1.0 if fault_model == "paper" else m.L_sigma
-    Phi, Gamma = winding_step_matrices(np.array(m.R)[None], np.array(m.L)[None], sigma,
-                                       np.array(m.mu)[None], np.array(m.R_f)[None], P[P_DT])
-    row[C_PHI:C_GAMMA] = Phi[0]
-    row[C_GAMMA:] = Gamma[0]
+    row[C_PHI:C_GAMMA], row[C_GAMMA:] = _one_winding(
+        tuple(m.R), tuple(m.L), float(sigma), tuple(m.mu), tuple(m.R_f), float(P[P_DT]))
     return P, row[None, :]
+
+
+@lru_cache(maxsize=64)
+def _one_winding(R: tuple, L: tuple, sigma: float, mu: tuple, R_f: tuple,
+                 dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`winding_step_matrices` of one winding, kept by value: an actuator packed
+    again and again with the same winding (calibration's one-parameter-at-a-time
+    differences, a model per trace) does its Cholesky factor and eigen-decomposition
+    once. Read-only arrays."""
+    Phi, Gamma = winding_step_matrices(np.array(R)[None], np.array(L)[None], sigma,
+                                       np.array(mu)[None], np.array(R_f)[None], dt)
+    Phi, Gamma = Phi[0], Gamma[0]
+    Phi.flags.writeable = False
+    Gamma.flags.writeable = False
+    return Phi, Gamma
 
 
 #: Nuisance parameters a candidate may carry beside its k: relative deviations of the
@@ -221,6 +235,11 @@ class PopulationPacker:
         self._sigma = 1.0 if fault_model == "paper" else nominal.motor.L_sigma
         self._R_f = np.array(nominal.motor.R_f)
         self._windings: OrderedDict[bytes, tuple[np.ndarray, np.ndarray]] = OrderedDict()
+        # a healthy candidate's winding is the nominal one, already packed in the base row
+        healthy = np.hstack([self.base[0, C_R_A:C_R_C + 1], self.base[0, C_L_A:C_L_C + 1],
+                             self.base[0, C_MU_A:C_MU_C + 1]])
+        self._windings[healthy.tobytes()] = (self.base[0, C_PHI:C_GAMMA].copy(),
+                                             self.base[0, C_GAMMA:].copy())
 
     def __call__(self, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         nuisance = self.nuisance
