@@ -14,7 +14,7 @@ import json
 import numpy as np
 import pytest
 
-from emaphm.faults import K_NAMES, SCENARIOS, error_pct
+from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, error_pct
 from emaphm.fitness import Eq4Objective
 from emaphm.identify import Identification, identify, parse_budget
 from emaphm.identify import DEFAULT_ALGORITHM, LSQ_RESTARTS
@@ -442,3 +442,22 @@ def test_objective_cache_is_by_value_and_changes_no_result():
     with pytest.raises(TraceError):
         identify(bad, "pso", seed=2, budget=60)              # validated, not cached
     assert len(ident_mod._OBJECTIVES.cache) == 3
+
+
+def test_a_backlash_flat_at_the_healthy_k_is_found_from_the_single_fault_starts():
+    """A backlash below the gear train's deflection under load hardly changes the currents,
+    so least squares from the healthy k stays at k2 = 0 when the truth is 0.25 (this seed
+    did, at 9.8 % Eq. 9 error, before the pipeline's sample had single-fault points); the
+    single-fault point k2 = 0.25 is among the starts and gets there."""
+    from emaphm.identify import LSQ_SINGLE_FAULT_LEVELS, single_fault_points
+
+    P = single_fault_points()
+    assert P.shape == (7 * len(LSQ_SINGLE_FAULT_LEVELS) + len(LSQ_SINGLE_FAULT_LEVELS), 8)
+    assert np.all(np.sum(P != K_NOMINAL, axis=1) == 1)       # one fault each, the rest healthy
+    k = K_NOMINAL.copy()
+    k[1] = 0.25
+    trace = simulate(k, model="monitoring", sensors=DEFAULT_SENSORS, seed=10119,
+                     fault_model="physical")
+    ident = identify(trace, seed=10119)
+    assert ident.restarts >= 1                                # the healthy start was not enough
+    assert abs(ident.k[1] - 0.25) < 0.02 and ident.error_pct < 1.0

@@ -46,6 +46,14 @@ ALGORITHM_NAMES: tuple[str, ...] = (DEFAULT_ALGORITHM, *sorted(ALL_ALGORITHMS))
 #: pipeline takes its further starts, when the nominal start is not good enough.
 LSQ_SAMPLE = 64
 
+#: Single-fault points added to that sample: each fault component alone at these values,
+#: the others healthy (:func:`single_fault_points`). Most actuators have one fault, and
+#: a fault whose effect is flat at the healthy value cannot be reached from it by a
+#: gradient: a backlash below the gear train's deflection under load (k2 up to about
+#: 0.05 with the preset's contact) hardly changes the currents, so least squares from
+#: the healthy k stays at k2 = 0 when the truth is 0.25.
+LSQ_SINGLE_FAULT_LEVELS = (0.1, 0.25, 0.5, 0.75)
+
 #: Further starts the least-squares pipeline may take after the first (without a budget).
 LSQ_RESTARTS = 3
 
@@ -327,6 +335,20 @@ def _k_true(trace: Trace) -> np.ndarray | None:
         return None
 
 
+def single_fault_points() -> np.ndarray:
+    """``(n, 8)``: each fault component (k1..k6, k8) alone at each of
+    :data:`LSQ_SINGLE_FAULT_LEVELS` (k8 that far below and above its healthy 0.5), the
+    others healthy."""
+    rows = []
+    for j in (0, 1, 2, 3, 4, 5, 7):
+        for v in LSQ_SINGLE_FAULT_LEVELS:
+            for x in ((0.5 - v / 2, 0.5 + v / 2) if j == 7 else (v,)):
+                k = K_NOMINAL.copy()
+                k[j] = x
+                rows.append(k)
+    return np.array(rows)
+
+
 def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndarray], search: str,
                    nu_names: tuple[str, ...], fault_model: str, start: np.ndarray | None, seed: int,
                    termination: Any, callback: Any, polish: bool, floor: float,
@@ -353,13 +375,16 @@ def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndar
         # the best of a seeded space-filling sample, drawn in the metaheuristics' space
         # (short circuits sparse), only when the first starts were not good enough and
         # the budget leaves room for it and one more start
-        if max_evals - objective.stats.evaluations + ev0 < LSQ_SAMPLE + n_var + 1:
+        axes = single_fault_points()
+        n_sample = LSQ_SAMPLE + len(axes)
+        if max_evals - objective.stats.evaluations + ev0 < n_sample + n_var + 1:
             return
-        sampled[0] = LSQ_SAMPLE
+        sampled[0] = n_sample
         sample_space = default_search(fault_model)
         Z = qmc.Sobol(n_var, scramble=True, seed=seed).random(LSQ_SAMPLE)
-        K = to_k(Z[:, :N_K], sample_space)
-        nu = nuisance_from_unit(Z[:, N_K:], nu_names) if nu_names else np.zeros((LSQ_SAMPLE, 0))
+        K = np.vstack([to_k(Z[:, :N_K], sample_space), axes])
+        Z = np.vstack([Z, np.tile(np.concatenate([np.zeros(N_K), nu0[0]]), (len(axes), 1))])
+        nu = nuisance_from_unit(Z[:, N_K:], nu_names) if nu_names else np.zeros((n_sample, 0))
         f = objective(np.hstack([K, nu]))
         for i in np.argsort(f, kind="stable")[:restarts]:
             if np.isfinite(f[i]):
@@ -403,7 +428,8 @@ def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
         SciPy's trust-region reflective method with a Jacobian from one batched kernel
         call), started from ``start`` if given, then the healthy actuator, then, while
         the fit is above the misfit test's limit at :data:`LSQ_ACCEPT_P`, the best
-        points of a seeded space-filling sample of :data:`LSQ_SAMPLE` candidates (at
+        points of a seeded space-filling sample of :data:`LSQ_SAMPLE` candidates and
+        the single-fault points (:func:`single_fault_points`; charged to the budget; at
         most ``restarts`` further starts, default :data:`LSQ_RESTARTS`), searched in
         :func:`emaphm.search.least_squares_search`; the best refined and polished. It
         needs some hundreds of model runs where the metaheuristics need thousands. Or
