@@ -23,12 +23,15 @@ to refresh this file. Timings are taken on one core per process unless said othe
 the machines are shared, so compare ratios measured side by side in one run.
 
 Accuracy is judged on **plant traces** first: the reference model is a plant with physics
-the monitoring model lacks (Stribeck friction, a compliant backlash contact, leakage and
-fault loops resolved with the PWM ripple) and, where stated, production units within
-tolerances. *Twin* traces (the monitoring model's own currents with the same sensor noise)
-are the inverse crime, shown beside for comparison. Sections dated 2026-11-22 (model
-report, optimizers, prognosis) were measured before the plant existed, on a reference
-model that shared the monitoring model's equations; their scripts re-run them.
+the monitoring model lacks (the Stribeck drop, the backlash contact resolved at 1 us with
+the unit's own stiffness, leakage and fault loops resolved with the PWM ripple) and, where
+stated, production units within tolerances. *Twin* traces (the monitoring model's own
+currents with the same sensor noise) are the inverse crime, shown beside for comparison.
+The monitoring model closes the backlash on a compliant contact since version 0.3
+(2026-11-23 17:00 UTC); sections dated before that were measured with its earlier rigid
+contact (on twin traces, a different model), and those dated 2026-11-22 (model report,
+optimizers, prognosis) before the plant existed, on a reference model that shared the
+monitoring model's equations. Their scripts re-run them.
 
 | section | script |
 |---|---|
