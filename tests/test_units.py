@@ -104,7 +104,7 @@ def test_a_faster_recording_through_an_anti_alias_filter():
 def test_band_limited_noise_is_not_read_as_misfit():
     # 20 kHz through a 2nd-order 4 kHz anti-alias filter: the noise floor is measured on
     # the model grid, where the band-limited noise is nearly white (before: 7x the floor,
-    # flagged and restarted); measured ratio 1.06, error 0.67 %
+    # flagged and restarted); measured ratio 1.10, error 0.45 %
     from emaphm.diagnosis import diagnose, fit_ratio_of
     from emaphm.identify import identify
     from emaphm.simulate import DEFAULT_SENSORS, simulate
@@ -121,8 +121,8 @@ def test_band_limited_noise_is_not_read_as_misfit():
 
 def test_a_declared_anti_alias_filter_is_aligned_not_read_as_a_fault():
     # 20 kHz through a 2nd-order 2 kHz filter: its 112.5 us lag is misfit when unknown
-    # (measured 2.85x, restarted, unexplained); declared in the parameters, the currents
-    # are aligned by it (measured 2.02x, no restart, error 0.10 %)
+    # (measured 2.82x, restarted, unexplained); declared in the parameters, the currents
+    # are aligned by it (measured 1.97x, no restart, error 0.28 %)
     from dataclasses import replace
 
     from emaphm.diagnosis import diagnose, fit_ratio_of
