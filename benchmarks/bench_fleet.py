@@ -30,7 +30,6 @@ import datetime as _dt
 import io
 import json
 import os
-import platform
 import resource
 import shutil
 import subprocess
@@ -39,24 +38,13 @@ import tempfile
 import time
 from pathlib import Path
 
+from _machine import machine as _machine  # the scripts run from benchmarks/
+
 ROOT = Path(__file__).resolve().parent
 
 
 def machine() -> str:
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import matplotlib
-    import numpy as np
-
-    return (f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, "
-            f"Python {platform.python_version()}, NumPy {np.__version__}, "
-            f"matplotlib {matplotlib.__version__}")
+    return _machine("matplotlib")
 
 
 def _cli(*args: str) -> dict:
@@ -170,7 +158,7 @@ def main() -> None:
         shutil.rmtree(tmp, ignore_errors=True)
 
     when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    lines = [f"## Fleet health site: build time (`benchmarks/bench_fleet.py`)", "",
+    lines = ["## Fleet health site: build time (`benchmarks/bench_fleet.py`)", "",
              f"Run {when} on {machine()}. Fleet: {fleet}; {n_act} actuators, {n_ins} "
              f"inspections. Each build is `emaphm fleet report` in a fresh process; CPU "
              f"includes its worker processes. Load average before and after each build "

@@ -31,12 +31,12 @@ for _v in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_
 import argparse  # noqa: E402
 import datetime as _dt  # noqa: E402
 import json  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _machine import machine as _machine  # noqa: E402  (the scripts run from benchmarks/)
 
 RESULTS = Path(__file__).parent / "results"
 ALGOS = ("de", "pso", "gwo")
@@ -84,18 +84,7 @@ def pc(times, errs) -> list[float]:
 
 
 def machine() -> str:
-    cpu = "unknown CPU"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import numba
-
-    return (f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, "
-            f"Python {platform.python_version()}, NumPy {np.__version__}, Numba {numba.__version__}")
+    return _machine("numba")
 
 
 def report(rows: list[dict], seeds: int, workers: int, wall: float, model: str) -> str:
