@@ -290,3 +290,20 @@ def test_the_rul_figure_says_no_growth_and_does_not_stretch_for_it():
     assert flat.get_xlim()[1] <= t[-1] + 0.6 * span               # not stretched to 1e5 h
     assert not [ln for ln in flat.lines if ln.get_marker() == "D"]  # no median drawn
     assert grow.get_title().startswith("friction: RUL median")
+
+
+def test_a_flat_history_names_no_first_failure():
+    """A healthy k that only scatters about zero: some indicator's trend (an exponential
+    through the scatter) still crosses its distant threshold at a finite median (gain
+    drift after 1977 h here), which is no prediction of a failure. ``first`` keeps only
+    the indicators past their threshold or rising beyond two standard errors, so it is
+    None, and a growing fault is still first (test above)."""
+    from emaphm.faults import K_NOMINAL
+
+    rng = np.random.default_rng(0)
+    t = np.array([0.0, 100.0, 200.0, 300.0, 400.0, 500.0])
+    K = np.tile(K_NOMINAL, (t.size, 1)) + np.abs(rng.normal(0, 0.003, (t.size, 8))) * (np.arange(8) != 6)
+    prog = prognose(t, K, seed=1)
+    naive = min(prog.predictions.values(), key=lambda p: (p.median, p.lo))
+    assert math.isfinite(naive.median)                  # the case the rule is for
+    assert prog.first is None

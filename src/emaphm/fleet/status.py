@@ -48,6 +48,7 @@ import numpy as np
 
 from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds,
                                     indicator_values)
+from ..prognosis.trends import growth_rate, indicator_state
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..prognosis.history import Actuator, HistoryData
@@ -125,45 +126,6 @@ def _verdict(data: "HistoryData") -> tuple[str, tuple[str, ...]]:
         if name not in modes:
             modes.append(name)
     return str(verdict), tuple(modes)
-
-
-def growth_rate(fit: "TrendFit") -> tuple[float, float]:
-    """``(rate, standard error)`` of a trend at its reference time (the last inspection):
-    its derivative there and the delta-method error from the fit's covariance."""
-    a, b = float(fit.theta[0]), float(fit.theta[1])
-    if fit.model in ("linear", "quadratic"):
-        grad = np.zeros(fit.n_params)
-        grad[1] = 1.0
-        rate = b
-    else:                                     # exp(alpha + b tau): d/dtau = exp(alpha) b
-        level = math.exp(min(a, 700.0))
-        grad = np.array([level * b, level])
-        rate = level * b
-    var = float(grad @ fit.cov @ grad)
-    return rate, math.sqrt(max(var, 0.0))
-
-
-def _trend_sign(p: "RULPrediction") -> tuple[int, float]:
-    """Sign of the growth of the prediction's most weighted trend, 0 within 2 standard errors."""
-    top = max(p.weights, key=p.weights.get)
-    rate, se = growth_rate(p.fits[top])
-    if not math.isfinite(rate):
-        return 0, rate
-    if abs(rate) <= 2.0 * se:
-        return 0, rate
-    return (1 if rate > 0 else -1), rate
-
-
-def indicator_state(p: "RULPrediction", span: float) -> tuple[str, int, float]:
-    """``(state, trend, growth rate)`` of one indicator's prediction over a history
-    spanning ``span``: state ``past threshold`` (the trend is at or past it: RUL median 0),
-    ``predicted`` (it grows towards it: module docstring) or ``no growth``."""
-    sign, rate = _trend_sign(p)
-    if p.median <= 0.0:
-        return "past threshold", sign, rate
-    if sign > 0 and math.isfinite(p.median) and not p.no_growth(span):
-        return "predicted", sign, rate
-    return "no growth", sign, rate
 
 
 def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,

@@ -248,7 +248,7 @@ def _prognosis_table(prog: Any) -> str:
             iv = f"[{_fmt_time(p.lo, unit)}, {_fmt_time(p.hi, unit) if math.isfinite(p.hi) else 'inf'}]"
         lines.append(f"{name:13s} {p.current:7.3f} {p.threshold:9.3f}  {model:24s} {rul:>12s}  {iv:>22s}")
     first = prog.first
-    if math.isfinite(first.median):
+    if first is not None and math.isfinite(first.median):
         lines.append(f"\nfirst to fail: {first.indicator}, median RUL {_fmt_time(first.median, unit)} "
                      f"({first.level:.0%} interval {_fmt_time(first.lo, unit)} to "
                      f"{_fmt_time(first.hi, unit)}; {first.p_failed:.0%} of the draws already past "

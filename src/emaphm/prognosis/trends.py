@@ -59,7 +59,8 @@ from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPO
 
 __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_trends", "select",
            "RULPrediction", "predict_rul", "Prognosis", "prognose", "indicator_series",
-           "MIN_INSPECTIONS", "DEFAULT_MODELS", "RULTrack", "rul_track"]
+           "MIN_INSPECTIONS", "DEFAULT_MODELS", "RULTrack", "rul_track", "growth_rate",
+           "indicator_state"]
 
 TREND_MODELS = ("linear", "exponential", "quadratic")
 _N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3}
@@ -545,6 +546,49 @@ def indicator_series(K: Any) -> dict[str, np.ndarray]:
     return out
 
 
+def growth_rate(fit: TrendFit) -> tuple[float, float]:
+    """``(rate, standard error)`` of a trend at its reference time (the last inspection):
+    its derivative there and the delta-method error from the fit's covariance."""
+    a, b = float(fit.theta[0]), float(fit.theta[1])
+    if fit.model in ("linear", "quadratic"):
+        grad = np.zeros(fit.n_params)
+        grad[1] = 1.0
+        rate = b
+    else:                                     # exp(alpha + b tau): d/dtau = exp(alpha) b
+        level = math.exp(min(a, 700.0))
+        grad = np.array([level * b, level])
+        rate = level * b
+    var = float(grad @ fit.cov @ grad)
+    return rate, math.sqrt(max(var, 0.0))
+
+
+def _trend_sign(p: RULPrediction) -> tuple[int, float]:
+    """Sign of the growth of the prediction's most weighted trend, 0 within 2 standard errors."""
+    top = max(p.weights, key=p.weights.get)
+    rate, se = growth_rate(p.fits[top])
+    if not math.isfinite(rate):
+        return 0, rate
+    if abs(rate) <= 2.0 * se:
+        return 0, rate
+    return (1 if rate > 0 else -1), rate
+
+
+def indicator_state(p: RULPrediction, span: float) -> tuple[str, int, float]:
+    """``(state, trend, growth rate)`` of one indicator's prediction over a history
+    spanning ``span``: state ``past threshold`` (the trend is at or past it: RUL median 0),
+    ``predicted`` (it grows towards it: its most weighted trend rises by more than two
+    standard errors at the last inspection, and its RUL median is finite and not
+    :meth:`RULPrediction.no_growth`) or ``no growth``. The rise keeps a healthy component
+    out: an exponential fitted to the scatter of a k that sits at zero can cross a
+    distant threshold at a finite time without any real growth."""
+    sign, rate = _trend_sign(p)
+    if p.median <= 0.0:
+        return "past threshold", sign, rate
+    if sign > 0 and math.isfinite(p.median) and not p.no_growth(span):
+        return "predicted", sign, rate
+    return "no growth", sign, rate
+
+
 @dataclass(frozen=True)
 class Prognosis:
     """RUL of every health indicator of one actuator at ``t_now`` (results as data)."""
@@ -558,9 +602,15 @@ class Prognosis:
     K: np.ndarray = field(repr=False)
 
     @property
-    def first(self) -> RULPrediction:
-        """The prediction with the smallest median RUL (the fault that ends life first)."""
-        return min(self.predictions.values(), key=lambda p: (p.median, p.lo))
+    def first(self) -> RULPrediction | None:
+        """The fault that ends life first: the smallest median RUL among the indicators
+        past their threshold or growing towards it (:func:`indicator_state`); None when
+        none is (a flat history's trend can cross a distant threshold from its scatter
+        alone, which is no prediction of a failure)."""
+        span = float(self.times[-1] - self.times[0]) if self.times.size else 0.0
+        live = [p for p in self.predictions.values()
+                if indicator_state(p, span)[0] != "no growth"]
+        return min(live, key=lambda p: (p.median, p.lo)) if live else None
 
     def to_dict(self) -> dict[str, Any]:
         return {"actuator": self.actuator, "t_now": self.t_now, "time_unit": self.time_unit,
