@@ -44,6 +44,7 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 from bench_identification import _warm, machine  # noqa: E402  (shared: warm-up, machine line)
+from bench_plant import largest_deviations  # noqa: E402  (shared: what a threshold must exceed)
 
 RESULTS = Path(__file__).parent / "results"
 UNIT_SEED0 = 20_000
@@ -161,21 +162,8 @@ def not_at_fault(rows: list[dict]) -> dict[str, float]:
     """Each component's largest deviation from healthy on calibrated units where it is
     not at fault (the third healthy trace, and every other added fault), the quantity
     ``bench_plant.py --tune`` sets the detection thresholds from on the nominal unit."""
-    comps = {"friction": [0], "backlash": [1], "short_circuit": [2, 3, 4], "eccentricity": [5],
-             "gain_drift": [7]}
-    out = {}
-    for comp, idx in comps.items():
-        v = 0.0
-        for r in rows:
-            for key, faulted in (("cal_k", None), ("fault_k", r.get("fault_index"))):
-                if key not in r:
-                    continue
-                k = np.asarray(r[key])
-                for j in idx:
-                    if j != faulted:
-                        v = max(v, abs(k[j] - 0.5) if comp == "gain_drift" else k[j])
-        out[comp] = float(v)
-    return out
+    return largest_deviations([(r["cal_k"], None) for r in rows if "cal_k" in r]
+                              + [(r["fault_k"], r["fault_index"]) for r in rows if "fault_k" in r])
 
 
 #: The identification algorithm (``--algorithm``; set before the worker processes fork).

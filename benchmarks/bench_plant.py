@@ -163,6 +163,25 @@ def summarise(rows: list[dict]) -> dict:
     return res
 
 
+#: The k components each detection threshold reads (``gain_drift``: ``|k8 - 0.5|``).
+THRESHOLD_COMPONENTS = {"friction": (0,), "backlash": (1,), "short_circuit": (2, 3, 4),
+                        "eccentricity": (5,), "gain_drift": (7,)}
+
+
+def largest_deviations(runs) -> dict[str, float]:
+    """Each threshold's largest deviation from healthy over ``runs``, pairs ``(k, faulted)``
+    (``faulted``: the index of the component at fault, or None), leaving out the component
+    at fault: what a threshold must stay above."""
+    out = dict.fromkeys(THRESHOLD_COMPONENTS, 0.0)
+    for k, faulted in runs:
+        k = np.asarray(k)
+        for comp, idx in THRESHOLD_COMPONENTS.items():
+            for j in idx:
+                if j != faulted:
+                    out[comp] = max(out[comp], abs(k[j] - 0.5) if comp == "gain_drift" else k[j])
+    return {comp: float(v) for comp, v in out.items()}
+
+
 def suggest(rows: list[dict]) -> dict:
     """Thresholds from the tuning runs: each component's largest deviation from healthy
     in runs where that component is not at fault (healthy units, and every other fault:
@@ -170,20 +189,15 @@ def suggest(rows: list[dict]) -> dict:
     runs the model explains (wrong basins, fit > 10x, left out)."""
     from emaphm.diagnosis import THRESHOLDS_BY_FAULT_MODEL
 
-    def dev(r, comp):
-        k = np.asarray(r["k_id"])
-        if comp == "short_circuit":
-            faulty = 2 + "ABC".index(r["phase"]) if r["case"] == "short" else None
-            return max((k[j] for j in (2, 3, 4) if j != faulty), default=0.0)
-        j = {"friction": 0, "backlash": 1, "eccentricity": 5, "gain_drift": 7}[comp]
-        if r["case"] == "modes" and r["index"] == j:
-            return 0.0
-        return abs(k[j] - 0.5) if comp == "gain_drift" else k[j]
+    def faulted(r):
+        if r["case"] == "short":
+            return 2 + "ABC".index(r["phase"])
+        return r["index"] if r["case"] == "modes" else None
 
+    largest = largest_deviations((r["k_id"], faulted(r)) for r in rows)
     cur = THRESHOLDS_BY_FAULT_MODEL["physical"]
     out = {}
-    for comp in ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift"):
-        v = max(dev(r, comp) for r in rows)
+    for comp, v in largest.items():
         out[comp] = {"max_not_at_fault": float(v), "suggested": float(max(1.25 * v, 0.015)),
                      "current": getattr(cur, comp)}
     ratios = np.array([r["fitness"] / r["noise_floor"] for r in rows])
