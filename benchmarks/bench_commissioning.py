@@ -57,9 +57,10 @@ FAULTS += [(f"short {int(100 * mu)} % {ph}", 2 + j, mu, "short_circuit", ph)
 
 def run_unit(task: tuple[int, int]) -> dict:
     from emaphm.calibration import CalibrationError, calibrate
-    from emaphm.diagnosis import diagnose, fit_ratio_of
+    from emaphm.diagnosis import fit_ratio_of
     from emaphm.faults import K_NOMINAL
     from emaphm.identify import identify
+    from emaphm.mismatch import diagnose_identification
     from emaphm.params import siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
     from emaphm.units import draw_unit
@@ -72,13 +73,16 @@ def run_unit(task: tuple[int, int]) -> dict:
 
     def verdict(trace, params):
         ident = identify(trace, ALGORITHM, seed=0, params=params)
-        d = diagnose(ident.k, params=params, fault_model="physical", fit_ratio=fit_ratio_of(ident))
+        # the verdict as diagnose gives it: on the data sheet, with the mismatch check
+        d = diagnose_identification(trace, ident, params=params)
         return ident, d
 
     i0, d0 = verdict(healthy[2], sheet)
     out = {"unit": i, "deviations": unit.deviations,
            "uncal_verdict": d0.verdict, "uncal_fit_ratio": fit_ratio_of(i0),
-           "uncal_faults": [f.mode for f in d0.faults]}
+           "uncal_faults": [f.mode for f in d0.faults],
+           "uncal_reason": None if d0.unexplained is None else d0.unexplained.reason,
+           "uncal_suspected": [f.mode for f in d0.suspected]}
     t = time.process_time()
     try:
         cal = calibrate(healthy[:2], sheet)
@@ -132,6 +136,9 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
            f"{sum(r['uncal_verdict'] == 'faulty' for r in rows)}/{n} "
            f"(unexplained {sum(r['uncal_verdict'] == 'unexplained' for r in rows)}, healthy "
            f"{sum(r['uncal_verdict'] == 'healthy' for r in rows)}) |",
+           f"| ... unexplained by the mismatch check (a fault read, explained as well by R, flux "
+           f"and an unreported load) | {sum(r.get('uncal_reason') == 'mismatch' for r in rows)}/{n} "
+           f"({', '.join(sorted({m for r in rows if r.get('uncal_reason') == 'mismatch' for m in r['uncal_suspected']})) or 'none'}) |",
            f"| calibration refused (unit does not look healthy) | "
            f"{n - len(ok)}/{n} |",
            f"| calibrated, third healthy trace: verdict healthy | "

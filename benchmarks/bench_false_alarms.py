@@ -33,13 +33,14 @@ EXPECTED = {"friction": ("friction", None), "backlash": ("backlash", None),
 
 
 def run(task):
-    from emaphm.diagnosis import diagnose, fit_ratio_of
     from emaphm.identify import identify
+    from emaphm.mismatch import diagnose_identification
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 
     scenario, algo, seed = task
-    r = identify(simulate(scenario=scenario, sensors=DEFAULT_SENSORS, seed=1000 + seed), algo, seed=seed)
-    d = diagnose(r.k, fault_model=r.fault_model, fit_ratio=fit_ratio_of(r))
+    trace = simulate(scenario=scenario, sensors=DEFAULT_SENSORS, seed=1000 + seed)
+    r = identify(trace, algo, seed=seed)
+    d = diagnose_identification(trace, r)      # with the mismatch check (data sheet)
     return scenario, algo, seed, r.k.tolist(), [(f.mode, f.phase) for f in d.faults], d.verdict
 
 

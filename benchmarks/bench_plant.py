@@ -68,8 +68,8 @@ def _k(index=None, value=None):
 def run_one(task: dict) -> dict:
     from dataclasses import replace
 
-    from emaphm.diagnosis import diagnose, fit_ratio_of
     from emaphm.identify import identify
+    from emaphm.mismatch import diagnose_identification
     from emaphm.params import siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 
@@ -86,13 +86,17 @@ def run_one(task: dict) -> dict:
     t0 = time.process_time()
     ident = identify(trace, ALGORITHM, seed=task["seed"], params=nominal)
     cpu = time.process_time() - t0
-    diag = diagnose(ident.k, params=nominal, fault_model="physical",
-                    fit_ratio=fit_ratio_of(ident))
+    t0 = time.process_time()
+    diag = diagnose_identification(trace, ident, params=nominal)   # with the mismatch check
+    check_cpu = time.process_time() - t0
     return {**task, "k_id": ident.k.tolist(), "error_pct": ident.error_pct,
             "faults": [(f.mode, f.phase) for f in diag.faults], "verdict": diag.verdict,
+            "mismatch_checked": diag.mismatch is not None,
+            "unexplained_reason": None if diag.unexplained is None else diag.unexplained.reason,
             "fitness": ident.fitness,
             "noise_floor": ident.noise_floor, "restarts": ident.restarts,
-            "suspect": ident.suspect, "cpu_s": cpu, "sim_cpu_s": sim_cpu}
+            "suspect": ident.suspect, "cpu_s": cpu, "sim_cpu_s": sim_cpu,
+            "check_cpu_s": check_cpu}
 
 
 def tasks(case: str, model: str, seed0: int, n_healthy: int) -> list[dict]:
@@ -156,6 +160,11 @@ def summarise(rows: list[dict]) -> dict:
             "healthy_fit_ratio_p95": float(np.percentile([r["fitness"] / r["noise_floor"]
                                                           for r in he], 95)) if he else None,
             "median_cpu_s": float(np.median([r["cpu_s"] for r in rs])),
+            "checked": sum(1 for r in rs if r.get("mismatch_checked")),
+            "check_median_cpu_s": float(np.median([r["check_cpu_s"] for r in rs
+                                                   if r.get("mismatch_checked")]))
+            if any(r.get("mismatch_checked") for r in rs) else None,
+            "explained_by_mismatch": sum(1 for r in rs if r.get("unexplained_reason") == "mismatch"),
             "failures": [(r["case"], r.get("name") or f"mu={r.get('mu')} Rf={r.get('R_f')} "
                           f"{r.get('phase')}", r["faults"]) for r in sh + md
                          if r not in ok and r not in md_ok],
@@ -242,6 +251,11 @@ def report(summary: dict, wall: float, workers: int) -> str:
                f"{cell(p, 'healthy_fit_ratio_p95', '{:.2f}')} | {cell(t, 'healthy_fit_ratio_p95', '{:.2f}')} |")
     out.append(f"| median CPU time per identification [s] | {cell(p, 'median_cpu_s', '{:.2f}')} | "
                f"{cell(t, 'median_cpu_s', '{:.2f}')} |")
+    out.append(f"| mismatch check (verdicts naming a fault): runs checked, explained away | "
+               f"{cell(p, 'checked')}, {cell(p, 'explained_by_mismatch')} | "
+               f"{cell(t, 'checked')}, {cell(t, 'explained_by_mismatch')} |")
+    out.append(f"| ... median CPU time of the check [s] | {cell(p, 'check_median_cpu_s', '{:.2f}')} | "
+               f"{cell(t, 'check_median_cpu_s', '{:.2f}')} |")
     out += ["", "Mean identified shorted fraction (k of the faulty phase) by true mu "
             f"{', '.join(f'{m:.2f}' for m in MUS)}, plant traces:", ""]
     for rf, sev in (p.get("short_severity_by_Rf") or {}).items():

@@ -289,7 +289,7 @@ def test_pack_population_winding_step_of_each_fault_model():
         Phi = row[C_PHI:C_GAMMA].reshape(5, 5)
         assert not Phi[2:, :2].any() and not Phi[:2, 2:].any()
     Phi = phys[1, C_PHI:C_GAMMA].reshape(5, 5)
-    Gam = phys[1, C_GAMMA:].reshape(5, 5)
+    Gam = phys[1, C_GAMMA:C_GAMMA + 25].reshape(5, 5)
     assert abs(Phi[0, 2]) > 1e-3 and abs(Gam[2, 0]) > 1e-3         # loop a couples to i_alpha
     assert not Phi[3:, :3].any() and not Phi[:3, 3:].any()                        # b, c: none
     np.testing.assert_allclose(Gam, Gam.T, rtol=1e-12, atol=1e-18)               # symmetric

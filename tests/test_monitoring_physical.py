@@ -90,7 +90,7 @@ def test_winding_step_equals_direct_integration_of_the_windings_ode(fault_model,
             sol = solve_ivp(lambda t, x: np.linalg.solve(L_r, w_ode - R_r @ x), (0.0, dt), z,
                             method="Radau", rtol=1e-12, atol=1e-12,
                             jac=-np.linalg.solve(L_r, R_r))
-            z1 = winding_step(*z, *w, tuple(cp[0, C_PHI:C_GAMMA]), tuple(cp[0, C_GAMMA:]))
+            z1 = winding_step(*z, *w, tuple(cp[0, C_PHI:C_GAMMA]), tuple(cp[0, C_GAMMA:C_GAMMA + 25]))
             np.testing.assert_allclose(z1, sol.y[:, -1], rtol=1e-7, atol=1e-9)
             np.testing.assert_allclose(phase_currents(z1[0], z1[1]), Q @ np.array(z1[:2]),
                                        rtol=1e-14, atol=1e-14)

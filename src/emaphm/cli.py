@@ -166,6 +166,7 @@ def _unit_options(args: argparse.Namespace, params) -> dict[str, Any]:
 # ----------------------------------------------------------------------------- diagnose
 def _table(ident, diag) -> str:
     from .faults import K_LABELS, K_NAMES
+    from .search import nuisance_text
 
     lines = [f"{'k':4s} {'component':26s} {'identified':>10s}"
              + (f" {'true':>8s}" if ident.k_true is not None else "")]
@@ -176,7 +177,7 @@ def _table(ident, diag) -> str:
         lines.append(row)
     lines.append("")
     lines.append(f"fault model {ident.fault_model}"
-                 + ("; searched with " + ", ".join(f"{n} {100 * v:+.1f}%"
+                 + ("; searched with " + ", ".join(nuisance_text(n, v)
                                                    for n, v in ident.nuisance.items())
                     if ident.nuisance else ""))
     lines.append(f"algorithm {ident.algorithm}, seed {ident.seed}: {ident.evaluations} evaluations, "
@@ -204,6 +205,10 @@ def _table(ident, diag) -> str:
         u = diag.unexplained
         lines.append(f"  the model does not explain this actuator ({u.reason}"
                      + (f", p = {u.p_value:.1e}" if u.p_value is not None else "") + f"): {u.hint}")
+        if diag.mismatch is not None and u.reason == "mismatch":
+            lines.append("  mismatch check (k searched with "
+                         + ", ".join(nuisance_text(n, v) for n, v in diag.mismatch.nuisance.items())
+                         + "): " + ", ".join(f"k{i + 1} {x:.3f}" for i, x in enumerate(diag.mismatch.k)))
         if diag.suspected:
             lines.append("  components above their thresholds, not a diagnosis: "
                          + ", ".join(f"{f.mode}{' ' + f.phase if f.phase else ''}"
@@ -212,7 +217,7 @@ def _table(ident, diag) -> str:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from .diagnosis import diagnose, fit_ratio_of
+    from .mismatch import diagnose_identification
     from .faults import scenario
     from .identify import ALGORITHM_NAMES, identify
     from .plots import plot_identification
@@ -265,8 +270,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
     finally:
         progress.close()
-    diag = diagnose(ident.k, params=params, fault_model=ident.fault_model,
-                    fit_ratio=fit_ratio_of(ident))
+    diag = diagnose_identification(trace, ident, params=params)
     if args.json:
         out = {**ident.to_dict(), **diag.to_dict(),
                "scenario": args.scenario or trace.meta.get("scenario"),
@@ -398,8 +402,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--quiet", action="store_true", help="no progress line")
     d.add_argument("--nuisance", default=None,
                    help="parameters searched with k so that a drift is not read as a fault: "
-                        "none, R (winding resistance), flux, or R,flux; default R,flux for "
-                        "calibrated --params, none for a data sheet")
+                        "none, or a comma-separated subset of R (winding resistance), flux "
+                        "(magnet flux), load (an unreported constant load, N m); default R,flux "
+                        "for calibrated --params, none for a data sheet, whose faults the "
+                        "mismatch check then confirms with R,flux,load searched beside k")
     _plant_arguments(d, diagnose=True)
     d.set_defaults(func=cmd_diagnose)
 

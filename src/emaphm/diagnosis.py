@@ -17,7 +17,11 @@ contact read as up to 0.11 of backlash and that threshold was 0.143.)
 The verdict is ``healthy``, ``faulty`` or ``unexplained``: a fit that the
 misfit test (:func:`emaphm.fitness.misfit_p_value`) finds too far above what the
 model reaches on actuators it describes, or a balanced change on all three
-phases (a calibration mismatch), is not read as faults.
+phases (a calibration mismatch), is not read as faults. Nor, on data-sheet
+parameters, is a fault that the *mismatch check* explains away
+(:mod:`emaphm.mismatch`): the fit with the unit's likeliest deviations from its
+data sheet (winding resistance, magnet flux, an unreported constant load)
+searched beside k does not name it.
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, mi
 from .params import ActuatorParams, siemens_1fk7060
 
 __all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fault", "Diagnosis",
+           "MismatchFit",
            "Unexplained", "diagnose", "FAULT_MODES", "VERDICTS", "MISFIT_LOG_MEAN",
            "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit", "fit_ratio_of"]
 
@@ -98,7 +103,9 @@ class Unexplained:
     """Why the identified k is not a diagnosis: ``reason`` (``"misfit"``: the best fit is
     statistically above what the model reaches on an actuator it describes;
     ``"balanced-phases"``: the same change on all three phases, a calibration mismatch
-    rather than three shorts), the ``statistic`` tested, its ``p_value`` (None where the
+    rather than three shorts; ``"mismatch"``: on data-sheet parameters, the fit with the
+    unit's likeliest deviations from its data sheet searched beside k names none of the
+    faults, its fit ratio the statistic, 0 without a noise floor), the ``statistic`` tested, its ``p_value`` (None where the
     rule is not a statistical test) and a ``hint`` of what to do."""
 
     reason: str
@@ -108,12 +115,31 @@ class Unexplained:
 
 
 @dataclass(frozen=True)
+class MismatchFit:
+    """The fit of a trace with the unit's likeliest deviations from its data sheet searched
+    beside ``k`` (:func:`emaphm.mismatch.mismatch_fit`): its ``k``, the ``nuisance`` values
+    found (name -> value, :data:`emaphm.search.NUISANCE_RANGE`) and its ``fit_ratio``
+    (None without a noise floor). A fault read on data-sheet parameters is kept only if
+    this fit names it too."""
+
+    k: np.ndarray
+    nuisance: dict
+    fit_ratio: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"k": [float(x) for x in self.k],
+                "nuisance": {n: float(v) for n, v in self.nuisance.items()},
+                "fit_ratio": None if self.fit_ratio is None else float(self.fit_ratio)}
+
+
+@dataclass(frozen=True)
 class Diagnosis:
     """Health verdict of one identified fault vector.
 
     ``verdict`` is ``"healthy"``, ``"faulty"`` (``faults`` names them) or
     ``"unexplained"`` (``unexplained`` says why; ``faults`` is then empty, and the
-    components above their thresholds are kept in ``suspected``).
+    components above their thresholds are kept in ``suspected``). ``mismatch``: the
+    mismatch check's fit, where one was made (data-sheet parameters and a fault read).
     """
 
     k: np.ndarray
@@ -122,6 +148,7 @@ class Diagnosis:
     fault_model: str = "paper"
     unexplained: Unexplained | None = None
     suspected: tuple[Fault, ...] = ()
+    mismatch: MismatchFit | None = None
 
     @property
     def verdict(self) -> str:
@@ -142,7 +169,8 @@ class Diagnosis:
                 "faults": [asdict(f) for f in self.faults],
                 "unexplained": None if self.unexplained is None else asdict(self.unexplained),
                 "suspected": [asdict(f) for f in self.suspected],
-                "thresholds": asdict(self.thresholds), "fault_model": self.fault_model}
+                "thresholds": asdict(self.thresholds), "fault_model": self.fault_model,
+                "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict()}
 
     def summary(self) -> str:
         if self.unexplained is not None:
@@ -161,7 +189,8 @@ def fit_ratio_of(ident: Any) -> float | None:
 
 def diagnose(k, *, thresholds: Thresholds | None = None,
              params: ActuatorParams | None = None, fault_model: str = "paper",
-             fit_ratio: float | None = None, misfit_p: float = MISFIT_P) -> Diagnosis:
+             fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
+             mismatch: MismatchFit | None = None) -> Diagnosis:
     """Read the faults out of an identified ``k``.
 
     ``params`` (the healthy actuator, default preset) turns the components into
@@ -171,12 +200,67 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
     given, is tested: a fit whose probability under the fit ratios of explained
     actuators (:func:`misfit_p_value`) is below ``misfit_p`` makes the verdict
     ``unexplained``, as does a balanced short circuit on all three phases.
+    ``mismatch`` (the mismatch check's fit, :func:`emaphm.mismatch.mismatch_fit`),
+    when given, keeps only the faults it names too; when it names none of them, the
+    verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
+    data sheet explains the reading as well as a fault does.
     """
     k = as_k(k)
     check_fault_model(fault_model)
     if thresholds is None:
         thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
     p = params if params is not None else siemens_1fk7060()
+    faults = _read_faults(k, thresholds, p, fault_model)
+    unexplained = None
+    if fit_ratio is not None:
+        pv = misfit_p_value(float(fit_ratio))
+        if pv < misfit_p:
+            unexplained = Unexplained(
+                "misfit", float(fit_ratio), pv,
+                f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
+                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
+                "differs from its parameters, or has a fault the model lacks; calibrate it on "
+                "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
+                "load the bench applies and the current sensor chain")
+    sc = k[2:5]
+    if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
+        unexplained = Unexplained(
+            "balanced-phases", float(sc.min() / sc.max()), None,
+            "the same change on all three phases is a mismatch of magnet flux, inertia or "
+            "current sensor gain between the unit and its parameters, not three simultaneous "
+            "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
+    if unexplained is None and mismatch is not None and faults:
+        named = {(f.mode, f.phase) for f in _read_faults(as_k(mismatch.k), thresholds, p,
+                                                          fault_model)}
+        kept = [f for f in faults if (f.mode, f.phase) in named]
+        if kept:
+            faults = kept
+        else:                       # the readings stay in ``suspected``
+            unexplained = Unexplained(
+                "mismatch", 0.0 if mismatch.fit_ratio is None else float(mismatch.fit_ratio),
+                None, _mismatch_hint(faults, mismatch))
+    if unexplained is not None:
+        return Diagnosis(k=k, faults=(), thresholds=thresholds, fault_model=fault_model,
+                         unexplained=unexplained, suspected=tuple(faults), mismatch=mismatch)
+    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model,
+                     mismatch=mismatch)
+
+
+def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
+    read = ", ".join(f"{f.mode.replace('_', ' ')}" + (f" (phase {f.phase})" if f.phase else "")
+                     + f" ({f.component} {f.k:.3f})" for f in faults)
+    from .search import nuisance_text   # local: keeps this module free of the search stack
+
+    devs = [nuisance_text(n, v) for n, v in mismatch.nuisance.items()]
+    return (f"the reading of {read} on data-sheet parameters is explained as well by how this "
+            f"unit may differ from its data sheet ({', '.join(devs)}: that fit names no such "
+            "fault); calibrate the unit on healthy traces (emaphm calibrate) and diagnose with "
+            "--params to tell a small fault from the unit's own tolerances")
+
+
+def _read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
+                 fault_model: str) -> list[Fault]:
+    """The components of ``k`` past their thresholds, as faults with physical readings."""
     tr, ctl = p.transmission, p.controller
     faults: list[Fault] = []
     if k[0] > thresholds.friction:
@@ -212,25 +296,4 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
         faults.append(Fault("gain_drift", "k8", float(k[7]), abs(drift) / 0.5,
                             f"proportional gain {100 * (g - 1):+.0f}% (Kp {ctl.Kp * g:.1f} 1/s "
                             f"instead of {ctl.Kp:.1f})"))
-    unexplained = None
-    if fit_ratio is not None:
-        pv = misfit_p_value(float(fit_ratio))
-        if pv < misfit_p:
-            unexplained = Unexplained(
-                "misfit", float(fit_ratio), pv,
-                f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
-                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
-                "differs from its parameters, or has a fault the model lacks; calibrate it on "
-                "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
-                "load the bench applies and the current sensor chain")
-    sc = k[2:5]
-    if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
-        unexplained = Unexplained(
-            "balanced-phases", float(sc.min() / sc.max()), None,
-            "the same change on all three phases is a mismatch of magnet flux, inertia or "
-            "current sensor gain between the unit and its parameters, not three simultaneous "
-            "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
-    if unexplained is not None:
-        return Diagnosis(k=k, faults=(), thresholds=thresholds, fault_model=fault_model,
-                         unexplained=unexplained, suspected=tuple(faults))
-    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model)
+    return faults

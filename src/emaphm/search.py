@@ -40,7 +40,7 @@ import numpy as np
 
 __all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search",
            "least_squares_search", "nuisance_to_unit",
-           "NUISANCE_RANGE", "nuisance_from_unit"]
+           "NUISANCE_RANGE", "nuisance_from_unit", "nuisance_text"]
 
 SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc", "ecc-xy-sq")
 
@@ -50,8 +50,22 @@ SC_SEARCH_MAX = 0.6
 
 #: Range of each nuisance parameter in the search (relative deviation from the
 #: parameters given, calibrated or data sheet): a winding warmer than at calibration
-#: (up to +30 %, about 75 K) or cooler, and the magnets' flux within +-6 % (temperature).
-NUISANCE_RANGE = {"R": (-0.1, 0.3), "flux": (-0.06, 0.06)}
+#: (up to +30 %, about 75 K) or cooler, the magnets' flux within +-6 % (temperature),
+#: and a constant load torque the trace does not report, in N m (``"load"``: 1.5x the
+#: +-0.1 N m of :data:`emaphm.units.DEFAULT_TOLERANCES`).
+NUISANCE_RANGE = {"R": (-0.1, 0.3), "flux": (-0.06, 0.06), "load": (-0.15, 0.15)}
+
+_NUISANCE_WORDS = {"R": "winding resistance", "flux": "magnet flux",
+                   "load": "unreported constant load"}
+
+
+def nuisance_text(name: str, value: float) -> str:
+    """One nuisance value in words: ``"winding resistance +12.0 %"``,
+    ``"unreported constant load +0.020 N m"``."""
+    word = _NUISANCE_WORDS.get(name, name)
+    if name == "load":
+        return f"{word} {value:+.3f} N m"
+    return f"{word} {100 * value:+.1f} %"
 
 
 def nuisance_from_unit(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:

@@ -44,7 +44,6 @@ import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Iterable
 
-import numpy as np
 
 from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds,
                                     indicator_values)
@@ -52,7 +51,7 @@ from ..prognosis.trends import growth_rate, indicator_state
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..prognosis.history import Actuator, HistoryData
-    from ..prognosis.trends import Prognosis, RULPrediction, TrendFit
+    from ..prognosis.trends import Prognosis
 
 __all__ = ["ActuatorStatus", "assess", "attention_key", "order_fleet", "growth_rate",
            "indicator_state", "VERDICTS"]

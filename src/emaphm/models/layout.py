@@ -51,7 +51,9 @@ N_P = 22
 #: ``Phi`` (25 entries, row-major) and ``Gamma`` (25) of the winding circuit's exact step
 C_PHI = 18
 C_GAMMA = C_PHI + N_Z * N_Z
-N_CP = C_GAMMA + N_Z * N_Z
+#: a constant load torque [N m] the candidate adds to the profile's (the ``"load"`` nuisance)
+C_T0 = C_GAMMA + N_Z * N_Z
+N_CP = C_T0 + 1
 
 
 #: Shorted fraction [-] below which a phase has no fault loop. Such a loop (inductance
@@ -165,8 +167,9 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     row[C_ECC_PHASE] = m.ecc_phase
     row[C_MU_A:C_MU_C + 1] = m.mu
     sigma = 1.0 if fault_model == "paper" else m.L_sigma
-    row[C_PHI:C_GAMMA], row[C_GAMMA:] = _one_winding(
+    row[C_PHI:C_GAMMA], row[C_GAMMA:C_T0] = _one_winding(
         tuple(m.R), tuple(m.L), float(sigma), tuple(m.mu), tuple(m.R_f), float(P[P_DT]))
+    row[C_T0] = 0.0          # Load.T_0 is in the profile the model is given
     return P, row[None, :]
 
 
@@ -187,8 +190,10 @@ def _one_winding(R: tuple, L: tuple, sigma: float, mu: tuple, R_f: tuple,
 
 #: Nuisance parameters a candidate may carry beside its k: relative deviations of the
 #: winding resistance (``"R"``, a warmer winding) and of the magnet flux (``"flux"``: the
-#: back-EMF coefficient, so the torque per ampere) from the nominal parameters.
-NUISANCE = ("R", "flux")
+#: back-EMF coefficient, so the torque per ampere) from the nominal parameters, and a
+#: constant load torque (``"load"``, in N m, added to the profile's: a load the bench
+#: does not report).
+NUISANCE = ("R", "flux", "load")
 
 
 def pack_population(nominal: ActuatorParams, K: np.ndarray, theta0: float = 0.0,
@@ -239,7 +244,7 @@ class PopulationPacker:
         healthy = np.hstack([self.base[0, C_R_A:C_R_C + 1], self.base[0, C_L_A:C_L_C + 1],
                              self.base[0, C_MU_A:C_MU_C + 1]])
         self._windings[healthy.tobytes()] = (self.base[0, C_PHI:C_GAMMA].copy(),
-                                             self.base[0, C_GAMMA:].copy())
+                                             self.base[0, C_GAMMA:C_T0].copy())
 
     def __call__(self, K: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         nuisance = self.nuisance
@@ -250,6 +255,9 @@ class PopulationPacker:
         K, NU = K[:, :N_K], K[:, N_K:]
         CP = np.repeat(self.base, K.shape[0], axis=0)
         for j, name in enumerate(nuisance):
+            if name == "load":
+                CP[:, C_T0] = NU[:, j]
+                continue
             cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
             CP[:, cols] *= 1.0 + NU[:, j:j + 1]
         CP[:, C_KP] *= gain_scale(K[:, 7])
@@ -268,7 +276,7 @@ class PopulationPacker:
             mu = s
         CP[:, C_ECC] = K[:, 5]
         CP[:, C_ECC_PHASE] = eccentricity_phase(K[:, 6])
-        CP[:, C_PHI:C_GAMMA], CP[:, C_GAMMA:] = self._matrices(
+        CP[:, C_PHI:C_GAMMA], CP[:, C_GAMMA:C_T0] = self._matrices(
             CP[:, C_R_A:C_R_C + 1], CP[:, C_L_A:C_L_C + 1], mu)
         return self.P.copy(), CP
 
@@ -310,4 +318,4 @@ def _population_matrices(R, L, sigma, mu, R_f, dt):
 
 
 __all__ = ["pack", "pack_shared", "contact_resolved", "pack_population", "PopulationPacker", "winding_step_matrices", "MU_MIN", "N_P",
-           "N_CP", "NUISANCE", "as_k"]
+           "N_CP", "C_T0", "NUISANCE", "as_k"]

@@ -50,7 +50,7 @@ from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, ST
 from .controller import control_step
 from .inverter import modulate, overcurrent
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
-                     C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, P_C_L, P_C_M, P_I_MAX,
+                     C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, C_T0, P_C_L, P_C_M, P_I_MAX,
                      P_D_C, P_J_L, P_J_M, P_K_C, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
                      P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
                      PopulationPacker)
@@ -159,8 +159,8 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                 # the fast current transients of the coarse step
                 T_m = 0.5 * (tq0 + torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc,
                                                 mu_a, mu_b, mu_c))
-                thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
-                                                     CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
+                thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + CP[j, C_T0],
+                                                     J_m, C_m, CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
                                                      CP[j, C_BACKLASH], K_c, D_c, dt)
             if not (abs(ia) < I_DIVERGED and abs(ib) < I_DIVERGED and abs(ic) < I_DIVERGED
                     and abs(wm) < OMEGA_DIVERGED and abs(thm) < 1e9):
@@ -281,7 +281,8 @@ class MonitoringModel:
     nuisance : tuple of str
         Nuisance parameters each candidate carries after its 8 k
         (:data:`emaphm.models.layout.NUISANCE`: relative deviations of the winding
-        resistance ``"R"`` and the magnet flux ``"flux"``); populations then have
+        resistance ``"R"`` and the magnet flux ``"flux"``, and a constant load torque
+        ``"load"`` in N m beside the profile's); populations then have
         ``8 + len(nuisance)`` columns.
     """
 

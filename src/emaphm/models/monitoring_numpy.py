@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAMMA, C_KP,
+from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAMMA, C_KP, C_T0,
                      C_MU_A, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI,
                      P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
                      P_V_DC, P_THETA0, P_I_TRIP, P_K_C, P_D_C)
@@ -199,6 +199,7 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
     V_dc = P[P_V_DC]
     Kp = CP[:, C_KP]
     FSJ, FDJ, backlash = CP[:, C_FSJ], CP[:, C_FDJ], CP[:, C_BACKLASH]
+    T_0 = CP[:, C_T0]                  # each candidate's load beside the profile's
     c0 = CP[:, C_C0_A:C_C0_A + 3]
     ecc, ecc_phase = CP[:, C_ECC], CP[:, C_ECC_PHASE]
     any_ecc = bool(np.any(ecc != 0.0))
@@ -258,7 +259,7 @@ def _run(P, CP, theta_ref, T_load, n_sub, i_target, weights, store):
             z = winding_step.py_func(*z, *w, Phi, Gam)
             ia, ib, ic = phase_currents.py_func(z[0], z[1])
             T_m = 0.5 * (tq0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *mu))
-            thm, wm, thl, wl = _transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m,
+            thm, wm, thl, wl = _transmission_step(thm, wm, thl, wl, T_m, T_l + T_0, J_m, C_m,
                                                   FSJ, FDJ, J_l, C_l, backlash,
                                                   P[P_K_C], P[P_D_C], dt)
         ok = ((np.abs(ia) < I_DIVERGED) & (np.abs(ib) < I_DIVERGED) & (np.abs(ic) < I_DIVERGED)

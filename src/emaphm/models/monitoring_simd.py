@@ -65,7 +65,7 @@ from . import inverter as _inverter
 from . import mechanics as _mechanics
 from . import pmsm as _pmsm
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
-                     C_GAMMA, C_KP, C_MU_A, C_PHI, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_D_C, P_J_L, P_J_M, P_K_C,
+                     C_GAMMA, C_KP, C_MU_A, C_PHI, C_T0, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_D_C, P_J_L, P_J_M, P_K_C,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
                      P_T_MAX, P_T_S, P_THETA0, P_V_DC)
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
@@ -218,7 +218,9 @@ R_GAM = R_PHI + 25
  W_E0, W_E1, W_E2, W_E3, W_TRIP, W_FIT) = range(R_ALIVE + 1, R_ALIVE + 19)
 # per-period intermediates: leg voltages, sines and cosines, torque at the control instant
 (R_UA, R_UB, R_UC, R_SE, R_CE, R_SG, R_CG, R_TQ) = range(W_FIT + 1, W_FIT + 9)
-N_ROWS = R_TQ + 1
+# the candidate's constant load torque beside the profile's (layout's C_T0)
+R_T0 = R_TQ + 1
+N_ROWS = R_T0 + 1
 N_STATE = 18      # rows R_THM..R_FIT and W_THM..W_FIT
 
 
@@ -288,11 +290,12 @@ def _control(thm, wm, ia, ib, ic, s_e, c_e, trip, fit, i0, i1, i2, i3, Kp, perio
 
 @inline
 def _plant(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c,
-           c0, ecc, mu, Phi, Gam, FSJ, FDJ, backlash, mech):
+           c0, ecc, mu, Phi, Gam, FSJ, FDJ, backlash, T_0, mech):
     """One sub-step of the plant of one candidate: back-EMF, winding circuit, transmission.
 
     ``c0, mu``: per-phase tuples; ``Phi, Gam``: tuples of the 25 entries of the winding
-    step; ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``. Returns ``(theta_m, omega_m, theta_l,
+    step; ``T_0`` the candidate's load torque beside the profile's ``T_l`` in
+    ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``. Returns ``(theta_m, omega_m, theta_l,
     omega_l, z0..z4, i_a, i_b, i_c, torque at the start)``. (At most 30 arguments: past
     that CPython passes them as ``*args``, which Numba's inliner refuses.)
     """
@@ -307,7 +310,7 @@ def _plant(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g,
     ja, jb, jc = phase_currents(z0, z1)
     # the mechanics see the step's mean torque (trapezoid), as in the scalar kernel
     T_m = 0.5 * (tq + torque_loops(ja, jb, jc, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c))
-    thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l, J_m, C_m, FSJ, FDJ,
+    thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + T_0, J_m, C_m, FSJ, FDJ,
                                          J_l, C_l, backlash, K_c, D_c, dt)
     return thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc, tq
 
@@ -371,7 +374,7 @@ def _plant_stage(B, first, mech):
                 B[b, R_UA, l], B[b, R_UB, l], B[b, R_UC, l],
                 (B[b, R_C0A, l], B[b, R_C0B, l], B[b, R_C0C, l]), B[b, R_ECC, l],
                 (B[b, R_MUA, l], B[b, R_MUB, l], B[b, R_MUC, l]), Phi, Gam,
-                B[b, R_FSJ, l], B[b, R_FDJ, l], B[b, R_BACKLASH, l], mech)
+                B[b, R_FSJ, l], B[b, R_FDJ, l], B[b, R_BACKLASH, l], B[b, R_T0, l], mech)
             B[b, W_THM, l] = thm
             B[b, W_WM, l] = wm
             B[b, W_THL, l] = thl
@@ -476,6 +479,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             B[b, R_C0C, l] = CP[j, C_C0_C]
             B[b, R_ECC, l] = CP[j, C_ECC]
             B[b, R_ECCPH, l] = CP[j, C_ECC_PHASE]
+            B[b, R_T0, l] = CP[j, C_T0]
             for ph in range(3):
                 B[b, R_MUA + ph, l] = CP[j, C_MU_A + ph]
             for e in range(25):

@@ -594,9 +594,9 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     actuator's last inspection under the same fault model (a warm start: faults grow
     slowly between inspections).
     """
-    from ..diagnosis import diagnose, fit_ratio_of
     from ..fitness import trace_fault_model
     from ..identify import DEFAULT_ALGORITHM
+    from ..mismatch import diagnose_identification
     from ..traces import validate
     from .uncertainty import identify_with_spread
 
@@ -616,8 +616,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
             kwargs["start"] = previous[-1].k
     a = identify_with_spread(trace, seed=seed, method=method, params=params, **kwargs)
     ident = a.identification
-    diag = diagnose(a.k, thresholds=thresholds, params=params, fault_model=ident.fault_model,
-                    fit_ratio=fit_ratio_of(ident))
+    diag = diagnose_identification(trace, ident, params=params, thresholds=thresholds, k=a.k)
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
              "fault_model": ident.fault_model,
              "calibrated_at": calibrated_at,
