@@ -488,6 +488,8 @@ def main(argv=None) -> int:
                     help="pin the process (and its subprocesses) to this CPU")
     ap.add_argument("--baseline-rev", default=BASELINE_REV, metavar="REV",
                     help=f"git revision whose kernel is timed side by side (default {BASELINE_REV})")
+    ap.add_argument("--title", default=None,
+                    help="heading of the Markdown file (default: the models benchmark's)")
     ap.add_argument("--side-by-side-only", action="store_true",
                     help="only the side-by-side rows (baseline vs today's kernels, pack cost)")
     ap.add_argument("--small-batches-only", action="store_true",
@@ -513,6 +515,9 @@ def main(argv=None) -> int:
     started = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M")
     rows, machine, note = run(args.quick, args.baseline_rev, args.side_by_side_only)
     text = _markdown(rows, machine, note, args.quick, started)
+    if args.title:
+        text = text.replace("## Models: speed, compile time, memory (`benchmarks/bench_models.py`)",
+                            f"## {args.title}", 1)
     out = args.out if args.out is not None or args.side_by_side_only else RESULTS
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
