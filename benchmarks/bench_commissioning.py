@@ -17,7 +17,8 @@ unreported load within +-0.1 N m). Per unit:
    drift k8 = 0.25, an inter-turn short of 10, 20 or 30 % of phase A, B or C through
    0.15 ohm), diagnosed with the calibrated parameters (and so, by default, with the
    winding resistance and magnet flux searched beside k): the right mode alone (the
-   right phase for a short), and the Eq. 9 error.
+   right phase for a short), and the Eq. 9 error; and the same faulty trace diagnosed
+   with the data sheet (what a unit never calibrated gets, the mismatch check included).
 
 Units use seeds 20000+, apart from every seed used to set a threshold; ``--tune``
 draws units from 30000+ and prints each calibrated parameter's model discrepancy
@@ -113,6 +114,11 @@ def run_unit(task: tuple[int, int]) -> dict:
                fault_named=[(f.mode, f.phase) for f in d2.faults], fault_error_pct=i2.error_pct,
                fault_fit_ratio=fit_ratio_of(i2), fault_k=i2.k.tolist(), fault_index=idx,
                fault_right=[(f.mode, f.phase) for f in d2.faults] == [(mode, phase)])
+    # the same faulty trace on the data sheet: what a unit that was never calibrated gets
+    i3, d3 = verdict(faulty, sheet)
+    out.update(uncal_fault_verdict=d3.verdict,
+               uncal_fault_reason=None if d3.unexplained is None else d3.unexplained.reason,
+               uncal_fault_right=[(f.mode, f.phase) for f in d3.faults] == [(mode, phase)])
     return out
 
 
@@ -148,6 +154,11 @@ def report(rows: list[dict], wall: float, workers: int) -> str:
            f"{sum(r['fault_right'] for r in ok)}/{len(ok)} (shorts "
            f"{sum(r['fault_right'] for r in shorts)}/{len(shorts)}, other modes "
            f"{sum(r['fault_right'] for r in paper_modes)}/{len(paper_modes)}) |",
+           f"| the same faulty trace with the data sheet (never calibrated): right mode alone | "
+           f"{sum(r['uncal_fault_right'] for r in ok)}/{len(ok)} (unexplained "
+           f"{sum(r['uncal_fault_verdict'] == 'unexplained' for r in ok)}, of which by the "
+           f"mismatch check {sum(r['uncal_fault_reason'] == 'mismatch' for r in ok)}; a wrong "
+           f"fault {sum(r['uncal_fault_verdict'] == 'faulty' and not r['uncal_fault_right'] for r in ok)}) |",
            f"| ... mean Eq. 9 error, friction/backlash/gain faults [%] | "
            f"{np.mean([r['fault_error_pct'] for r in paper_modes]):.2f} |" if paper_modes else "",
            f"| calibrate, CPU time per unit [s]: median (max) | "

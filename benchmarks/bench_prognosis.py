@@ -67,6 +67,9 @@ def _track_stats(sc, tracks) -> dict:
             "coverage": inside.mean(axis=0).tolist(),
             "median_abs_error": np.median(err, axis=0).tolist(),
             "coverage_from_midlife": float(inside[:, late].mean()),
+            # a cone that never reaches the threshold (lo = hi = inf) is infinitely wide
+            "width_from_midlife": float(np.median(np.nan_to_num(
+                np.array([tr.hi - tr.lo for tr in tracks])[:, late], nan=np.inf))),
             "alpha_lambda_pass": dict(zip(["0.5", "0.6", "0.7", "0.8", "0.9"], al.mean(axis=0).tolist())),
             "prognostic_horizon_median": float(np.nanmedian(ph)) if np.isfinite(ph).any() else None,
             "prognostic_horizon_found": float(np.mean(np.isfinite(ph))),
@@ -98,7 +101,7 @@ def real_history(task: tuple[str, int, bool]) -> dict:
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 
     name, h, commission = task
-    sc = degradation_scenario(name)
+    sc = TUNE_SCENARIOS[name]() if name in TUNE_SCENARIOS else degradation_scenario(name)
     times = inspection_times(sc.eol, N_INSPECTIONS)
     t0 = time.perf_counter()
     run = simulate_degradation(sc, times, seed=h)
@@ -119,6 +122,48 @@ def real_history(task: tuple[str, int, bool]) -> dict:
             "error_pct": [i.extra.get("error_pct") for i in data.inspections],
             "calibration": calibration,
             "elapsed_s": time.perf_counter() - t0}
+
+
+def _backlash_growth():
+    from emaphm.prognosis import DegradationLaw, DegradationScenario
+    from emaphm.prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS as thr
+
+    return DegradationScenario("backlash", DegradationLaw.reaching("linear", thr.backlash, 1000.0),
+                               name="backlash-growth")
+
+
+def _eccentricity_growth():
+    from emaphm.prognosis import DegradationLaw, DegradationScenario
+    from emaphm.prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS as thr
+
+    return DegradationScenario("eccentricity",
+                               DegradationLaw.reaching("linear", thr.eccentricity, 1000.0),
+                               name="eccentricity-growth")
+
+
+#: Histories only the discrepancy tuning runs (no preset: the RUL tables do not report them).
+TUNE_SCENARIOS = {"backlash-growth": _backlash_growth, "eccentricity-growth": _eccentricity_growth}
+TUNE_SEED0 = 100
+#: Share of its failure threshold from which a true indicator counts in the discrepancy.
+TUNE_FROM = 0.25
+
+
+def relative_errors(rows: list[dict]) -> dict[str, list[float]]:
+    """``(identified - true) / true`` of each history's degrading indicator, at the
+    inspections where the true value is at least :data:`TUNE_FROM` of its threshold."""
+    from emaphm.prognosis import degradation_scenario
+    from emaphm.prognosis.trends import indicator_series
+
+    out: dict[str, list[float]] = {}
+    for r in rows:
+        name = r["scenario"]
+        sc = TUNE_SCENARIOS[name]() if name in TUNE_SCENARIOS else degradation_scenario(name)
+        y = indicator_series(np.array(r["K"]))[sc.indicator]
+        y_true = indicator_series(np.array(r["k_true"]))[sc.indicator]
+        y, y_true = abs(y), abs(y_true)              # gain drift: signed by its own direction
+        m = y_true >= TUNE_FROM * sc.threshold
+        out.setdefault(sc.indicator, []).extend(((y[m] - y_true[m]) / y_true[m]).tolist())
+    return out
 
 
 def calibrate_one(task: tuple[int | None, float, int]) -> dict:
@@ -150,7 +195,7 @@ def figures(syn_tracks: dict, real: list[dict], stats: dict) -> list[str]:
     from emaphm.prognosis import degradation_scenario, prognose, rul_track
     from emaphm.prognosis.history import Actuator, HistoryData
     from emaphm.prognosis.plots import plot_alpha_lambda, plot_history, plot_prognosis
-    from emaphm.prognosis.trends import indicator_series
+    from emaphm.prognosis.trends import MODEL_DISCREPANCY, indicator_series
 
     FIGURES.mkdir(parents=True, exist_ok=True)
     written = []
@@ -190,7 +235,8 @@ def figures(syn_tracks: dict, real: list[dict], stats: dict) -> list[str]:
         tracks = []
         for r in (x for x in real if x["scenario"] == name):
             y = indicator_series(np.array(r["K"]))[sc.indicator]
-            tracks.append(rul_track(np.array(r["times"]), y, sc.threshold, seed=r["history"]))
+            tracks.append(rul_track(np.array(r["times"]), y, sc.threshold, seed=r["history"],
+                                    discrepancy=MODEL_DISCREPANCY[sc.indicator]))
         plot_alpha_lambda(tracks, sc.eol, ax=ax, labels=[f"history {i}" for i in range(len(tracks))],
                           title=f"{name} (real identifications)")
     p = FIGURES / "alpha-lambda-real.png"
@@ -254,11 +300,30 @@ def main() -> None:
     ap.add_argument("--real-histories", type=int, default=3)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--calibrate", action="store_true")
+    ap.add_argument("--tune-discrepancy", type=int, default=0, metavar="N",
+                    help="only measure each indicator's model discrepancy on N commissioned "
+                         "histories per scenario (seeds 100+) and print it "
+                         "(-> results/prognosis_tuning.json)")
     ap.add_argument("--no-commission", dest="commission", action="store_false",
                     help="diagnose the real histories with the data sheet (no emaphm calibrate "
                          "on healthy traces first)")
     args = ap.parse_args()
     t0 = time.perf_counter()
+    if args.tune_discrepancy:
+        names = list(REAL_SCENARIOS) + list(TUNE_SCENARIOS)
+        tasks = [(n, TUNE_SEED0 + h, args.commission) for n in names
+                 for h in range(args.tune_discrepancy)]
+        with ProcessPoolExecutor(max_workers=args.workers) as ex:
+            rows = list(ex.map(real_history, tasks))
+        errors = relative_errors(rows)
+        summary = {n: {"rms": float(np.sqrt(np.mean(np.square(e)))), "mean": float(np.mean(e)),
+                       "n": len(e)} for n, e in errors.items()}
+        RESULTS.mkdir(parents=True, exist_ok=True)
+        (RESULTS / "prognosis_tuning.json").write_text(json.dumps(
+            {"discrepancy": summary, "rows": rows}, indent=1))
+        print(json.dumps(summary, indent=1))
+        print(f"{time.perf_counter() - t0:.0f} s")
+        return
     stats: dict = {"synthetic": {}, "real": {}}
     syn_tracks = {}
     for name in SCENARIOS:
@@ -273,13 +338,16 @@ def main() -> None:
     from emaphm.prognosis import degradation_scenario, rul_track
     from emaphm.prognosis.trends import indicator_series
 
+    from emaphm.prognosis.trends import MODEL_DISCREPANCY
+
     for name in REAL_SCENARIOS:
         sc = degradation_scenario(name)
         tracks = []
         for r in (x for x in real if x["scenario"] == name):
             y = indicator_series(np.array(r["K"]))[sc.indicator]
             tracks.append(rul_track(np.array(r["times"]), y, sc.threshold, seed=r["history"],
-                                    n_samples=2000))
+                                    n_samples=2000,
+                                    discrepancy=MODEL_DISCREPANCY[sc.indicator]))
         stats["real"][name] = _track_stats(sc, tracks)
         ind_err = [np.abs(np.array(r["K"]) - np.array(r["k_true"])).max(axis=0).tolist()
                    for r in real if r["scenario"] == name]
@@ -305,7 +373,9 @@ def main() -> None:
           f"{meta['elapsed_s']:.0f} s)", "",
           f"{N_INSPECTIONS} inspections from 0 to 950 h, true end of life 1000 h; a prediction at "
           "every inspection from the 3rd on. 90 % intervals (trend models linear, exponential, "
-          "quadratic mixed by Akaike weight; Monte Carlo over the fit).", "",
+          "quadratic mixed by Akaike weight; Monte Carlo over the fit; for real identifications "
+          "also over each indicator's model discrepancy, `emaphm.prognosis.trends."
+          "MODEL_DISCREPANCY`, measured with `--tune-discrepancy` on seeds 100+).", "",
           "### Synthetic k histories (true k + N(0, 0.007) per component, no identification)", ""]
     md += _table(stats["synthetic"], "synthetic")
     md += ["", "### Real identifications (reference plant with sensor noise, the default "
@@ -314,13 +384,14 @@ def main() -> None:
            + ")", ""]
     md += _table(stats["real"], "real")
     md += ["", "### From mid-life on", "",
-           "| scenario | kind | coverage | alpha-lambda pass at 0.5 / 0.7 / 0.9 | PH (alpha 0.1) median h, share found |",
-           "|---|---|---|---|---|"]
+           "| scenario | kind | coverage | median interval width [h] | alpha-lambda pass at 0.5 / 0.7 / 0.9 | PH (alpha 0.1) median h, share found |",
+           "|---|---|---|---|---|---|"]
     for kind in ("synthetic", "real"):
         for name, s in stats[kind].items():
             al = s["alpha_lambda_pass"]
             ph = s["prognostic_horizon_median"]
             md.append(f"| {name} | {kind} | {s['coverage_from_midlife']:.3f} | "
+                      f"{s['width_from_midlife']:.0f} | "
                       f"{al['0.5']:.2f} / {al['0.7']:.2f} / {al['0.9']:.2f} | "
                       f"{'-' if ph is None else f'{ph:.0f}'}, {s['prognostic_horizon_found']:.2f} |")
     if calib is not None:

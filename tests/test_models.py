@@ -646,3 +646,35 @@ def test_simulate_entry_point_matches_the_models(mm, rm_traces):
         simulate(K_NOMINAL, scenario="nominal")
     with pytest.raises(ValueError, match="unknown model"):
         simulate(model="simulink")
+
+
+# ----------------------------------------------------------------------------- kernel cache
+
+def test_kernels_are_cached_under_a_digest_of_every_model_source(tmp_path):
+    """Numba's cache checks only the file that defines a kernel; ours is keyed by every
+    model source, so an edit to an inlined physics module compiles afresh."""
+    import numba
+
+    from emaphm.models import _jit, monitoring, monitoring_simd, reference
+
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "b.py").write_text("y = 2\n")
+    before = _jit.sources_digest(tmp_path)
+    assert _jit.sources_digest(tmp_path) == before and len(before) == 16
+    (tmp_path / "b.py").write_text("y = 3\n")                 # another module than the kernel's
+    assert _jit.sources_digest(tmp_path) != before
+    assert _jit.SOURCES_DIGEST == _jit.sources_digest()
+    assert _jit.CACHE_DIR is not None and _jit.CACHE_DIR.name == f"kernels-{_jit.SOURCES_DIGEST}"
+    for kernel in (monitoring._kernel, monitoring_simd._kernel, reference._rm_kernel):
+        path = kernel._cache._cache_path                     # Numba's locator, chosen at declaration
+        assert path.startswith(str(_jit.CACHE_DIR)), (kernel, path)
+    assert numba.config.CACHE_DIR in ("", None) or not numba.config.CACHE_DIR.startswith(
+        str(_jit.CACHE_DIR))                                  # other libraries' setting restored
+
+
+def test_kernel_cache_goes_where_emaphm_cache_dir_says(tmp_path, monkeypatch):
+    from emaphm.models import _jit
+
+    monkeypatch.setenv("EMAPHM_CACHE_DIR", str(tmp_path))
+    assert _jit.cache_dir("0123") == tmp_path / "kernels-0123"
+    assert (tmp_path / "kernels-0123").is_dir()

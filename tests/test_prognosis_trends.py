@@ -307,3 +307,47 @@ def test_a_flat_history_names_no_first_failure():
     naive = min(prog.predictions.values(), key=lambda p: (p.median, p.lo))
     assert math.isfinite(naive.median)                  # the case the rule is for
     assert prog.first is None
+
+
+# ----------------------------------------------------------------- model discrepancy
+
+def test_a_relative_discrepancy_moves_the_threshold_by_its_normal_quantiles():
+    """Known answer: a noise-free linear indicator 0.001 t reaches 0.5 at 500 h; read with
+    a relative discrepancy d, the true crossing is at 500 (1 + delta), delta ~ N(0, d), so
+    the 90 % RUL interval from t = 200 h is 500 (1 -+ 1.645 d) - 200."""
+    from emaphm.prognosis.trends import predict_rul
+
+    t = np.linspace(0.0, 200.0, 6)
+    y = 0.001 * t
+    bare = predict_rul(t, y, 0.5, seed=1, sigma_floor=1e-7, n_samples=20000)
+    wide = predict_rul(t, y, 0.5, seed=1, sigma_floor=1e-7, n_samples=20000, discrepancy=0.05)
+    assert bare.median == pytest.approx(300.0, abs=0.5) and bare.hi - bare.lo < 1.0
+    assert wide.lo == pytest.approx(500 * (1 - 1.645 * 0.05) - 200, abs=2.0)
+    assert wide.hi == pytest.approx(500 * (1 + 1.645 * 0.05) - 200, abs=2.0)
+    assert wide.median == pytest.approx(300.0, abs=1.5)
+    assert wide.discrepancy == 0.05 and wide.to_dict()["discrepancy"] == 0.05
+    # zero discrepancy draws nothing more: the same draws as before it existed
+    again = predict_rul(t, y, 0.5, seed=1, sigma_floor=1e-7, n_samples=20000, discrepancy=0.0)
+    np.testing.assert_array_equal(again.samples, bare.samples)
+    for bad in (-0.1, 1.0, float("nan"), True, "0.05"):
+        with pytest.raises(ValueError, match="discrepancy"):
+            predict_rul(t, y, 0.5, seed=1, discrepancy=bad)
+
+
+def test_prognose_carries_each_indicators_measured_discrepancy():
+    from emaphm.faults import K_NOMINAL
+    from emaphm.prognosis import prognose
+    from emaphm.prognosis.trends import MODEL_DISCREPANCY
+
+    times = np.linspace(0.0, 600.0, 7)
+    K = np.tile(K_NOMINAL, (times.size, 1))
+    K[:, 0] = 0.0006 * times + np.array([0.002, -0.001, 0.0, 0.001, -0.002, 0.001, 0.0])
+    default = prognose(times, K, seed=3, indicators=("friction",))
+    none = prognose(times, K, seed=3, indicators=("friction",), discrepancy={})
+    p, q = default.predictions["friction"], none.predictions["friction"]
+    assert p.discrepancy == MODEL_DISCREPANCY["friction"] > 0 and q.discrepancy == 0.0
+    assert p.hi - p.lo > q.hi - q.lo                    # the offset the scatter cannot see
+    assert p.lo <= q.median <= p.hi
+    assert set(MODEL_DISCREPANCY) == set(INDICATORS)   # every indicator has a measured value
+    with pytest.raises(ValueError, match="unknown health indicator"):
+        prognose(times, K, seed=3, discrepancy={"bearing": 0.1})

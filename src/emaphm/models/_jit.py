@@ -1,7 +1,103 @@
-"""The one place that decides how model kernels are compiled."""
+"""The one place that decides how model kernels are compiled, and where they are cached.
 
+Kernels are compiled in nopython mode and cached on disk, so that a warm process
+(or a worker of a campaign) pays no compile time. Numba's own cache checks only
+the file that defines a kernel: a kernel that calls or inlines a physics function
+from another module (the transmission step, the winding step...) or reads a
+module constant (the layout's column numbers) keeps its old machine code when
+only that other module changes (numba issues #1833, #6845). After an upgrade or
+a ``git pull`` over an editable install, that would be the old physics, silently.
+
+So every kernel of this package is cached under a directory named by a digest of
+the package's sources (:data:`SOURCES_DIGEST`, every ``*.py`` of
+``emaphm.models``): a change to any of them starts a fresh cache, and the old one
+is never read again. The directory (:data:`CACHE_DIR`) is the first writable of
+``$EMAPHM_CACHE_DIR``, the package's own ``__pycache__`` and the user's cache
+(``$XDG_CACHE_HOME`` or ``~/.cache``, ``emaphm``); with none writable, kernels are
+compiled in every process. Numba's ``NUMBA_CACHE_DIR`` of other libraries is left
+as it is: it is switched only while this package's kernels are declared.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import os
+from pathlib import Path
+from typing import Any, Callable, Iterator
+
+import numba
 from numba import njit
 
-#: Compile a scalar physics function or a kernel: nopython, cached on disk so
-#: that a warm process (or a worker of a campaign) pays no compile time.
-jit = njit(cache=True, nogil=True)
+_HERE = Path(__file__).resolve().parent
+
+
+def sources_digest(folder: Path = _HERE) -> str:
+    """A digest (16 hex digits) of every ``*.py`` in ``folder``, names and contents."""
+    h = hashlib.sha256()
+    for path in sorted(folder.glob("*.py")):
+        h.update(path.name.encode())
+        h.update(b"\0")
+        h.update(path.read_bytes())
+        h.update(b"\0")
+    return h.hexdigest()[:16]
+
+
+#: Digest of the model sources the kernels are compiled from.
+SOURCES_DIGEST = sources_digest()
+
+
+def _writable(folder: Path) -> bool:
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / f".probe-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+        return True
+    except OSError:
+        return False
+
+
+def cache_dir(digest: str = SOURCES_DIGEST) -> Path | None:
+    """Where kernels compiled from sources of ``digest`` are cached (None: nowhere)."""
+    candidates = []
+    if os.environ.get("EMAPHM_CACHE_DIR"):
+        candidates.append(Path(os.environ["EMAPHM_CACHE_DIR"]))
+    candidates.append(_HERE / "__pycache__")
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    candidates.append((Path(xdg) if xdg else Path.home() / ".cache") / "emaphm")
+    for base in candidates:
+        folder = base / f"kernels-{digest}"
+        if _writable(folder):
+            return folder
+    return None
+
+
+#: Directory of this package's kernel cache (None: not cached).
+CACHE_DIR = cache_dir()
+
+
+@contextlib.contextmanager
+def _cache_location() -> Iterator[None]:
+    """Numba's cache directory set to :data:`CACHE_DIR` while a kernel is declared (its
+    cache locator is chosen then), restored after."""
+    old = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = str(CACHE_DIR)
+    try:
+        yield
+    finally:
+        numba.config.CACHE_DIR = old
+
+
+def cached_njit(**options: Any) -> Callable[[Callable], Any]:
+    """``numba.njit(**options)``, cached under :data:`CACHE_DIR` (not cached without one)."""
+    def decorate(func: Callable) -> Any:
+        if CACHE_DIR is None:
+            return njit(**options)(func)
+        with _cache_location():
+            return njit(cache=True, **options)(func)
+    return decorate
+
+
+#: Compile a scalar physics function or a kernel: nopython, cached (:func:`cached_njit`).
+jit = cached_njit(nogil=True)

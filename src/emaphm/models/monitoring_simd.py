@@ -45,9 +45,9 @@ vectorised): trig [+ rare scalar fix-up], controller, first sub-step,
 and commit. The time loop is outermost, so the blocks of a stage are
 independent work for the out-of-order core.
 
-Caveat shared with the scalar kernel: Numba's on-disk cache (``cache=True``)
-does not track the physics modules the kernel inlines; after editing them,
-clear ``__pycache__`` (or bump this file) so that the kernel is recompiled.
+The kernel is cached on disk under a digest of the model sources
+(:mod:`emaphm.models._jit`), so an edit to a physics module it inlines compiles it
+afresh (Numba's own cache would not see it).
 """
 
 from __future__ import annotations
@@ -61,6 +61,7 @@ from numba import njit, types as nbtypes
 from numba.extending import intrinsic
 
 from . import controller as _controller
+from ._jit import cached_njit
 from . import inverter as _inverter
 from . import mechanics as _mechanics
 from . import pmsm as _pmsm
@@ -82,7 +83,7 @@ inline = njit(nogil=True, inline="always", error_model="numpy")
 #: physical ``P`` no division in the loop has a zero divisor; ``CP[:, C_KP] == 0`` (divides
 #: in the back-calculation) gives inf/nan, so a diverged candidate, where the scalar kernel
 #: raises ZeroDivisionError.
-kernel_jit = njit(cache=True, nogil=True, error_model="numpy")
+kernel_jit = cached_njit(nogil=True, error_model="numpy")
 
 
 @intrinsic

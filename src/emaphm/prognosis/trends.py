@@ -49,6 +49,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -60,7 +61,7 @@ from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPO
 __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_trends", "select",
            "RULPrediction", "predict_rul", "Prognosis", "prognose", "indicator_series",
            "MIN_INSPECTIONS", "DEFAULT_MODELS", "RULTrack", "rul_track", "growth_rate",
-           "indicator_state"]
+           "indicator_state", "MODEL_DISCREPANCY"]
 
 TREND_MODELS = ("linear", "exponential", "quadratic")
 _N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3}
@@ -70,6 +71,21 @@ from .choices import SELECTION_RULES  # noqa: E402  (the CLI reads it without Sc
 
 #: Least number of inspections for a trend with an uncertainty (two parameters + one dof).
 MIN_INSPECTIONS = 3
+
+#: Relative systematic error of each health indicator as identified on a calibrated unit
+#: (one standard deviation), which every RUL interval carries (:func:`predict_rul`): the
+#: RMS of ``(identified - true) / true`` over the inspections where the true indicator is
+#: at least a quarter of its failure threshold, in degradation histories on the reference
+#: plant, each unit calibrated first (``benchmarks/bench_prognosis.py
+#: --tune-discrepancy``, seeds 100+, apart from the reported 0-2). The plant has physics
+#: the monitoring model lacks (the Stribeck drop reads as more Coulomb friction, more so
+#: as the friction grows); the three phases share the short circuit's value.
+#: Measured (5 histories of each, 20-35 inspections): friction 0.056 (mean +0.041),
+#: backlash 0.057 (+0.027), short circuit 0.023 (+0.016), eccentricity 0.0095, gain drift
+#: 0.0051.
+MODEL_DISCREPANCY: Mapping[str, float] = MappingProxyType({
+    "friction": 0.056, "backlash": 0.057, "short_a": 0.023, "short_b": 0.023, "short_c": 0.023,
+    "eccentricity": 0.0095, "gain_drift": 0.0051})
 
 _ALPHA_MIN = math.log(1e-9)
 
@@ -96,8 +112,9 @@ def _jacobian(model: str, theta: np.ndarray, tau: np.ndarray) -> np.ndarray:
     return np.column_stack([y, tau * y])
 
 
-def _crossing_tau(model: str, theta: np.ndarray, threshold: float) -> np.ndarray:
-    """Time relative to t_ref where the trend reaches ``threshold`` (n, p) -> (n,):
+def _crossing_tau(model: str, theta: np.ndarray, threshold: Any) -> np.ndarray:
+    """Time relative to t_ref where the trend reaches ``threshold`` (a number, or one per
+    draw) (n, p) -> (n,):
     +inf if it never does, 0 if the trend is at or above it at t_ref already."""
     a, b = theta[:, 0], theta[:, 1]
     if model == "linear":
@@ -119,7 +136,7 @@ def _crossing_tau(model: str, theta: np.ndarray, threshold: float) -> np.ndarray
     else:
         level = np.exp(np.clip(a, -700.0, 700.0))
         with np.errstate(divide="ignore", invalid="ignore"):
-            tau = np.where(b > 0, (math.log(threshold) - a) / b, np.inf)
+            tau = np.where(b > 0, (np.log(threshold) - a) / b, np.inf)
     # at or above the threshold at t_ref: failed already (counted at t_ref), whatever the slope
     return np.where(level >= threshold, 0.0, tau)
 
@@ -171,8 +188,9 @@ class TrendFit:
         w = np.sqrt(self.dof / rng.chisquare(self.dof, size=n))
         return self.theta[None, :] + (z @ chol.T) * w[:, None]
 
-    def crossing_time(self, threshold: float, theta: np.ndarray | None = None) -> np.ndarray:
-        """Absolute time(s) where the trend reaches ``threshold`` (inf: never)."""
+    def crossing_time(self, threshold: Any, theta: np.ndarray | None = None) -> np.ndarray:
+        """Absolute time(s) where the trend reaches ``threshold`` (a number, or one per row
+        of ``theta``; inf: never)."""
         th = np.atleast_2d(self.theta if theta is None else theta)
         return self.t_ref + _crossing_tau(self.model, th, threshold)
 
@@ -339,6 +357,8 @@ class RULPrediction:
     theta         dict       model -> parameter draws (n_m, p), for plots
     current       float      trend value at t_now (chosen model)
     seed          int|None   seed of the draws
+    excluded      tuple      inspections left out as outliers
+    discrepancy   float      relative model discrepancy drawn into the threshold (1 sd)
     ============  =========  ===========================================================
     """
 
@@ -358,6 +378,7 @@ class RULPrediction:
     current: float = math.nan
     seed: int | None = None
     excluded: tuple = ()
+    discrepancy: float = 0.0
 
     @property
     def p_reach(self) -> float:
@@ -390,7 +411,7 @@ class RULPrediction:
              "rul_median": _json_float(self.median), "rul_lo": _json_float(self.lo),
              "rul_hi": _json_float(self.hi), "level": self.level, "p_failed": self.p_failed,
              "p_reach": self.p_reach, "current": self.current, "seed": self.seed,
-             "excluded": list(self.excluded)}
+             "excluded": list(self.excluded), "discrepancy": self.discrepancy}
         if samples:
             d["samples"] = [_json_float(x) for x in self.samples]
         return d
@@ -412,7 +433,8 @@ def _seed_rng(seed: Any) -> tuple[np.random.Generator, int | None]:
 def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | None = None,
                 models: Sequence[str] = DEFAULT_MODELS, selection: str = "average",
                 level: float = 0.9, n_samples: int = 4000, sigma_floor: float = 0.003,
-                reject_outliers: bool = True, indicator: str = "indicator") -> RULPrediction:
+                reject_outliers: bool = True, indicator: str = "indicator",
+                discrepancy: float = 0.0) -> RULPrediction:
     """RUL distribution of one health indicator ``y`` (n,) observed at times ``t`` (n,).
 
     Parameters
@@ -439,10 +461,21 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
         identification that landed in a wrong basin (it happens: see
         ``docs/prognosis.md``) would otherwise bend the trend. Their indices are
         in :attr:`RULPrediction.excluded`.
+    discrepancy
+        Relative systematic error of the indicator as identified (one standard
+        deviation): the monitoring model reads ``(1 + delta)`` times the true value
+        (:data:`MODEL_DISCREPANCY`, measured on plant traces), ``delta ~ N(0,
+        discrepancy)`` drawn once per Monte Carlo draw, so the actuator fails where the
+        trend reaches ``threshold (1 + delta)``. The trend's scatter cannot see such an
+        offset: it moves every inspection alike. 0 (default here): none.
     """
     if not (isinstance(threshold, (int, float, np.floating)) and math.isfinite(threshold)
             and threshold > 0):
         raise ValueError(f"failure threshold must be a positive number, got {threshold!r}")
+    if isinstance(discrepancy, bool) or not isinstance(discrepancy, (int, float, np.floating)) \
+            or not (math.isfinite(discrepancy) and 0.0 <= discrepancy < 1.0):
+        raise ValueError(f"discrepancy must be a number in [0, 1) (a relative standard "
+                         f"deviation, e.g. 0.05), got {discrepancy!r}")
     if selection not in SELECTION_RULES:
         raise ValueError(f"unknown model selection {selection!r}; choose one of "
                          f"{', '.join(SELECTION_RULES)}")
@@ -477,7 +510,11 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
             continue
         th = fit.sample(rng, int(counts[m]))
         thetas[m] = th
-        crossings.append(fit.crossing_time(threshold, th))
+        thr = threshold
+        if discrepancy > 0:        # (drawn only then: without it the draws are as before)
+            thr = threshold * np.maximum(1.0 + discrepancy * rng.standard_normal(th.shape[0]),
+                                         0.05)
+        crossings.append(fit.crossing_time(thr, th))
     t_star = np.concatenate(crossings)
     rul = np.maximum(t_star - t_now, 0.0)
     q = np.quantile(rul, [(1 - level) / 2, 0.5, (1 + level) / 2], method="inverted_cdf")
@@ -487,7 +524,7 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
                          lo=float(q[0]), hi=float(q[2]), level=float(level),
                          p_failed=float(np.mean(t_star <= t_now)), samples=rul, theta=thetas,
                          current=float(chosen.value(t_now)[0]), seed=seed_int,
-                         excluded=excluded)
+                         excluded=excluded, discrepancy=float(discrepancy))
 
 
 def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_floor: float,
@@ -621,7 +658,7 @@ class Prognosis:
 def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
              indicators: Sequence[str] = INDICATORS, t_now: float | None = None,
              actuator: str | None = None, time_unit: str = "h", sigma_floor: float = 0.003,
-             **kwargs: Any) -> Prognosis:
+             discrepancy: Mapping[str, float] | None = None, **kwargs: Any) -> Prognosis:
     """RUL of each health indicator from a k history ``K`` (n, 8) at ``times`` (n,).
 
     Each indicator gets its own seed, spawned from ``seed`` by
@@ -629,13 +666,21 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
     a prediction does not depend on which other indicators were asked for.
     ``sigma_floor`` defaults to 0.003, the per-component repeatability of an
     identification on a noisy reference-model trace (Eq. 9 errors of 0.2-0.3 %);
-    other keyword arguments go to :func:`predict_rul`.
+    ``discrepancy`` (indicator -> relative standard deviation, default
+    :data:`MODEL_DISCREPANCY`; ``{}`` for none) is the identification's systematic error
+    each RUL carries (:func:`predict_rul`); other keyword arguments go to
+    :func:`predict_rul`.
     """
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     for name in indicators:
         if name not in INDICATOR_MODE:
             raise ValueError(f"unknown health indicator {name!r}; choose from {', '.join(INDICATORS)}")
+    discrepancy = MODEL_DISCREPANCY if discrepancy is None else discrepancy
+    unknown = [n for n in discrepancy if n not in INDICATOR_MODE]
+    if unknown:
+        raise ValueError(f"discrepancy: unknown health indicator(s) {unknown}; choose from "
+                         f"{', '.join(INDICATORS)}")
     series = indicator_series(K)
     times = np.asarray(times, dtype=float)
     children = np.random.SeedSequence(int(seed)).spawn(len(INDICATORS))
@@ -645,7 +690,8 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
             continue
         preds[name] = predict_rul(times, series[name], thresholds.for_indicator(name),
                                   seed=np.random.default_rng(ss), t_now=t_now,
-                                  sigma_floor=sigma_floor, indicator=name, **kwargs)
+                                  sigma_floor=sigma_floor, indicator=name,
+                                  discrepancy=float(discrepancy.get(name, 0.0)), **kwargs)
         preds[name] = _with_seed(preds[name], int(seed))
     return Prognosis(actuator=actuator, t_now=float(times[-1] if t_now is None else t_now),
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
