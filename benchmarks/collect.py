@@ -28,10 +28,11 @@ the unit's own stiffness, leakage and fault loops resolved with the PWM ripple) 
 stated, production units within tolerances. *Twin* traces (the monitoring model's own
 currents with the same sensor noise) are the inverse crime, shown beside for comparison.
 The monitoring model closes the backlash on a compliant contact since version 0.3
-(2026-11-23 17:00 UTC); sections dated before that were measured with its earlier rigid
-contact (on twin traces, a different model), and those dated 2026-11-22 (model report,
-optimizers, prognosis) before the plant existed, on a reference model that shared the
-monitoring model's equations. Their scripts re-run them.
+(2026-11-23 17:00 UTC), and its kernels carry a per-candidate load column (the mismatch
+check's unreported load) since 2026-11-23 18:50 UTC, at 0.99x the kernel time side by side
+(*The load column's cost* below); sections dated before 17:00 were measured with the
+earlier rigid contact. The optimizer section runs the optimizers on standard test
+functions: it does not depend on the actuator model. Every script re-runs its section.
 
 | section | script |
 |---|---|
