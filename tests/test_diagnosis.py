@@ -14,6 +14,7 @@ import math
 
 import numpy as np
 import pytest
+from kvectors import k_with
 
 from emaphm.diagnosis import (DEFAULT_THRESHOLDS, FAULT_MODES, Diagnosis, Fault, Thresholds,
                               diagnose)
@@ -28,12 +29,7 @@ SINGLE = {
 }
 
 
-def _k(**components):
-    """Nominal k with some components set, by 1-based index: _k(k4=0.25)."""
-    k = K_NOMINAL.copy()
-    for name, v in components.items():
-        k[int(name[1:]) - 1] = v
-    return k
+_k = k_with      # nominal k with some components set, by 1-based index
 
 
 # ----------------------------------------------------------------------------- verdicts

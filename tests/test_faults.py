@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from kvectors import k_with
 from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
@@ -24,12 +25,7 @@ unit = st.floats(0.0, 1.0, allow_nan=False)
 k_vectors = arrays(np.float64, N_K, elements=unit)
 
 
-def _k(**components):
-    """Nominal k with some components changed, by 1-based index: _k(k3=0.25)."""
-    k = K_NOMINAL.copy()
-    for name, value in components.items():
-        k[int(name[1:]) - 1] = value
-    return k
+_k = k_with      # nominal k with some components set, by 1-based index
 
 
 # --------------------------------------------------------------------------- as_k

@@ -10,6 +10,7 @@ check, while a real fault on the nominal unit stays ``faulty``.
 
 import numpy as np
 import pytest
+from kvectors import k_with
 
 from emaphm.diagnosis import MismatchFit, diagnose
 from emaphm.faults import K_NOMINAL
@@ -79,11 +80,7 @@ def test_the_numpy_kernel_has_the_load_column_too():
 
 # ------------------------------------------------------------------ the rule, on k alone
 
-def _k(**kw):
-    k = K_NOMINAL.copy()
-    for name, v in kw.items():
-        k[int(name[1:]) - 1] = v
-    return k
+_k = k_with      # nominal k with some components set, by 1-based index
 
 
 def test_a_fault_the_mismatch_fit_does_not_name_makes_the_verdict_unexplained():
