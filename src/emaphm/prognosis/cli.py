@@ -255,6 +255,11 @@ def _prognosis_table(prog: Any) -> str:
                      "the threshold)")
     else:
         lines.append("\nno fault is predicted to reach its failure threshold")
+    carried = [f"{n} {100 * p.discrepancy:.1f} %" for n, p in prog.predictions.items()
+               if p.discrepancy > 0]
+    if carried:
+        lines.append("intervals include the identification's model discrepancy measured on the "
+                     "reference plant (" + ", ".join(carried) + " of the indicator)")
     return "\n".join(lines)
 
 
