@@ -77,13 +77,13 @@ def test_cli_loop(run, tmp_path, capsys):
                "--threshold", "friction=0.45"])
     out, _ = capsys.readouterr()
     assert rc == 0 and "first to fail: friction" in out
-    assert "model discrepancy" in out and "friction 5.6 %" in out   # what the interval carries
+    assert "model discrepancy" in out and "friction 5.3 %" in out   # what the interval carries
     assert_png_of(tmp_path / "p.png", (10, 3.2 * 1 + 0.6))  # one growing indicator: friction
     rc = main(["prognose", "EMA-CLI", "--db", db, "--json", "--indicator", "friction"])
     d = json.loads(capsys.readouterr().out)
     assert rc == 0 and d["thresholds"]["friction"] == 0.5 and d["n_inspections"] == 3
     assert set(d["predictions"]) == {"friction"}
-    assert d["predictions"]["friction"]["discrepancy"] == 0.056
+    assert d["predictions"]["friction"]["discrepancy"] == 0.053
 
 
 def test_spread_methods(run):

@@ -80,12 +80,12 @@ MIN_INSPECTIONS = 3
 #: --tune-discrepancy``, seeds 100+, apart from the reported 0-2). The plant has physics
 #: the monitoring model lacks (the Stribeck drop reads as more Coulomb friction, more so
 #: as the friction grows); the three phases share the short circuit's value.
-#: Measured (5 histories of each, 20-35 inspections): friction 0.056 (mean +0.041),
-#: backlash 0.057 (+0.027), short circuit 0.023 (+0.016), eccentricity 0.0095, gain drift
+#: Measured (5 histories of each, 20-35 inspections): friction 0.053 (mean +0.039),
+#: backlash 0.058 (+0.025), short circuit 0.020 (+0.012), eccentricity 0.0070, gain drift
 #: 0.0051.
 MODEL_DISCREPANCY: Mapping[str, float] = MappingProxyType({
-    "friction": 0.056, "backlash": 0.057, "short_a": 0.023, "short_b": 0.023, "short_c": 0.023,
-    "eccentricity": 0.0095, "gain_drift": 0.0051})
+    "friction": 0.053, "backlash": 0.058, "short_a": 0.020, "short_b": 0.020, "short_c": 0.020,
+    "eccentricity": 0.0070, "gain_drift": 0.0051})
 
 _ALPHA_MIN = math.log(1e-9)
 
