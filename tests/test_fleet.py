@@ -468,3 +468,31 @@ def test_the_site_assets_are_package_data():
     from emaphm.fleet.site import ASSETS
 
     assert {f"assets/{a}" for a in ASSETS} == on_disk
+
+
+def test_a_site_rebuilt_from_another_history_drops_the_pages_it_no_longer_has(tmp_path):
+    from emaphm.fleet.site import build_site
+
+    t = np.linspace(0.0, 300.0, 3)
+    first, second = tmp_path / "1.sqlite", tmp_path / "2.sqlite"
+    with HealthHistory(first) as h:
+        for aid in ("A", "GONE"):
+            h.register(aid)
+            _add_series(h, aid, t, [_k(friction=0.01 + 0.0004 * x) for x in t])
+    with HealthHistory(second) as h:
+        h.register("A")
+        _add_series(h, "A", t, [_k(friction=0.01 + 0.0004 * x) for x in t])
+    out = tmp_path / "site"
+    build_site(first, out, workers=0)
+    gone = page_stem("GONE")
+    assert (out / "actuators" / f"{gone}.html").is_file()
+    assert (out / "actuators" / f"{gone}-prognosis.png").is_file()
+    # a subset keeps the others' pages; the whole of another history does not
+    build_site(first, out, workers=0, actuators=["A"])
+    assert (out / "actuators" / f"{gone}.html").is_file()
+    site = build_site(second, out, workers=0)
+    assert set(site.pages) == {"A"}
+    left = sorted(p.name for p in (out / "actuators").iterdir())
+    assert not [n for n in left if n.startswith(gone)]
+    manifest = json.loads((out / "actuators" / ".figures.json").read_text())
+    assert set(manifest) == {page_stem("A")}

@@ -25,7 +25,9 @@ the cost (about a second of CPU per actuator), so a rebuild into the same folder
 again only the figures whose inputs changed: ``actuators/.figures.json`` keeps, per
 actuator, the SHA-256 of everything its figures are drawn from (its inspections, the
 thresholds, the seed and level of the prognosis, the versions of emaphm and matplotlib
-and the code of the plotting modules); ``redraw=True`` ignores it.
+and the code of the plotting modules); ``redraw=True`` ignores it. A build of the whole
+history removes the pages and figures of actuators an earlier build into the folder
+wrote that the history no longer has; a build of some ``actuators`` keeps the others'.
 """
 
 from __future__ import annotations
@@ -186,6 +188,23 @@ def _reusable(entry: Any, key: str, folder: Path) -> dict | None:
     if not all((folder / name).is_file() for name, _, _ in out.values()):
         return None
     return out
+
+
+def _remove_others(folder: Path, known: dict, keep: set[str]) -> None:
+    """Remove from ``folder`` (and from the manifest ``known``) the page and figures of
+    every actuator an earlier build wrote that is not in ``keep``: a site rebuilt from a
+    history without them must not keep serving their pages. Only files the manifest
+    names (and their pages) are removed."""
+    for stem in [s for s in known if s not in keep]:
+        entry = known.pop(stem)
+        names = [f"{stem}.html", *_figure_names(stem)]
+        if isinstance(entry, dict) and isinstance(entry.get("figures"), dict):
+            names += [str(v[0]) for v in entry["figures"].values()
+                      if isinstance(v, (list, tuple)) and v]
+        for name in dict.fromkeys(names):
+            path = folder / name
+            if path.parent == folder:          # a name from the manifest stays inside
+                path.unlink(missing_ok=True)
 
 
 def _figure_names(stem: str) -> tuple[str, str]:
@@ -704,6 +723,8 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
                          reuse=_reusable(manifest.get(stem), key, figdir)))
     results = _run(jobs, n_workers, progress)
     figures = {s.id: f for s, f in results}
+    if not actuators:                 # the whole history: pages of others are not its own
+        _remove_others(figdir, known, {j.stem for j in jobs})
     known.update({j.stem: {"key": j.key, "figures": figures[j.data.actuator.id]} for j in jobs})
     atomic_write_text(figdir / _MANIFEST, json.dumps(known, indent=1, sort_keys=True) + "\n")
     n_draw = sum(j.reuse is None for j in jobs)
