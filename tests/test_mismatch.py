@@ -46,6 +46,13 @@ def test_load_is_a_nuisance_in_newton_metres_and_only_fills_its_column():
     assert with_load.shape == (LOADS.size, N_CP) and np.all(plain[:, C_T0] == 0.0)
     np.testing.assert_array_equal(with_load[:, C_T0], LOADS)
     np.testing.assert_array_equal(np.delete(with_load, C_T0, axis=1), np.delete(plain, C_T0, axis=1))
+    # a calibrated unit's unreported load is packed in the same column; the nuisance adds to it
+    from dataclasses import replace
+
+    sheet = siemens_1fk7060()
+    loaded = replace(sheet, load=replace(sheet.load, T_0=0.04))
+    _, cal = pack_population(loaded, np.hstack([K, LOADS[:, None]]), nuisance=("load",))
+    np.testing.assert_array_equal(cal[:, C_T0], 0.04 + LOADS)
     assert nuisance_text("load", 0.0204) == "unreported constant load +0.020 N m"
     assert nuisance_text("R", 0.3) == "winding resistance +30.0 %"
 

@@ -37,8 +37,8 @@ model error instead), and the less certain one of a pair the profile cannot
 *separate* (``|correlation| > CORRELATION_LIMIT``: inertia and flux both scale
 the current), or that the others predict together (a multiple correlation above
 :data:`MULTIPLE_CORRELATION_LIMIT`: flux, inertia, friction, load and the sensor
-gains can all be off together). The others then absorb them, which is what the monitoring model
-needs to reproduce the unit's currents.
+gains can all be off together). The others then absorb them, which is what the
+monitoring model needs to reproduce the unit's currents.
 
 The result is an :class:`~emaphm.params.ActuatorParams` (the unit's, with a
 ``[calibration]`` section holding the date, the sources, each estimate and
@@ -155,7 +155,8 @@ class _Target:
     w: np.ndarray               # (n, 3) Eq. 4 weights
     sqrt_w: np.ndarray          # (n, 3) sqrt of the Eq. 4 weights, over the noise sigma
     floor: float                # Eq. 4 value of white noise alone
-    #: the test profile per constant load T_0 [N m]: only the load parameter changes it
+    #: the test profile per control period T_s [s] (the load parameter is packed per
+    #: candidate, ``Load.T_0``, not in the profile)
     profiles: dict = field(default_factory=dict, compare=False, repr=False)
 
 
@@ -181,13 +182,11 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
 def _model_currents(params: ActuatorParams, tg: _Target) -> np.ndarray:
     from .models.monitoring import MonitoringModel
 
-    key = (params.inverter.T_s, params.load.T_0)
-    prof = tg.profiles.get(key)
+    T_s = params.inverter.T_s
+    prof = tg.profiles.get(T_s)
     if prof is None:
-        if len(tg.profiles) > 16:
-            tg.profiles.clear()
-        prof = tg.profiles[key] = Profile.from_samples(
-            np.arange(tg.theta_ref.size) * params.inverter.T_s, tg.theta_ref, tg.load + params.load.T_0)
+        prof = tg.profiles[T_s] = Profile.from_samples(
+            np.arange(tg.theta_ref.size) * T_s, tg.theta_ref, tg.load)
     mm = MonitoringModel(params, prof, theta0=tg.theta0, fault_model="physical")
     r = mm.simulate(K_NOMINAL)
     i = r.i_abc[0]
@@ -202,8 +201,8 @@ class CalibrationResult:
     ``estimates``: name -> ``{"value", "se", "lo95", "hi95", "unit"}`` (deviations from
     the data sheet; parameters kept at the data sheet are absent and listed in
     ``fixed``); ``correlated``: the estimates found not separable, each with its partner
-(or ``"J+friction+gain_b"``: the others that predict it together) and the (multiple)
-correlation;
+    (or ``"J+friction+gain_b"``: the others that predict it together) and the (multiple)
+    correlation;
     ``weak``: the parameters found not identifiable, with the change of the fit ratio a
     typical deviation of theirs makes (see :data:`MIN_EFFECT`);
     ``fit_ratio``: per source, the fitted Eq. 4 over the trace's white-noise floor;

@@ -293,8 +293,8 @@ class Eq4Objective:
             load_torque = np.asarray(load_torque, dtype=float)
             if load_torque.shape != (n,):
                 raise ValueError(f"load_torque must have shape ({n},) on the model grid")
-        # a calibrated unit: its constant load, and its current sensors' gains and offsets
-        load_torque = load_torque + params.load.T_0
+        # a calibrated unit's constant load is in the model's parameters (Load.T_0, packed
+        # per candidate); its current sensors' gains and offsets are removed below
         profile = Profile.from_samples(t_model, on_grid.theta_ref, load_torque)
         model = MonitoringModel(params, profile, n_sub=n_sub, theta0=float(on_grid.theta_m[0]),
                                 fault_model=fault_model, nuisance=tuple(nuisance))

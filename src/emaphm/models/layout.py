@@ -51,7 +51,9 @@ N_P = 22
 #: ``Phi`` (25 entries, row-major) and ``Gamma`` (25) of the winding circuit's exact step
 C_PHI = 18
 C_GAMMA = C_PHI + N_Z * N_Z
-#: a constant load torque [N m] the candidate adds to the profile's (the ``"load"`` nuisance)
+#: a constant load torque [N m] the candidate adds to the profile's: the unit's unreported
+#: load ``Load.T_0``, plus the ``"load"`` nuisance (read by the monitoring model's kernels;
+#: the reference plant takes its whole load from ``run_reference(extra_load=)``)
 C_T0 = C_GAMMA + N_Z * N_Z
 N_CP = C_T0 + 1
 
@@ -169,7 +171,7 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     sigma = 1.0 if fault_model == "paper" else m.L_sigma
     row[C_PHI:C_GAMMA], row[C_GAMMA:C_T0] = _one_winding(
         tuple(m.R), tuple(m.L), float(sigma), tuple(m.mu), tuple(m.R_f), float(P[P_DT]))
-    row[C_T0] = 0.0          # Load.T_0 is in the profile the model is given
+    row[C_T0] = params.load.T_0
     return P, row[None, :]
 
 
@@ -256,7 +258,7 @@ class PopulationPacker:
         CP = np.repeat(self.base, K.shape[0], axis=0)
         for j, name in enumerate(nuisance):
             if name == "load":
-                CP[:, C_T0] = NU[:, j]
+                CP[:, C_T0] += NU[:, j]
                 continue
             cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
             CP[:, cols] *= 1.0 + NU[:, j:j + 1]

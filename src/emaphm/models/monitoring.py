@@ -229,7 +229,8 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
             ia, ib, ic = phase_currents.py_func(z[0], z[1])
             T_m = 0.5 * (T_0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu))
             thm, wm, thl, wl = transmission_step.py_func(
-                thm, wm, thl, wl, T_m, T_load[n], m.J_m, m.C_m, tr.FSJ, tr.FDJ, ld.J_l, ld.C_l,
+                thm, wm, thl, wl, T_m, T_load[n] + cp[0, C_T0], m.J_m, m.C_m, tr.FSJ, tr.FDJ,
+                ld.J_l, ld.C_l,
                 tr.backlash, P[P_K_C], P[P_D_C], dt)
     out.update(t=t, theta_ref=ref)
     return out
