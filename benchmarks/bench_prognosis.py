@@ -96,12 +96,12 @@ def real_history(task: tuple[str, int, bool]) -> dict:
     from emaphm.calibration import calibrate
     from emaphm.faults import K_NOMINAL
     from emaphm.params import siemens_1fk7060
-    from emaphm.prognosis import (HealthHistory, degradation_scenario, inspect, inspection_times,
+    from emaphm.prognosis import (HealthHistory, inspect, inspection_times,
                                   simulate_degradation)
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 
     name, h, commission = task
-    sc = TUNE_SCENARIOS[name]() if name in TUNE_SCENARIOS else degradation_scenario(name)
+    sc = _scenario(name)
     times = inspection_times(sc.eol, N_INSPECTIONS)
     t0 = time.perf_counter()
     run = simulate_degradation(sc, times, seed=h)
@@ -144,6 +144,13 @@ def _eccentricity_growth():
 #: Histories only the discrepancy tuning runs (no preset: the RUL tables do not report them).
 TUNE_SCENARIOS = {"backlash-growth": _backlash_growth, "eccentricity-growth": _eccentricity_growth}
 TUNE_SEED0 = 100
+
+
+def _scenario(name: str):
+    """A preset degradation scenario, or one only the discrepancy tuning runs."""
+    from emaphm.prognosis import degradation_scenario
+
+    return TUNE_SCENARIOS[name]() if name in TUNE_SCENARIOS else degradation_scenario(name)
 #: Share of its failure threshold from which a true indicator counts in the discrepancy.
 TUNE_FROM = 0.25
 
@@ -151,13 +158,12 @@ TUNE_FROM = 0.25
 def relative_errors(rows: list[dict]) -> dict[str, list[float]]:
     """``(identified - true) / true`` of each history's degrading indicator, at the
     inspections where the true value is at least :data:`TUNE_FROM` of its threshold."""
-    from emaphm.prognosis import degradation_scenario
     from emaphm.prognosis.trends import indicator_series
 
     out: dict[str, list[float]] = {}
     for r in rows:
         name = r["scenario"]
-        sc = TUNE_SCENARIOS[name]() if name in TUNE_SCENARIOS else degradation_scenario(name)
+        sc = _scenario(name)
         y = indicator_series(np.array(r["K"]))[sc.indicator]
         y_true = indicator_series(np.array(r["k_true"]))[sc.indicator]
         y, y_true = abs(y), abs(y_true)              # gain drift: signed by its own direction

@@ -193,18 +193,14 @@ def _reusable(entry: Any, key: str, folder: Path) -> dict | None:
 def _remove_others(folder: Path, known: dict, keep: set[str]) -> None:
     """Remove from ``folder`` (and from the manifest ``known``) the page and figures of
     every actuator an earlier build wrote that is not in ``keep``: a site rebuilt from a
-    history without them must not keep serving their pages. Only files the manifest
-    names (and their pages) are removed."""
+    history without them must not keep serving their pages. Only the files a build
+    names after a manifest stem are removed."""
     for stem in [s for s in known if s not in keep]:
-        entry = known.pop(stem)
-        names = [f"{stem}.html", *_figure_names(stem)]
-        if isinstance(entry, dict) and isinstance(entry.get("figures"), dict):
-            names += [str(v[0]) for v in entry["figures"].values()
-                      if isinstance(v, (list, tuple)) and v]
-        for name in dict.fromkeys(names):
-            path = folder / name
-            if path.parent == folder:          # a name from the manifest stays inside
-                path.unlink(missing_ok=True)
+        del known[stem]
+        if Path(stem).name != stem:             # a stem is a plain name (page_stem)
+            continue
+        for name in (f"{stem}.html", *_figure_names(stem)):
+            (folder / name).unlink(missing_ok=True)
 
 
 def _figure_names(stem: str) -> tuple[str, str]:
