@@ -266,9 +266,9 @@ def test_execute_run_never_raises():
     run = spec.runs_list()[0]
     import dataclasses
 
-    broken = dataclasses.replace(run, optimizer="no-such")
+    broken = dataclasses.replace(run, k_true=(2.0,) * 8)
     r = execute_run(broken)
-    assert r.status == "failed" and "unknown algorithm 'no-such'" in r.error_text
+    assert r.status == "failed" and "k1 (friction) = 2 is outside [0, 1]" in r.error_text
 
 
 # ----------------------------------------------------------------------------- replay
@@ -431,6 +431,8 @@ def test_a_run_of_the_default_pipeline_is_executed_and_stored():
     run = spec.runs_list()[0]
     import dataclasses
 
-    r = execute_run(dataclasses.replace(run, optimizer="lsq", options=(), budget=None))
+    from emaphm.identify import IdentificationConfig
+
+    r = execute_run(dataclasses.replace(run, config=IdentificationConfig("lsq")))
     assert r.status == "ok", r.error_text
     assert r.optimizer == "lsq" and 0 < r.evaluations < 2000 and r.error_pct < 5.0

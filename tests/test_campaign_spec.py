@@ -118,9 +118,9 @@ pop_size = 40
     assert algos["pso"].options == {"pop_size": 40} and algos["pso-20"].options == {"pop_size": 20}
     assert algos["pso-20"].name == "pso" and algos["cmaes"].name == "cmaes"
     runs = {r.key: r for r in spec.runs_list()}
-    assert runs["my-case/pso/0"].budget == 3000
-    assert runs["my-case/pso-20/1"].budget is None          # "default": the algorithm's own rule
-    assert runs["my-case/pso-20/1"].options == {"pop_size": 20}
+    assert runs["my-case/pso/0"].config.budget == 3000
+    assert runs["my-case/pso-20/1"].config.budget is None   # "default": the algorithm's own rule
+    assert runs["my-case/pso-20/1"].config.options == {"pop_size": 20}
     # JSON round trip (what the store keeps)
     again = CampaignSpec.from_json(spec.to_json())
     assert again == spec and again.hash == spec.hash

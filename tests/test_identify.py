@@ -16,10 +16,11 @@ import pytest
 
 from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, error_pct
 from emaphm.fitness import Eq4Objective
-from emaphm.identify import Identification, identify, parse_budget
+from emaphm.identify import Identification, IdentificationConfig, identify, parse_budget
 from emaphm.identify import DEFAULT_ALGORITHM, LSQ_RESTARTS
 from emaphm.models.monitoring import MonitoringModel
-from emaphm.optim import ALGORITHMS, MaxEvaluations, MaxIterations, WallClock
+from emaphm.optim import ALGORITHMS, PSO, MaxEvaluations, MaxIterations, WallClock
+from emaphm.problem import IdentificationProblem
 from emaphm.simulate import DEFAULT_SENSORS, simulate
 from emaphm.traces import Trace, TraceError
 
@@ -41,14 +42,24 @@ def mm_gain_low():
 
 
 @pytest.fixture(scope="module")
-def objective(mm_gain_low):
-    return Eq4Objective.from_trace(mm_gain_low)
+def problem(mm_gain_low):
+    return IdentificationProblem(mm_gain_low)
 
 
 @pytest.fixture(scope="module")
-def cheap(mm_gain_low, objective):
+def objective(problem):
+    return problem.objective
+
+
+def config(algorithm, **kw):
+    """The settings of a cheap run where only the plumbing matters."""
+    return IdentificationConfig(algorithm, options=kw.pop("options", SMALL), **kw)
+
+
+@pytest.fixture(scope="module")
+def cheap(problem):
     """A short PSO run for the tests about the result's plumbing, not its accuracy."""
-    return identify(mm_gain_low, "pso", seed=5, budget=400, options=SMALL, objective=objective)
+    return identify(problem, PSO(pop_size=20), seed=5, termination=400)
 
 
 def _strip_k(trace: Trace) -> Trace:
@@ -68,8 +79,8 @@ TWIN_FITNESS_RATIO = {"de": 2e-9, "pso": 5e-8, "gwo": 2e-6}      # de measured 7
 
 
 @pytest.mark.parametrize("algorithm", ALGOS)
-def test_recovers_gain_low_with_defaults(mm_gain_low, objective, algorithm):
-    ident = identify(mm_gain_low, algorithm, seed=1, objective=objective)
+def test_recovers_gain_low_with_defaults(problem, objective, algorithm):
+    ident = identify(problem, algorithm, seed=1)
     assert isinstance(ident, Identification)
     assert ident.algorithm == algorithm
     np.testing.assert_array_equal(ident.k_true, SCENARIOS["gain-low"])
@@ -103,11 +114,11 @@ def test_recovers_friction_high_from_a_noisy_reference_trace():
 
 # ----------------------------------------------------------------------------- determinism
 @pytest.mark.parametrize("algorithm", ALGOS)
-def test_same_seed_same_result_other_seed_other_result(mm_gain_low, objective, algorithm):
-    kw = dict(budget=300, options=SMALL, objective=objective, polish=False)
-    a = identify(mm_gain_low, algorithm, seed=11, **kw)
-    b = identify(mm_gain_low, algorithm, seed=11, **kw)
-    c = identify(mm_gain_low, algorithm, seed=12, **kw)
+def test_same_seed_same_result_other_seed_other_result(problem, algorithm):
+    cfg = config(algorithm, budget=300, polish=False)
+    a = identify(problem, cfg, seed=11)
+    b = identify(problem, cfg, seed=11)
+    c = identify(problem, cfg, seed=12)
     np.testing.assert_array_equal(a.k, b.k)
     assert a.fitness == b.fitness
     assert (a.evaluations, a.iterations, a.reason) == (b.evaluations, b.iterations, b.reason)
@@ -116,25 +127,33 @@ def test_same_seed_same_result_other_seed_other_result(mm_gain_low, objective, a
     assert a.fitness != c.fitness
 
 
-def test_same_seed_same_result_with_the_default_polish(mm_gain_low, objective):
-    kw = dict(budget=300, options=SMALL, objective=objective)
-    a = identify(mm_gain_low, "pso", seed=4, **kw)
-    b = identify(mm_gain_low, "pso", seed=4, **kw)
+def test_same_seed_same_result_with_the_default_polish(problem):
+    cfg = config("pso", budget=300)
+    a = identify(problem, cfg, seed=4)
+    b = identify(problem, cfg, seed=4)
     np.testing.assert_array_equal(a.k, b.k)
     assert (a.fitness, a.evaluations, a.iterations) == (b.fitness, b.evaluations, b.iterations)
     np.testing.assert_array_equal(a.history, b.history)
 
 
-def test_prebuilt_objective_gives_the_same_result(mm_gain_low):
-    kw = dict(seed=2, budget=200, options=SMALL, polish=False)
-    fresh = identify(mm_gain_low, "de", **kw)
-    obj = Eq4Objective.from_trace(mm_gain_low)
-    reused = identify(mm_gain_low, "de", objective=obj, **kw)
-    np.testing.assert_array_equal(fresh.k, reused.k)
-    assert fresh.fitness == reused.fitness
-    # the objective counted the run's evaluations (plus the final model_trace run is not
-    # an objective call)
-    assert obj.stats.evaluations == reused.evaluations
+def test_a_problem_built_once_gives_the_same_result_as_a_trace(mm_gain_low):
+    """The problem is the explicit cache of the objective's set-up: identifying it again
+    gives what identifying the trace from scratch gives, and it counts nothing itself."""
+    cfg = config("de", budget=200, polish=False)
+    fresh = identify(mm_gain_low, cfg, seed=2)
+    prob = IdentificationProblem(mm_gain_low)
+    reused = identify(prob, cfg, seed=2)
+    again = identify(prob, cfg, seed=2)
+    for other in (reused, again):
+        np.testing.assert_array_equal(fresh.k, other.k)
+        assert (fresh.fitness, fresh.evaluations) == (other.fitness, other.evaluations)
+    assert fresh.compile_s >= 0 and again.compile_s < reused.compile_s + 1.0
+    # a view counts one search's evaluations
+    view = prob.view("ecc-xy")
+    view.evaluate(np.full((4, 8), 0.5))
+    view.residuals(np.full((2, 8), 0.5))
+    assert (view.evaluations, view.diverged) == (6, 0) and view.kernel_s > 0
+    assert prob.view("ecc-xy").evaluations == 0
 
 
 # ----------------------------------------------------------------------------- budgets
@@ -169,36 +188,37 @@ def test_parse_budget_rejects(budget, match):
         parse_budget(budget)
 
 
-def test_bad_budget_raises_before_any_work(mm_gain_low):
-    obj = Eq4Objective.from_trace(mm_gain_low)
+def test_bad_budget_raises_before_any_work(mm_gain_low, monkeypatch):
+    built = []
+    monkeypatch.setattr(IdentificationProblem, "__post_init__", lambda self: built.append(self))
     with pytest.raises(ValueError, match="positive"):
-        identify(mm_gain_low, "pso", seed=0, budget=0, objective=obj)
-    assert obj.stats.evaluations == 0
+        identify(mm_gain_low, "pso", seed=0, termination=0)
+    with pytest.raises(ValueError, match="positive"):
+        IdentificationConfig("pso", budget=0)
+    assert built == []                        # refused before the problem was set up
 
 
-def test_evaluation_budget_is_respected_by_the_search(mm_gain_low, objective):
-    ident = identify(mm_gain_low, "pso", seed=0, budget=1234, objective=objective, polish=False)
+def test_evaluation_budget_is_respected_by_the_search(problem):
+    ident = identify(problem, IdentificationConfig("pso", budget=1234, polish=False), seed=0)
     assert ident.reason == "max_evaluations"
     assert 1234 <= ident.evaluations < 1234 + 50           # at most one population more
     assert ident.evaluations % 50 == 0
     assert ident.options["budget"] == "1234"
 
 
-def test_evaluation_budget_counts_in_populations(mm_gain_low, objective):
-    ident = identify(mm_gain_low, "gwo", seed=0, budget="250evals", options=SMALL,
-                     objective=objective, polish=False)
+def test_evaluation_budget_counts_in_populations(problem):
+    ident = identify(problem, config("gwo", budget="250evals", polish=False), seed=0)
     assert ident.reason == "max_evaluations"
     assert ident.evaluations == 260 and ident.iterations == 13
 
 
-def test_evaluation_budget_is_respected_with_the_default_polish(mm_gain_low, objective):
-    ident = identify(mm_gain_low, "pso", seed=0, budget=1500, objective=objective)
+def test_evaluation_budget_is_respected_with_the_default_polish(problem):
+    ident = identify(problem, "pso", seed=0, termination=1500)
     assert ident.evaluations <= 1500 + 50
 
 
-def test_wall_clock_budget(mm_gain_low, objective):
-    ident = identify(mm_gain_low, "pso", seed=0, budget="0.5s", objective=objective,
-                     polish=False)
+def test_wall_clock_budget(problem):
+    ident = identify(problem, IdentificationConfig("pso", budget="0.5s", polish=False), seed=0)
     assert ident.reason == "wall_clock"
     assert 0.5 <= ident.elapsed_s < 0.5 + 5.0
     # far more than the paper's 200 iterations would not fit; far fewer would mean it
@@ -206,15 +226,14 @@ def test_wall_clock_budget(mm_gain_low, objective):
     assert ident.iterations >= 2
 
 
-def test_callback_stops_the_search(mm_gain_low, objective):
+def test_callback_stops_the_search(problem):
     seen = []
 
     def stop_after_three(state):
         seen.append((state.nit, state.nfev, state.best_f))
         return state.nit >= 3
 
-    ident = identify(mm_gain_low, "pso", seed=0, options=SMALL, objective=objective,
-                     callback=stop_after_three, polish=False)
+    ident = identify(problem, config("pso", polish=False), seed=0, callback=stop_after_three)
     assert ident.reason == "callback"
     assert ident.iterations == 3 and ident.evaluations == 60
     assert [s[0] for s in seen] == [1, 2, 3]
@@ -223,9 +242,8 @@ def test_callback_stops_the_search(mm_gain_low, objective):
     assert len(ident.history) == 3
 
 
-def test_callback_stops_the_search_with_the_default_polish(mm_gain_low, objective):
-    ident = identify(mm_gain_low, "pso", seed=0, options=SMALL, objective=objective,
-                     callback=lambda state: state.nit >= 3)
+def test_callback_stops_the_search_with_the_default_polish(problem):
+    ident = identify(problem, config("pso"), seed=0, callback=lambda state: state.nit >= 3)
     assert ident.reason == "callback"
     assert ident.evaluations == 60
 
@@ -249,7 +267,7 @@ def test_seed_is_required(mm_gain_low):
 
 def test_bad_optimizer_option_raises(mm_gain_low):
     with pytest.raises(ValueError, match="pop_size"):
-        identify(mm_gain_low, "pso", seed=0, options={"pop_size": 1})
+        identify(mm_gain_low, IdentificationConfig("pso", options={"pop_size": 1}), seed=0)
 
 
 def test_invalid_trace_raises(mm_gain_low):
@@ -258,14 +276,13 @@ def test_invalid_trace_raises(mm_gain_low):
     bad = Trace(t=mm_gain_low.t, theta_ref=mm_gain_low.theta_ref, theta_m=mm_gain_low.theta_m,
                 omega_m=mm_gain_low.omega_m, i_abc=i, meta=mm_gain_low.meta)
     with pytest.raises(TraceError, match="non-finite"):
-        identify(bad, "pso", seed=0, budget=100)
+        identify(bad, "pso", seed=0, termination=100)
 
 
 # ----------------------------------------------------------------------------- results as data
 def test_k_true_and_error_only_for_traces_that_carry_k(mm_gain_low, cheap):
     assert cheap.k_true is not None and cheap.error_pct is not None
-    bench = identify(_strip_k(mm_gain_low), "pso", seed=5, budget=100, options=SMALL,
-                     polish=False)
+    bench = identify(_strip_k(mm_gain_low), config("pso", budget=100, polish=False), seed=5)
     assert bench.k_true is None and bench.error_pct is None
     d = bench.to_dict()
     assert "k_true" not in d and "error_pct" not in d
@@ -290,7 +307,7 @@ def test_model_trace_keeps_the_trace_start_time(mm_gain_low):
     later = Trace(t=mm_gain_low.t + 3.0, theta_ref=mm_gain_low.theta_ref,
                   theta_m=mm_gain_low.theta_m, omega_m=mm_gain_low.omega_m,
                   i_abc=mm_gain_low.i_abc, meta=mm_gain_low.meta)
-    ident = identify(later, "pso", seed=5, budget=100, options=SMALL, polish=False)
+    ident = identify(later, config("pso", budget=100, polish=False), seed=5)
     assert ident.model_trace.t[0] == pytest.approx(3.0)
     assert ident.model_trace.n == mm_gain_low.n
 
@@ -313,20 +330,22 @@ def test_to_dict_is_json_with_the_documented_keys(cheap):
     assert back["evals_per_s"] == pytest.approx(cheap.evaluations / cheap.elapsed_s)
 
 
-def test_to_dict_is_json_with_numpy_options(mm_gain_low, objective):
-    ident = identify(mm_gain_low, "pso", seed=5, budget=60, options={"pop_size": np.int64(20)},
-                     objective=objective, polish=False)
+def test_to_dict_is_json_with_numpy_options(problem):
+    ident = identify(problem, config("pso", options={"pop_size": np.int64(20)}, budget=60,
+                                     polish=False), seed=5)
     json.dumps(ident.to_dict())
 
 
 def test_equivalent_mode_is_passed_through(mm_gain_low):
-    ident = identify(mm_gain_low, "pso", seed=0, budget=200, options=SMALL, mode="equivalent",
-                     polish=False)
-    assert ident.options["mode"] == "equivalent"
+    ident = identify(IdentificationProblem(mm_gain_low, mode="equivalent"),
+                     config("pso", budget=200, polish=False), seed=0)
+    assert ident.options["mode"] == "equivalent" and ident.config.mode == "equivalent"
     eq = Eq4Objective.from_trace(mm_gain_low, mode="equivalent")
     assert ident.fitness == pytest.approx(eq(ident.k)[0], rel=1e-12)
     with pytest.raises(ValueError, match="unknown fitness mode"):
-        identify(mm_gain_low, "pso", seed=0, budget=100, mode="bogus")
+        IdentificationProblem(mm_gain_low, mode="bogus")
+    with pytest.raises(ValueError, match="unknown fitness mode"):
+        IdentificationConfig(mode="bogus")
 
 
 # ----------------------------------------------------------------------------- nuisance
@@ -342,7 +361,7 @@ def test_a_resistance_drift_is_searched_beside_k_not_read_as_a_fault():
     k = SCENARIOS["turn-short-15pct"]
     trace = simulate(k, model="monitoring", params=warm, sensors=DEFAULT_SENSORS, seed=2,
                      fault_model="physical")
-    ident = identify(trace, "pso", seed=0, params=p, nuisance=("R", "flux"))
+    ident = identify(IdentificationProblem(trace, params=p, nuisance=("R", "flux")), "pso", seed=0)
     assert set(ident.nuisance) == {"R", "flux"}
     # on the model's own traces the drift is found (measured R +0.20, flux -0.030)
     assert ident.nuisance["R"] == pytest.approx(0.2, abs=0.03)
@@ -350,18 +369,18 @@ def test_a_resistance_drift_is_searched_beside_k_not_read_as_a_fault():
     assert ident.k[2] == pytest.approx(0.15, abs=0.01) and ident.error_pct < 1.0
     assert ident.to_dict()["nuisance"] == ident.nuisance
     with pytest.raises(ValueError, match="unknown"):
-        identify(trace, "pso", seed=0, nuisance=("J",))
+        IdentificationProblem(trace, nuisance=("J",))
 
 
 # ----------------------------------------------------------------- the default pipeline (lsq)
-def test_default_pipeline_is_least_squares_and_exact_on_the_models_own_trace(mm_gain_low, objective):
+def test_default_pipeline_is_least_squares_and_exact_on_the_models_own_trace(problem):
     """Noise-free twin trace: the fitness is zero at the truth and least squares gets there
     (measured: Eq. 9 error 2.6e-5 %, fitness 1e-14 in 775 evaluations, against 1e-3 at the
     healthy k. The healthy start alone stops at 4e-13, above the acceptance of a noise-free
     trace: the backlash contact's clip and stick decisions leave kinks in the residual at
     that level, so the pipeline takes its further starts; it took none before the MM had
     the compliant contact)."""
-    ident = identify(mm_gain_low, seed=1, objective=objective)
+    ident = identify(problem, seed=1)
     assert ident.algorithm == DEFAULT_ALGORITHM == "lsq"
     assert ident.error_pct < 5e-3 and ident.fitness < 3e-13
     assert ident.restarts <= LSQ_RESTARTS and ident.reason == "converged"
@@ -371,19 +390,22 @@ def test_default_pipeline_is_least_squares_and_exact_on_the_models_own_trace(mm_
     assert np.all(np.diff(ident.history) <= 0.0)
 
 
-def test_default_pipeline_warm_start_and_budget(mm_gain_low, objective):
-    cold = identify(mm_gain_low, seed=1, objective=objective)
-    warm = identify(mm_gain_low, seed=1, objective=objective, start=SCENARIOS["gain-low"])
+def test_default_pipeline_warm_start_and_budget(problem):
+    import dataclasses
+
+    cold = identify(problem, seed=1)
+    warm_problem = dataclasses.replace(problem, start=SCENARIOS["gain-low"])
+    warm = identify(warm_problem, seed=1)
     assert warm.error_pct < 5e-3 and warm.evaluations < cold.evaluations
-    capped = identify(mm_gain_low, seed=1, objective=objective, budget=100)
+    capped = identify(problem, seed=1, termination=100)
     assert capped.evaluations <= 100 and capped.reason == "max_evaluations"
     # the seeded sample that chooses further starts is charged to the budget too
-    sampled = identify(mm_gain_low, seed=1, objective=objective, budget=200)
+    sampled = identify(problem, seed=1, termination=200)
     assert sampled.restarts >= 1 and sampled.evaluations <= 200
-    with pytest.raises(ValueError, match="start .* is an option of 'lsq', not of 'pso'"):
-        identify(mm_gain_low, "pso", seed=1, objective=objective, start=SCENARIOS["gain-low"])
+    with pytest.raises(ValueError, match="warm start .* least-squares solver, not by 'pso'"):
+        identify(warm_problem, "pso", seed=1)
     with pytest.raises(ValueError, match="takes no optimizer options"):
-        identify(mm_gain_low, seed=1, objective=objective, options={"pop_size": 4})
+        identify(problem, IdentificationConfig(options={"pop_size": 4}), seed=1)
 
 
 def test_default_pipeline_is_deterministic_and_restarts_from_the_sample(monkeypatch):
@@ -397,7 +419,7 @@ def test_default_pipeline_is_deterministic_and_restarts_from_the_sample(monkeypa
     np.testing.assert_array_equal(a.k, b.k)
     assert a.evaluations == b.evaluations and a.error_pct < 1.0     # measured 0.32 %
     monkeypatch.setattr(identify_module, "misfit_limit", lambda p=None: 0.0)
-    c = identify(trace, seed=4, restarts=2, suspect_ratio=3.0)
+    c = identify(trace, IdentificationConfig(restarts=2, suspect_ratio=3.0), seed=4)
     # further starts until one gains less than 1 % below the suspect limit (measured: 1)
     assert 1 <= c.restarts <= 2 and c.evaluations > a.evaluations
     assert c.fitness <= a.fitness * (1 + 1e-6)   # the first start is among them (refined alike)
@@ -413,35 +435,40 @@ def test_default_pipeline_on_the_physical_fault_model():
     assert ident.error_pct < 1.0 and not ident.suspect
 
 
-def test_objective_cache_is_by_value_and_changes_no_result():
+def test_identify_keeps_nothing_between_calls():
+    """No hidden cache: a trace identified twice, or an equal trace, gives the same result,
+    and the module holds no objectives (a cache, where it pays, is the problem object the
+    caller keeps)."""
     import emaphm.identify as ident_mod
 
     trace = simulate(scenario="gain-high", sensors=DEFAULT_SENSORS, seed=1)
-    ident_mod._OBJECTIVES.cache = None                       # cold
-    cold = identify(trace, "pso", seed=2, budget=300)
-    warm = identify(trace, "pso", seed=2, budget=300)        # the cached objective
-    assert len(ident_mod._OBJECTIVES.cache) == 1
-    assert np.array_equal(cold.k, warm.k) and cold.fitness == warm.fitness
-    assert np.array_equal(cold.history, warm.history)
-    assert cold.evaluations == warm.evaluations and cold.noise_floor == warm.noise_floor
-    assert np.array_equal(cold.model_trace.i_abc, warm.model_trace.i_abc)
-    # an equal trace (another object) hits; changed data or settings miss
+    cfg = IdentificationConfig("pso", budget=300)
+    first = identify(trace, cfg, seed=2)
     same = Trace(trace.t, trace.theta_ref, trace.theta_m, trace.omega_m, trace.i_abc.copy(),
                  trace.torque, dict(trace.meta))
-    identify(same, "pso", seed=2, budget=60)
-    assert len(ident_mod._OBJECTIVES.cache) == 1
-    i_abc = trace.i_abc.copy()
-    i_abc[5, 0] += 1e-3
-    other = Trace(trace.t, trace.theta_ref, trace.theta_m, trace.omega_m, i_abc, trace.torque,
-                  dict(trace.meta))
-    identify(other, "pso", seed=2, budget=60)
-    identify(trace, "pso", seed=2, budget=60, mode="equivalent")
-    assert len(ident_mod._OBJECTIVES.cache) == 3
+    second = identify(same, cfg, seed=2)
+    assert np.array_equal(first.k, second.k) and first.fitness == second.fitness
+    assert np.array_equal(first.history, second.history)
+    assert first.evaluations == second.evaluations and first.noise_floor == second.noise_floor
+    assert np.array_equal(first.model_trace.i_abc, second.model_trace.i_abc)
+    assert not any(isinstance(v, __import__("threading").local) for v in vars(ident_mod).values())
     bad = Trace(trace.t, trace.theta_ref, trace.theta_m, trace.omega_m,
                 np.full_like(trace.i_abc, np.nan), trace.torque, dict(trace.meta))
     with pytest.raises(TraceError):
-        identify(bad, "pso", seed=2, budget=60)              # validated, not cached
-    assert len(ident_mod._OBJECTIVES.cache) == 3
+        identify(bad, cfg, seed=2)
+
+
+def test_the_keywords_of_version_0_3_still_work_with_a_warning(mm_gain_low, problem):
+    new = identify(problem, config("pso", budget=200, polish=False), seed=3)
+    with pytest.warns(DeprecationWarning, match="0.3 spelling"):
+        old = identify(mm_gain_low, "pso", seed=3, budget=200, options=SMALL, polish=False,
+                       objective=problem.objective)
+    np.testing.assert_array_equal(new.k, old.k)
+    assert new.fitness == old.fitness
+    with pytest.warns(DeprecationWarning), pytest.raises(ValueError, match="start"):
+        identify(mm_gain_low, "pso", seed=1, start=SCENARIOS["gain-low"])
+    with pytest.raises(TypeError, match="unexpected keyword"):
+        identify(mm_gain_low, "pso", seed=1, bogus=3)
 
 
 def test_a_backlash_flat_at_the_healthy_k_is_found_from_the_single_fault_starts():

@@ -631,7 +631,7 @@ def test_simulation_is_deterministic(model):
 def test_noise_without_a_seed_raises():
     with pytest.raises(ValueError, match="explicit seed"):
         simulate(sensors=DEFAULT_SENSORS)
-    with pytest.raises(ValueError, match="seed must be an integer"):
+    with pytest.raises(ValueError, match="seed must be a non-negative integer"):
         simulate(sensors=DEFAULT_SENSORS, seed=1.5)
     # without noise no seed is needed, and quantisation alone is deterministic
     simulate(model="monitoring", sensors=Sensors(current_lsb=0.01))

@@ -184,3 +184,39 @@ def test_sincos_within_one_ulp_of_libm():
     assert math.isnan(s) and math.isnan(c)
     s, c = sincos(np.inf)
     assert math.isnan(s) and math.isnan(c)
+
+
+def scalar_fdlibm(mm, P, CP, i_target=None, weights=None):
+    """The scalar kernel on the SIMD kernel's sines (its ``fdlibm`` switch)."""
+    from emaphm.models.monitoring import _kernel as scalar_kernel
+
+    n_pop, n = CP.shape[0], mm.t.size
+    store = i_target is None
+    shape = (n_pop, n) if store else (0, 0)
+    out_i = np.zeros(shape + (3,))
+    th, om, tq = (np.zeros(shape) for _ in range(3))
+    fitness = np.zeros(n_pop)
+    status = np.zeros(n_pop, dtype=np.int64)
+    empty = np.zeros((0, 3))
+    scalar_kernel(P, np.ascontiguousarray(CP), *_inputs(mm), mm.n_sub,
+                  empty if store else np.ascontiguousarray(i_target),
+                  empty if store else np.ascontiguousarray(weights),
+                  out_i, th, om, tq, fitness, status, True)
+    return {"i_abc": out_i, "theta_m": th, "omega_m": om, "torque": tq, "status": status,
+            "fitness": fitness}
+
+
+def test_one_step_the_scalar_kernel_on_the_same_sines_gives_the_simd_bits(case):
+    """Both kernels run the one step of emaphm.models.step: on fdlibm's sines the scalar
+    kernel gives the SIMD kernel's results bit for bit, for every candidate, the
+    ill-conditioned ones included (an ulp of difference would grow there)."""
+    mm, _, simd, _, _, (P, CP) = case
+    same = scalar_fdlibm(mm, P, CP)
+    for name in ("i_abc", "theta_m", "omega_m", "torque", "status"):
+        np.testing.assert_array_equal(same[name], simd[name], err_msg=name)
+    target = simd["i_abc"][N_RANDOM]          # the nominal scenario's currents as a target
+    w = np.full_like(target, 1e-4)
+    f_simd, s_simd = simd_sse(mm, P, CP, target, w)
+    same = scalar_fdlibm(mm, P, CP, target, w)
+    np.testing.assert_array_equal(same["fitness"], f_simd)
+    np.testing.assert_array_equal(same["status"], s_simd)

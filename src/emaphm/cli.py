@@ -217,9 +217,9 @@ def _table(ident, diag) -> str:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from .mismatch import diagnose_identification
     from .faults import scenario
-    from .identify import ALGORITHM_NAMES, identify
+    from .identify import ALGORITHM_NAMES, IdentificationConfig, identify
+    from .verdict import diagnose_identification
     from .plots import plot_identification
     from .progress import SearchProgress, compile_notice
     from .simulate import DEFAULT_SENSORS, simulate
@@ -263,9 +263,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                      "cap it with --budget (e.g. --budget 60s)")
     try:
         with compile_notice(progress, enabled=not args.quiet):
-            ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
-                             callback=progress, fault_model=args.fault_model,
-                             nuisance=_nuisance_option(args.nuisance))
+            config = IdentificationConfig(algorithm=args.algorithm, budget=budget,
+                                          fault_model=args.fault_model,
+                                          nuisance=_nuisance_option(args.nuisance))
+            ident = identify(trace, config, seed=args.seed, params=params, callback=progress)
     except TraceError as exc:            # found in the trace's content: name the file
         raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
     finally:

@@ -1,7 +1,7 @@
-"""From an identified fault vector to a health verdict (fault detection and identification).
+"""From an identified fault vector to the faults it names (fault detection and identification).
 
 A component of ``k`` raises a fault when it leaves its healthy value by more
-than its detection threshold. The thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`)
+than its detection threshold (:func:`read_faults`). The thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`)
 were set on reference-*plant* traces -- physics the monitoring model lacks
 (Stribeck friction, a compliant backlash contact, PWM ripple, leakage), realistic
 sensor noise -- of healthy and faulty units on tuning seeds
@@ -14,14 +14,10 @@ is the widest; all stay well below the paper's low fault magnitude (0.25).
 (Before the monitoring model had the compliant backlash contact, the plant's
 contact read as up to 0.11 of backlash and that threshold was 0.143.)
 
-The verdict is ``healthy``, ``faulty`` or ``unexplained``: a fit that the
-misfit test (:func:`emaphm.fitness.misfit_p_value`) finds too far above what the
-model reaches on actuators it describes, or a balanced change on all three
-phases (a calibration mismatch), is not read as faults. Nor, on data-sheet
-parameters, is a fault that the *mismatch check* explains away
-(:mod:`emaphm.mismatch`): the fit with the unit's likeliest deviations from its
-data sheet (winding resistance, magnet flux, an unreported constant load)
-searched beside k does not name it.
+This module holds the readings and the result data (:class:`Fault`,
+:class:`Diagnosis`, :class:`Unexplained`, :class:`MismatchFit`); the rules that make
+the verdict ``healthy``, ``faulty`` or ``unexplained`` (the misfit test, balanced
+phases, the mismatch check) are in :mod:`emaphm.verdict`.
 """
 
 from __future__ import annotations
@@ -38,9 +34,9 @@ from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, mi
 from .params import ActuatorParams, siemens_1fk7060
 
 __all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fault", "Diagnosis",
-           "MismatchFit",
-           "Unexplained", "diagnose", "FAULT_MODES", "VERDICTS", "MISFIT_LOG_MEAN",
-           "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit", "fit_ratio_of"]
+           "MismatchFit", "Unexplained", "read_faults", "FAULT_MODES", "VERDICTS",
+           "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit",
+           "fit_ratio_of"]
 
 VERDICTS = ("healthy", "faulty", "unexplained")
 
@@ -187,78 +183,7 @@ def fit_ratio_of(ident: Any) -> float | None:
     return float(ident.fitness / floor) if floor and floor > 0 else None
 
 
-def diagnose(k, *, thresholds: Thresholds | None = None,
-             params: ActuatorParams | None = None, fault_model: str = "paper",
-             fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
-             mismatch: MismatchFit | None = None) -> Diagnosis:
-    """Read the faults out of an identified ``k``.
-
-    ``params`` (the healthy actuator, default preset) turns the components into
-    physical values for the readings; ``fault_model`` says what k3..k5 mean
-    (and picks the default thresholds, :data:`THRESHOLDS_BY_FAULT_MODEL`).
-    ``fit_ratio`` (the identification's Eq. 4 over the trace's noise floor), when
-    given, is tested: a fit whose probability under the fit ratios of explained
-    actuators (:func:`misfit_p_value`) is below ``misfit_p`` makes the verdict
-    ``unexplained``, as does a balanced short circuit on all three phases.
-    ``mismatch`` (the mismatch check's fit, :func:`emaphm.mismatch.mismatch_fit`),
-    when given, keeps only the faults it names too; when it names none of them, the
-    verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
-    data sheet explains the reading as well as a fault does.
-    """
-    k = as_k(k)
-    check_fault_model(fault_model)
-    if thresholds is None:
-        thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
-    p = params if params is not None else siemens_1fk7060()
-    faults = _read_faults(k, thresholds, p, fault_model)
-    unexplained = None
-    if fit_ratio is not None:
-        pv = misfit_p_value(float(fit_ratio))
-        if pv < misfit_p:
-            unexplained = Unexplained(
-                "misfit", float(fit_ratio), pv,
-                f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
-                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
-                "differs from its parameters, or has a fault the model lacks; calibrate it on "
-                "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
-                "load the bench applies and the current sensor chain")
-    sc = k[2:5]
-    if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
-        unexplained = Unexplained(
-            "balanced-phases", float(sc.min() / sc.max()), None,
-            "the same change on all three phases is a mismatch of magnet flux, inertia or "
-            "current sensor gain between the unit and its parameters, not three simultaneous "
-            "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
-    if unexplained is None and mismatch is not None and faults:
-        named = {(f.mode, f.phase) for f in _read_faults(as_k(mismatch.k), thresholds, p,
-                                                          fault_model)}
-        kept = [f for f in faults if (f.mode, f.phase) in named]
-        if kept:
-            faults = kept
-        else:                       # the readings stay in ``suspected``
-            unexplained = Unexplained(
-                "mismatch", 0.0 if mismatch.fit_ratio is None else float(mismatch.fit_ratio),
-                None, _mismatch_hint(faults, mismatch))
-    if unexplained is not None:
-        return Diagnosis(k=k, faults=(), thresholds=thresholds, fault_model=fault_model,
-                         unexplained=unexplained, suspected=tuple(faults), mismatch=mismatch)
-    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model,
-                     mismatch=mismatch)
-
-
-def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
-    read = ", ".join(f"{f.mode.replace('_', ' ')}" + (f" (phase {f.phase})" if f.phase else "")
-                     + f" ({f.component} {f.k:.3f})" for f in faults)
-    from .search import nuisance_text   # local: keeps this module free of the search stack
-
-    devs = [nuisance_text(n, v) for n, v in mismatch.nuisance.items()]
-    return (f"the reading of {read} on data-sheet parameters is explained as well by how this "
-            f"unit may differ from its data sheet ({', '.join(devs)}: that fit names no such "
-            "fault); calibrate the unit on healthy traces (emaphm calibrate) and diagnose with "
-            "--params to tell a small fault from the unit's own tolerances")
-
-
-def _read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
+def read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
                  fault_model: str) -> list[Fault]:
     """The components of ``k`` past their thresholds, as faults with physical readings."""
     tr, ctl = p.transmission, p.controller
@@ -297,3 +222,23 @@ def _read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
                             f"proportional gain {100 * (g - 1):+.0f}% (Kp {ctl.Kp * g:.1f} 1/s "
                             f"instead of {ctl.Kp:.1f})"))
     return faults
+
+
+def __getattr__(name: str):
+    """``emaphm.diagnosis.diagnose`` of version 0.3, kept for one release with a warning: the
+    verdict's rules are :func:`emaphm.verdict.diagnose` now, whose ``fault_model`` defaults
+    to ``"physical"`` like every bare k in emaphm (this alias keeps the old ``"paper"``)."""
+    if name == "diagnose":
+        import warnings
+
+        from . import verdict
+
+        warnings.warn("emaphm.diagnosis.diagnose moved to emaphm.verdict.diagnose (whose "
+                      "fault_model defaults to 'physical'); the old name goes in the next release",
+                      DeprecationWarning, stacklevel=2)
+
+        def diagnose(k, *, fault_model: str = "paper", **kw):
+            return verdict.diagnose(k, fault_model=fault_model, **kw)
+
+        return diagnose
+    raise AttributeError(f"module 'emaphm.diagnosis' has no attribute {name!r}")

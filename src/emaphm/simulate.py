@@ -14,6 +14,7 @@ from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
 from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
+from .seeds import check_seed
 from .traces import Trace
 from .units import Tolerances, Unit, draw_unit, nominal_unit
 
@@ -83,8 +84,8 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     if fault_model is None:
         fault_model = scenario_fault_model(scenario) if scenario is not None else "physical"
     check_fault_model(fault_model)
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
-        raise ValueError(f"seed must be an integer, got {seed!r}")
+    if seed is not None:
+        check_seed(seed)
     params = params if params is not None else siemens_1fk7060()
     profile = profile if profile is not None else diagnostic()
     sensors = sensors if sensors is not None else Sensors()

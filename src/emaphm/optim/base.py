@@ -47,6 +47,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..seeds import as_generator
+
 __all__ = [
     "AnyOf",
     "Bounds",
@@ -60,6 +62,7 @@ __all__ = [
     "WallClock",
     "as_bounds",
     "minimize",
+    "remaining",
     "resume",
 ]
 
@@ -360,6 +363,21 @@ class Termination(Protocol):
     def check(self, state: State, elapsed_s: float) -> str | None: ...
 
 
+#: What a termination leaves of its budget when it has none of that kind: no limit.
+UNLIMITED = (math.inf, math.inf)
+
+
+def remaining(termination: Any, nfev: int, elapsed_s: float) -> tuple[float, float]:
+    """``(evaluations, seconds)`` that ``termination`` leaves after ``nfev`` evaluations and
+    ``elapsed_s`` seconds: what a solver that works in larger steps than one iteration (a
+    least-squares pass, a polish) may spend inside one of them. ``inf`` where it sets no
+    such limit, and for ``None`` or a termination without a ``remaining`` method (an
+    iteration count or a stall rule cannot say in advance)."""
+    if termination is None or not hasattr(termination, "remaining"):
+        return UNLIMITED
+    return termination.remaining(nfev, elapsed_s)
+
+
 class _Combinable:
     """Adds ``a | b`` -> :class:`AnyOf` to the termination dataclasses."""
 
@@ -396,6 +414,9 @@ class MaxIterations(_Combinable):
     def check(self, state: State, elapsed_s: float) -> str | None:
         return "max_iterations" if state.nit >= self.n else None
 
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return UNLIMITED
+
 
 @dataclass(frozen=True)
 class MaxEvaluations(_Combinable):
@@ -418,6 +439,9 @@ class MaxEvaluations(_Combinable):
 
     def check(self, state: State, elapsed_s: float) -> str | None:
         return "max_evaluations" if state.nfev >= self.n else None
+
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return self.n - nfev, math.inf
 
 
 @dataclass(frozen=True)
@@ -474,6 +498,9 @@ class StallTolerance(_Combinable):
             return None
         return "stall" if old - new < self.tol else None
 
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return UNLIMITED
+
 
 @dataclass(frozen=True)
 class WallClock(_Combinable):
@@ -500,6 +527,9 @@ class WallClock(_Combinable):
 
     def check(self, state: State, elapsed_s: float) -> str | None:
         return "wall_clock" if elapsed_s >= self.seconds else None
+
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return math.inf, self.seconds - elapsed_s
 
 
 @dataclass(frozen=True, init=False)
@@ -533,6 +563,10 @@ class AnyOf(_Combinable):
             if reason is not None:
                 return reason
         return None
+
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        left = [remaining(t, nfev, elapsed_s) for t in self.terms]
+        return min(e for e, _ in left), min(s for _, s in left)
 
     def __repr__(self) -> str:
         return " | ".join(repr(t) for t in self.terms)
@@ -600,14 +634,7 @@ class OptimizeResult:
 
 
 def _as_generator(seed: Any) -> np.random.Generator:
-    if isinstance(seed, np.random.Generator):
-        return seed
-    if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed >= 0:
-        return np.random.default_rng(int(seed))
-    raise ValueError(
-        "seed must be given explicitly as a non-negative int or a numpy.random.Generator, "
-        f"got {seed!r}"
-    )
+    return as_generator(seed)
 
 
 def _check_optimizer(optimizer: Any) -> None:
