@@ -8,7 +8,7 @@ import importlib
 
 import numpy as np
 import pytest
-from figures import assert_png_of, legend_texts
+from support import assert_png_of, legend_texts
 
 matplotlib = pytest.importorskip("matplotlib")
 

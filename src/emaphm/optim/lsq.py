@@ -98,9 +98,11 @@ def _sse(r: np.ndarray) -> float:
 def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any, bounds: Any, *,
                           diff_step: float | Sequence[float] = 1e-3, max_evals: float = 2000,
                           max_seconds: float = float("inf"), xtol: float = 1e-4,
-                          ftol: float = 1e-6, max_nfev: int = 60,
+                          ftol: float = 1e-6, gtol: float = 1e-12, max_nfev: int = 60,
+                          x_scale: Any = None,
+                          jac: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
                           callback: Callable[[np.ndarray, float, int, int], bool | None] | None = None,
-                          ) -> OptimizeResult:
+                          full_output: bool = False) -> Any:
     """Minimise ``||r(x)||^2`` inside ``bounds`` from ``x0``.
 
     ==========  ======  ==========================================================
@@ -115,9 +117,17 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
     xtol, ftol  --      SciPy's tolerances on the step and on the cost reduction
                         (defaults 1e-4, 1e-6: tighter ones cost a sixth more evaluations
                         for a change far below the model's own error)
+    gtol        --      SciPy's tolerance on the gradient
     max_nfev    --      SciPy's limit on its own calls of ``r`` (steps tried)
+    x_scale     --      SciPy's variable scales (default: each bound's width)
+    jac         --      ``jac(x, r(x)) -> (n_res, n)``: the Jacobian, where the caller
+                        knows it better (some columns exactly, or steps of its own);
+                        default: forward differences, one batch call
     callback    --      ``callback(best_x, best_f, nfev, nit)`` before each Jacobian;
                         True stops (reason ``"callback"``)
+    full_output --      also return SciPy's own result (its ``x``, residual ``fun`` and
+                        ``jac`` at the solution, for a covariance), None where SciPy did
+                        not finish
     ==========  ======  ==========================================================
 
     Returns an :class:`~emaphm.optim.base.OptimizeResult` whose ``fun`` is
@@ -148,11 +158,13 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
             best["x"], best["f"] = x.copy(), s
         return r
 
-    def jac(x: np.ndarray) -> np.ndarray:
+    def jacobian(x: np.ndarray) -> np.ndarray:
         r0 = f.at(x)
         history.append(best["f"])
         if callback is not None and callback(best["x"], best["f"], f.nfev, len(history)):
             raise _Stop
+        if jac is not None:
+            return np.asarray(jac(x, r0), dtype=float)
         step = np.where(x + h <= b.hi, h, -h)
         R = f.batch(x[None, :] + np.diag(step))
         J = (R - r0[None, :]) / step[:, None]
@@ -160,17 +172,19 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
         return J.T
 
     reason = "converged"
+    res = None
     try:
         r0 = f.at(x0)
         if not np.all(np.isfinite(r0)):
-            return OptimizeResult(x=x0, fun=np.inf, nfev=f.nfev, nit=0, history=np.array([np.inf]),
-                                  reason="not_finite", elapsed_s=time.perf_counter() - t0,
-                                  algorithm="lsq")
+            out = OptimizeResult(x=x0, fun=np.inf, nfev=f.nfev, nit=0, history=np.array([np.inf]),
+                                 reason="not_finite", elapsed_s=time.perf_counter() - t0,
+                                 algorithm="lsq")
+            return (out, None) if full_output else out
         best["x"], best["f"] = x0.copy(), _sse(r0)
         with threadpool_limits(limits=1, user_api="blas"):
-            res = least_squares(fun, x0, jac=jac, bounds=(b.lo, b.hi), method="trf",
-                                x_scale=b.hi - b.lo, xtol=xtol, ftol=ftol, gtol=1e-12,
-                                max_nfev=max_nfev)
+            res = least_squares(fun, x0, jac=jacobian, bounds=(b.lo, b.hi), method="trf",
+                                x_scale=b.hi - b.lo if x_scale is None else x_scale, xtol=xtol,
+                                ftol=ftol, gtol=gtol, max_nfev=max_nfev)
         if res.status == 0:
             reason = "max_iterations"
     except _Budget:
@@ -178,9 +192,10 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
     except _Stop:
         reason = "callback"
     history.append(best["f"])
-    return OptimizeResult(x=best["x"], fun=float(best["f"]), nfev=f.nfev, nit=len(history) - 1,
-                          history=np.minimum.accumulate(np.asarray(history)), reason=reason,
-                          elapsed_s=time.perf_counter() - t0, algorithm="lsq")
+    out = OptimizeResult(x=best["x"], fun=float(best["f"]), nfev=f.nfev, nit=len(history) - 1,
+                         history=np.minimum.accumulate(np.asarray(history)), reason=reason,
+                         elapsed_s=time.perf_counter() - t0, algorithm="lsq")
+    return (out, res) if full_output else out
 
 
 @dataclass(frozen=True, eq=False)

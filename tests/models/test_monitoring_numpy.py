@@ -7,12 +7,12 @@ are told apart and compared: ``tests/agreement.py``.
 
 import numpy as np
 import pytest
-from agreement import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population
+from support import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population
 
 from emaphm.faults import SCENARIOS
 from emaphm.models.layout import pack_population
 from emaphm.models.monitoring import STATUS_DIVERGED, STATUS_TRIPPED, MonitoringModel
-from emaphm.models.monitoring_numpy import simulate_population_numpy, weighted_sse_numpy
+from monitoring_numpy import simulate_population_numpy, weighted_sse_numpy
 
 K = population()
 N_NAMED = len(SCENARIOS) + 2          # scenarios and corners, last in K

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from figures import assert_png_of
+from support import assert_png_of
 
 from emaphm.cli import main
 from emaphm.fitness import Eq4Objective
@@ -21,7 +21,7 @@ from emaphm.prognosis import (HealthHistory, degradation_scenario, identify_with
 from emaphm.traces import write_trace
 
 FAST = {"budget": 1500}            # the default pipeline (lsq) needs a few hundred
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,7 @@ import pytest
 
 from emaphm.faults import K_NAMES
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 README = ROOT / "README.md"
 
 #: What the test appends to a README command (argparse keeps an option's last value), so

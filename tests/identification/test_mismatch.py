@@ -10,13 +10,13 @@ check, while a real fault on the nominal unit stays ``faulty``.
 
 import numpy as np
 import pytest
-from kvectors import k_with
+from support import k_with
 
 from emaphm.diagnosis import MismatchFit, diagnose
 from emaphm.faults import K_NOMINAL
 from emaphm.models.layout import C_T0, N_CP, NUISANCE, pack_population
 from emaphm.models.monitoring import MonitoringModel, _kernel as scalar_kernel
-from emaphm.models.monitoring_numpy import simulate_population_numpy
+from monitoring_numpy import simulate_population_numpy
 from emaphm.models.monitoring_simd import _kernel as simd_kernel
 from emaphm.search import NUISANCE_RANGE, nuisance_text
 

@@ -1,21 +1,68 @@
-"""Shared by the tests that hold one monitoring-model implementation equal to another
-(``test_monitoring_numpy.py``, ``test_monitoring_simd.py``).
+"""Helpers the tests share (imported by name: ``from support import k_with``).
 
-Two implementations of the same operations differ only by an ulp of a sine now and
-then. Most trajectories carry that through unchanged and must agree to ``TOL``. Some
-candidates with a heavily shorted phase drive the discrete current loop unstable
-until the drive trips: they amplify any ulp, so the reference does not even agree
-with its own "twin", the same run with ``k`` nudged by ``NUDGE`` (relative). For
-those the tests check what is well defined: the same status, and agreement up to the
-step where the twin departs (the horizon of predictability), less ``MARGIN`` steps
-since the nudge is larger than an ulp. The reference decides which candidates are
-ill-conditioned, so a wrong branch cannot hide behind that label on a
-well-conditioned candidate.
+* fault vectors: :func:`k_with`;
+* figures: :func:`assert_png_of`, :func:`legend_texts`, :func:`markers`;
+* agreement of two monitoring-model implementations (``tests/models/``): two
+  implementations of the same operations differ only by an ulp of a sine now and then.
+  Most trajectories carry that through unchanged and must agree to ``TOL``. Some
+  candidates with a heavily shorted phase drive the discrete current loop unstable until
+  the drive trips: they amplify any ulp, so the reference does not even agree with its
+  own "twin", the same run with ``k`` nudged by ``NUDGE`` (relative). For those the
+  tests check what is well defined: the same status, and agreement up to the step where
+  the twin departs (the horizon of predictability), less ``MARGIN`` steps since the
+  nudge is larger than an ulp. The reference decides which candidates are
+  ill-conditioned, so a wrong branch cannot hide behind that label on a
+  well-conditioned candidate;
+* campaign runs computed by two processes: :func:`assert_same_outcome`.
 """
+
+from __future__ import annotations
 
 import numpy as np
 
-from emaphm.faults import SCENARIOS
+from emaphm.faults import K_NOMINAL, SCENARIOS
+
+# ----------------------------------------------------------------------------- fault vectors
+
+def k_with(**components: float):
+    """Nominal k with some components set, by 1-based index: ``k_with(k3=0.25)``."""
+    k = K_NOMINAL.copy()
+    for name, value in components.items():
+        k[int(name[1:]) - 1] = value
+    return k
+
+
+# ----------------------------------------------------------------------------- figures
+
+DPI = 120          # emaphm.plots.save_figure's default
+
+
+def assert_png_of(path, size_in, dpi: int = DPI) -> None:
+    """``path`` is a PNG of a figure of ``size_in`` (width, height) inches at ``dpi`` (or of
+    that ``Figure``) as :func:`emaphm.plots.save_figure` writes it: it decodes, has the
+    figure's size in pixels, and is drawn (hundreds of colours, not a blank canvas)."""
+    from matplotlib.image import imread
+
+    if hasattr(size_in, "get_size_inches"):
+        size_in = size_in.get_size_inches()
+    img = imread(path)                                  # raises on anything but an image
+    w, h = (round(float(x) * dpi) for x in size_in)
+    assert img.shape[:2] == (h, w), (img.shape, (h, w))
+    colours = np.unique(img.reshape(-1, img.shape[2]), axis=0)
+    assert len(colours) > 100, f"{path}: {len(colours)} colours, a blank figure?"
+
+
+def legend_texts(ax) -> list[str]:
+    legend = ax.get_legend()
+    return [] if legend is None else [t.get_text() for t in legend.get_texts()]
+
+
+def markers(ax, marker: str) -> list:
+    """The lines of ``ax`` drawn with ``marker`` and no connecting line."""
+    return [ln for ln in ax.lines if ln.get_marker() == marker and ln.get_linestyle() == "None"]
+
+
+# ----------------------------------------------------------------------------- model agreement
 
 TOL = 1e-9            # rtol and atol on currents [A], angles [rad], speeds [rad/s], torque [N m]
 NUDGE = 1e-12         # relative nudge of k that makes the reference's twin

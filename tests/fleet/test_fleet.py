@@ -457,7 +457,7 @@ def test_fleet_demo_then_report_from_the_command_line(tmp_path, capsys):
 
 def test_the_site_assets_are_package_data():
     """An install from a clean clone carries the stylesheet and the script."""
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     cfg = tomllib.loads((root / "pyproject.toml").read_text())
     patterns = cfg["tool"]["setuptools"]["package-data"]["emaphm.fleet"]
     assets = root / "src" / "emaphm" / "fleet" / "assets"

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 import pytest
-from kvectors import k_with
+from support import k_with
 
 from emaphm.diagnosis import (DEFAULT_THRESHOLDS, FAULT_MODES, Diagnosis, Fault, Thresholds,
                               diagnose)

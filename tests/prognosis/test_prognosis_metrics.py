@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from figures import assert_png_of, legend_texts, markers
+from support import assert_png_of, legend_texts, markers
 
 from emaphm.prognosis import metrics
 from emaphm.prognosis.simulator import degradation_scenario, inspection_times, synthetic_k_history

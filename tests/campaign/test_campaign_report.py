@@ -14,7 +14,7 @@ import sqlite3
 
 import numpy as np
 import pytest
-from figures import assert_png_of, legend_texts
+from support import assert_png_of, legend_texts
 
 from emaphm.campaign import CampaignStore, RunResult, paper_spec
 from emaphm.campaign.report import (PAPER_TABLE3, PAPER_TOTALS, bar_figure, convergence_figure,
@@ -183,7 +183,7 @@ def test_the_committed_results_hold_plain_numbers():
     """docs/results (the paper campaign's report) as the reader gets it."""
     from pathlib import Path
 
-    results = Path(__file__).resolve().parents[1] / "docs" / "results"
+    results = Path(__file__).resolve().parents[2] / "docs" / "results"
     for name in CSV_FILES:
         cols = numeric_columns(results / name)
         assert all(v is None or np.isfinite(v) for c, vs in cols.items()

@@ -3,7 +3,7 @@
 from dataclasses import replace
 
 import pytest
-from figures import assert_png_of
+from support import assert_png_of
 
 from emaphm.acquisition import Sensors
 from emaphm.calibration import (PARAMETERS, CalibrationError, apply_deviations, calibrate)
@@ -57,7 +57,7 @@ def test_twin_calibration_recovers_the_unit(twin_result):
 
 def test_the_calibration_figure_shows_the_fit_and_its_residual(twin_result, tmp_path):
     import numpy as np
-    from figures import legend_texts
+    from support import legend_texts
 
     from emaphm.plots import plot_calibration
 

@@ -16,7 +16,7 @@ from emaphm.campaign import AlgorithmSpec, CampaignSpec, ScenarioSpec, SpecError
 from emaphm.campaign.spec import SCENARIO_GROUPS, parse_algorithms, parse_scenarios
 from emaphm.faults import SCENARIOS
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "docs" / "examples" / "paper.toml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "paper.toml"
 
 
 def _toml(tmp_path, text: str) -> Path:

@@ -14,7 +14,7 @@ import socket
 import threading
 
 import pytest
-from agreement import assert_same_outcome
+from support import assert_same_outcome
 
 distributed = pytest.importorskip("distributed")
 

@@ -18,7 +18,7 @@ import sys
 import time
 
 import pytest
-from agreement import assert_same_outcome
+from support import assert_same_outcome
 
 from emaphm.campaign import (CampaignInterrupted, CampaignStore, LocalExecutor, ProgressLine, RunResult,
                              SerialExecutor, execute_run, paper_spec, replay, run_campaign)

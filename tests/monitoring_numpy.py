@@ -1,6 +1,7 @@
 """The monitoring model (MM) vectorised with NumPy: time loop in Python, population in arrays.
 
-This module exists for two reasons:
+A test oracle, kept under ``tests/`` (the package runs the one step of
+:mod:`emaphm.models.step`); it exists for two reasons:
 
 * it is the **vectorised-NumPy baseline** of ``benchmarks/bench_models.py``,
   the way the MM would be written without a compiler, against which the Numba
@@ -10,7 +11,7 @@ This module exists for two reasons:
   saturation, min-max modulation, Borello stick/slip friction, backlash
   contact, divergence freeze) is rewritten here as a whole-population
   ``np.where`` mask, so a branch taken wrongly on either side shows up as a
-  disagreement in ``tests/test_monitoring_numpy.py``.
+  disagreement in ``tests/models/test_monitoring_numpy.py``.
 
 It evaluates the SAME equations in the SAME order of floating-point operations
 as ``_kernel`` and the scalar functions it is built from (``control_step``,
@@ -37,12 +38,12 @@ import math
 
 import numpy as np
 
-from .layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAMMA, C_KP, C_T0,
+from emaphm.models.layout import (C_BACKLASH, C_C0_A, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_GAMMA, C_KP, C_T0,
                      C_MU_A, C_PHI, P_C_L, P_C_M, P_DT, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI,
                      P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_T_MAX, P_T_S,
                      P_V_DC, P_THETA0, P_I_TRIP, P_K_C, P_D_C)
-from ._monitoring_common import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
-from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
+from emaphm.models._monitoring_common import I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_TRIPPED
+from emaphm.models.pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
                    winding_step)
 
 __all__ = ["weighted_sse_numpy", "simulate_population_numpy"]

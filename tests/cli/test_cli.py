@@ -11,7 +11,7 @@ import json
 
 import numpy as np
 import pytest
-from figures import assert_png_of
+from support import assert_png_of
 
 from emaphm import __version__
 from emaphm.cli import EXIT_USAGE, main

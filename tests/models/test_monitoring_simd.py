@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from agreement import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population, traces
+from support import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population, traces
 
 from emaphm.faults import SCENARIOS
 from emaphm.models.layout import C_KP, C_PHI, P_THETA0, pack_population

@@ -17,14 +17,14 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from agreement import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population
+from support import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population
 from scipy.integrate import solve_ivp
 
 from emaphm.faults import K_NOMINAL, FaultVectorError, apply_faults, scenario
 from emaphm.models.layout import C_GAMMA, C_MU_A, C_PHI, MU_MIN, pack, pack_population
 from emaphm.models.monitoring import (STATUS_DIVERGED, STATUS_OK, MonitoringModel, _kernel,
                                       simulate_reference)
-from emaphm.models.monitoring_numpy import simulate_population_numpy, weighted_sse_numpy
+from monitoring_numpy import simulate_population_numpy, weighted_sse_numpy
 from emaphm.models.pmsm import (back_emf_coeffs, phase_currents, torque_loops, winding_input,
                                 winding_step)
 from emaphm.models.windings import Q, reduced, winding_matrices

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 import pytest
-from figures import assert_png_of, legend_texts
+from support import assert_png_of, legend_texts
 
 from emaphm.cli import EXIT_USAGE, main
 from emaphm.faults import K_NOMINAL
