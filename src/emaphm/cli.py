@@ -299,7 +299,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     plot = plot_path(args.plot)
     params = _load_params(args.params)
     traces = [_trace_file(name) for name in args.traces]
-    progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs",
+    progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs",
                              header=f"calibrating on {len(traces)} healthy trace(s) around "
                                     f"{args.params or 'the default preset'}")
     if not args.quiet:

@@ -14,10 +14,10 @@ is the widest; all stay well below the paper's low fault magnitude (0.25).
 (Before the monitoring model had the compliant backlash contact, the plant's
 contact read as up to 0.11 of backlash and that threshold was 0.143.)
 
-This module holds the readings and the result data (:class:`Fault`,
-:class:`Diagnosis`, :class:`Unexplained`, :class:`MismatchFit`); the rules that make
-the verdict ``healthy``, ``faulty`` or ``unexplained`` (the misfit test, balanced
-phases, the mismatch check) are in :mod:`emaphm.verdict`.
+:func:`diagnose` applies to the faults read the rules that make the verdict ``healthy``,
+``faulty`` or ``unexplained`` given the statistics of an identification (the misfit
+test on its fit ratio, balanced phases, the mismatch check's refit); the tests that
+produce those statistics for an identification are in :mod:`emaphm.verdict`.
 """
 
 from __future__ import annotations
@@ -32,9 +32,10 @@ from .faults import (K_NOMINAL, as_k, backlash_scale, check_fault_model, eccentr
                      friction_scale, gain_scale, shorted_fraction)
 from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
 from .params import ActuatorParams, siemens_1fk7060
+from .search import nuisance_text
 
 __all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fault", "Diagnosis",
-           "MismatchFit", "Unexplained", "read_faults", "FAULT_MODES", "VERDICTS",
+           "MismatchFit", "Unexplained", "diagnose", "read_faults", "FAULT_MODES", "VERDICTS",
            "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit",
            "fit_ratio_of"]
 
@@ -183,6 +184,87 @@ def fit_ratio_of(ident: Any) -> float | None:
     return float(ident.fitness / floor) if floor and floor > 0 else None
 
 
+def diagnose(k, *, thresholds: Thresholds | None = None,
+             params: ActuatorParams | None = None, fault_model: str | None = None,
+             fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
+             mismatch: MismatchFit | None = None) -> Diagnosis:
+    """The verdict on an identified ``k``: its faults (:func:`emaphm.diagnosis.read_faults`)
+    and the rules that make it ``healthy``, ``faulty`` or ``unexplained``.
+
+    ``params`` (the healthy actuator, default preset) turns the components into
+    physical values for the readings; ``fault_model`` says what k3..k5 mean (an
+    identification's own: :meth:`emaphm.problem.IdentificationProblem.diagnose`) and
+    picks the default thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`). Give it: without
+    it a k is read under ``"paper"`` for one more release, with a DeprecationWarning,
+    then under ``"physical"`` like every bare k in emaphm (``simulate --k``, a bench
+    trace).
+    ``fit_ratio`` (the identification's Eq. 4 over the trace's noise floor), when
+    given, is tested: a fit whose probability under the fit ratios of explained
+    actuators (:func:`misfit_p_value`) is below ``misfit_p`` makes the verdict
+    ``unexplained``, as does a balanced short circuit on all three phases.
+    ``mismatch`` (the mismatch check's fit, :func:`emaphm.verdict.mismatch_fit`),
+    when given, keeps only the faults it names too; when it names none of them, the
+    verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
+    data sheet explains the reading as well as a fault does.
+    """
+    k = as_k(k)
+    if fault_model is None:
+        import warnings
+
+        warnings.warn("diagnose(k) without fault_model reads k3..k5 as the paper's turn "
+                      "removal; give fault_model='physical' or 'paper' (the default becomes "
+                      "'physical' in the next release)", DeprecationWarning, stacklevel=2)
+        fault_model = "paper"
+    check_fault_model(fault_model)
+    if thresholds is None:
+        thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
+    p = params if params is not None else siemens_1fk7060()
+    faults = read_faults(k, thresholds, p, fault_model)
+    unexplained = None
+    if fit_ratio is not None:
+        pv = misfit_p_value(float(fit_ratio))
+        if pv < misfit_p:
+            unexplained = Unexplained(
+                "misfit", float(fit_ratio), pv,
+                f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
+                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
+                "differs from its parameters, or has a fault the model lacks; calibrate it on "
+                "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
+                "load the bench applies and the current sensor chain")
+    sc = k[2:5]
+    if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
+        unexplained = Unexplained(
+            "balanced-phases", float(sc.min() / sc.max()), None,
+            "the same change on all three phases is a mismatch of magnet flux, inertia or "
+            "current sensor gain between the unit and its parameters, not three simultaneous "
+            "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
+    if unexplained is None and mismatch is not None and faults:
+        named = {(f.mode, f.phase) for f in read_faults(as_k(mismatch.k), thresholds, p,
+                                                          fault_model)}
+        kept = [f for f in faults if (f.mode, f.phase) in named]
+        if kept:
+            faults = kept
+        else:                       # the readings stay in ``suspected``
+            unexplained = Unexplained(
+                "mismatch", 0.0 if mismatch.fit_ratio is None else float(mismatch.fit_ratio),
+                None, _mismatch_hint(faults, mismatch))
+    if unexplained is not None:
+        return Diagnosis(k=k, faults=(), thresholds=thresholds, fault_model=fault_model,
+                         unexplained=unexplained, suspected=tuple(faults), mismatch=mismatch)
+    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model,
+                     mismatch=mismatch)
+
+
+def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
+    read = ", ".join(f"{f.mode.replace('_', ' ')}" + (f" (phase {f.phase})" if f.phase else "")
+                     + f" ({f.component} {f.k:.3f})" for f in faults)
+    devs = [nuisance_text(n, v) for n, v in mismatch.nuisance.items()]
+    return (f"the reading of {read} on data-sheet parameters is explained as well by how this "
+            f"unit may differ from its data sheet ({', '.join(devs)}: that fit names no such "
+            "fault); calibrate the unit on healthy traces (emaphm calibrate) and diagnose with "
+            "--params to tell a small fault from the unit's own tolerances")
+
+
 def read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
                  fault_model: str) -> list[Fault]:
     """The components of ``k`` past their thresholds, as faults with physical readings."""
@@ -223,22 +305,3 @@ def read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
                             f"instead of {ctl.Kp:.1f})"))
     return faults
 
-
-def __getattr__(name: str):
-    """``emaphm.diagnosis.diagnose`` of version 0.3, kept for one release with a warning: the
-    verdict's rules are :func:`emaphm.verdict.diagnose` now, whose ``fault_model`` defaults
-    to ``"physical"`` like every bare k in emaphm (this alias keeps the old ``"paper"``)."""
-    if name == "diagnose":
-        import warnings
-
-        from . import verdict
-
-        warnings.warn("emaphm.diagnosis.diagnose moved to emaphm.verdict.diagnose (whose "
-                      "fault_model defaults to 'physical'); the old name goes in the next release",
-                      DeprecationWarning, stacklevel=2)
-
-        def diagnose(k, *, fault_model: str = "paper", **kw):
-            return verdict.diagnose(k, fault_model=fault_model, **kw)
-
-        return diagnose
-    raise AttributeError(f"module 'emaphm.diagnosis' has no attribute {name!r}")

@@ -60,7 +60,7 @@ ALGORITHM_NAMES: tuple[str, ...] = (DEFAULT_ALGORITHM, *sorted(ALL_ALGORITHMS))
 LSQ_RESTARTS = 3
 
 #: A start of the least-squares solver is good enough when its fit ratio is below the
-#: misfit test's limit at this false-alarm probability (about 2.1): most fits of an
+#: misfit test's limit at this false-alarm probability (about 2.0): most fits of an
 #: actuator the model describes are (a stricter limit than the verdict's, so that a fit
 #: the verdict would accept is still checked against another start). Below the
 #: suspect limit, further starts stop once one improves the fit by less than 1 % (the

@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from .diagnosis import diagnose
 from .faults import K_NOMINAL, N_K, as_k
 from .fitness import Eq4Objective
 from .params import ActuatorParams
@@ -213,8 +214,6 @@ class IdentificationProblem:
     def diagnose(self, k: Any, **kw: Any) -> Any:
         """:func:`emaphm.diagnosis.diagnose` of ``k`` with this problem's parameters and
         fault model (``fit_ratio``, ``thresholds``, ``mismatch`` passed on)."""
-        from .diagnosis import diagnose
-
         return diagnose(k, params=self.params, fault_model=self.fault_model, **kw)
 
     def model_trace(self, k: np.ndarray, nu: np.ndarray | None = None) -> Trace:

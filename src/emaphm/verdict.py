@@ -1,8 +1,10 @@
 """The verdict: healthy, faulty or unexplained, and the tests that decide it.
 
-:func:`diagnose` reads the faults of an identified ``k``
-(:func:`emaphm.diagnosis.read_faults`) and applies the rules that keep a reading from
-being a diagnosis:
+:func:`diagnose_identification` is the verdict of an identification, as ``emaphm
+diagnose`` and the health history give it. :func:`diagnose` (implemented beside the
+readings in :mod:`emaphm.diagnosis`, below the identification problem, which reads a k
+with it) reads the faults of an identified ``k`` and applies the rules that keep a
+reading from being a diagnosis:
 
 * the **misfit test**: a fit whose ratio to the trace's noise floor is improbable for an
   actuator the model describes (:func:`emaphm.fitness.misfit_p_value`, below
@@ -26,19 +28,13 @@ being a diagnosis:
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from typing import Any
 
-import numpy as np
-
-from .diagnosis import (THRESHOLDS_BY_FAULT_MODEL, Diagnosis, Fault, MismatchFit, Thresholds,
-                        Unexplained, fit_ratio_of, read_faults)
-from .faults import as_k, check_fault_model
+from .diagnosis import Diagnosis, MismatchFit, Thresholds, diagnose, fit_ratio_of
 from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
-from .params import ActuatorParams, siemens_1fk7060
+from .params import ActuatorParams
 from .problem import IdentificationProblem
-from .search import nuisance_text
 from .traces import Trace
 
 __all__ = ["diagnose", "diagnose_identification", "mismatch_fit", "needs_mismatch_check",
@@ -49,78 +45,6 @@ __all__ = ["diagnose", "diagnose_identification", "mismatch_fit", "needs_mismatc
 #: (relative) and an unreported constant load (N m), within
 #: :data:`emaphm.search.NUISANCE_RANGE`.
 MISMATCH_NUISANCE = ("R", "flux", "load")
-
-
-def diagnose(k, *, thresholds: Thresholds | None = None,
-             params: ActuatorParams | None = None, fault_model: str = "physical",
-             fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
-             mismatch: MismatchFit | None = None) -> Diagnosis:
-    """The verdict on an identified ``k``: its faults (:func:`emaphm.diagnosis.read_faults`)
-    and the rules that make it ``healthy``, ``faulty`` or ``unexplained``.
-
-    ``params`` (the healthy actuator, default preset) turns the components into
-    physical values for the readings; ``fault_model`` says what k3..k5 mean
-    (default ``"physical"``, as every bare k in emaphm; an identification's own:
-    :meth:`emaphm.problem.IdentificationProblem.diagnose`) and picks the default
-    thresholds (:data:`emaphm.diagnosis.THRESHOLDS_BY_FAULT_MODEL`).
-    ``fit_ratio`` (the identification's Eq. 4 over the trace's noise floor), when
-    given, is tested: a fit whose probability under the fit ratios of explained
-    actuators (:func:`misfit_p_value`) is below ``misfit_p`` makes the verdict
-    ``unexplained``, as does a balanced short circuit on all three phases.
-    ``mismatch`` (the mismatch check's fit, :func:`mismatch_fit`),
-    when given, keeps only the faults it names too; when it names none of them, the
-    verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
-    data sheet explains the reading as well as a fault does.
-    """
-    k = as_k(k)
-    check_fault_model(fault_model)
-    if thresholds is None:
-        thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
-    p = params if params is not None else siemens_1fk7060()
-    faults = read_faults(k, thresholds, p, fault_model)
-    unexplained = None
-    if fit_ratio is not None:
-        pv = misfit_p_value(float(fit_ratio))
-        if pv < misfit_p:
-            unexplained = Unexplained(
-                "misfit", float(fit_ratio), pv,
-                f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
-                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
-                "differs from its parameters, or has a fault the model lacks; calibrate it on "
-                "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
-                "load the bench applies and the current sensor chain")
-    sc = k[2:5]
-    if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
-        unexplained = Unexplained(
-            "balanced-phases", float(sc.min() / sc.max()), None,
-            "the same change on all three phases is a mismatch of magnet flux, inertia or "
-            "current sensor gain between the unit and its parameters, not three simultaneous "
-            "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
-    if unexplained is None and mismatch is not None and faults:
-        named = {(f.mode, f.phase) for f in read_faults(as_k(mismatch.k), thresholds, p,
-                                                          fault_model)}
-        kept = [f for f in faults if (f.mode, f.phase) in named]
-        if kept:
-            faults = kept
-        else:                       # the readings stay in ``suspected``
-            unexplained = Unexplained(
-                "mismatch", 0.0 if mismatch.fit_ratio is None else float(mismatch.fit_ratio),
-                None, _mismatch_hint(faults, mismatch))
-    if unexplained is not None:
-        return Diagnosis(k=k, faults=(), thresholds=thresholds, fault_model=fault_model,
-                         unexplained=unexplained, suspected=tuple(faults), mismatch=mismatch)
-    return Diagnosis(k=k, faults=tuple(faults), thresholds=thresholds, fault_model=fault_model,
-                     mismatch=mismatch)
-
-
-def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
-    read = ", ".join(f"{f.mode.replace('_', ' ')}" + (f" (phase {f.phase})" if f.phase else "")
-                     + f" ({f.component} {f.k:.3f})" for f in faults)
-    devs = [nuisance_text(n, v) for n, v in mismatch.nuisance.items()]
-    return (f"the reading of {read} on data-sheet parameters is explained as well by how this "
-            f"unit may differ from its data sheet ({', '.join(devs)}: that fit names no such "
-            "fault); calibrate the unit on healthy traces (emaphm calibrate) and diagnose with "
-            "--params to tell a small fault from the unit's own tolerances")
 
 
 def needs_mismatch_check(params: ActuatorParams | None) -> bool:

@@ -66,7 +66,7 @@ def test_squared_short_circuit_space_is_linear_in_the_loops_effect():
     """``ecc-xy-sq``: k = SC_SEARCH_MAX sqrt(z) on k3..k5 (a loop's effect grows as k^2,
     so linearly in z), ecc-xy elsewhere; a round trip inside the range; and the
     least-squares pipeline uses it only under the physical fault model."""
-    from emaphm.search import SC_SEARCH_MAX, least_squares_search, nuisance_from_unit, nuisance_to_unit
+    from emaphm.search import SC_SEARCH_MAX, least_squares_search, nuisance_from_box, nuisance_to_box
 
     z = np.full((1, 8), 0.5)
     z[0, 2:5] = [0.0, 0.25, 1.0]
@@ -78,6 +78,6 @@ def test_squared_short_circuit_space_is_linear_in_the_loops_effect():
     assert least_squares_search("physical") == "ecc-xy-sq"
     assert least_squares_search("paper") == "ecc-xy"
     nu = np.array([[0.0, 0.0], [0.3, -0.06]])
-    u = nuisance_to_unit(nu, ("R", "flux"))
+    u = nuisance_to_box(nu, ("R", "flux"))
     assert u == pytest.approx(np.array([[0.25, 0.5], [1.0, 0.0]]))
-    assert nuisance_from_unit(u, ("R", "flux")) == pytest.approx(nu)
+    assert nuisance_from_box(u, ("R", "flux")) == pytest.approx(nu)

@@ -167,10 +167,10 @@ def test_invalid_bounds(bounds, match):
 def test_bounds_roundtrip_and_clip():
     b = as_bounds(([-5.0, 0.0], [3.0, 1e-9]))
     U = np.array([[0.0, 0.0], [1.0, 1.0], [0.25, 0.5]])
-    X = b.from_unit(U)
+    X = b.from_normalized(U)
     assert np.array_equal(X[0], b.lo) and np.array_equal(X[1], b.hi)
-    assert np.allclose(b.to_unit(X), U)
-    assert np.array_equal(b.to_unit(np.array([[-10.0, 1.0]])), [[0.0, 1.0]])
+    assert np.allclose(b.to_normalized(X), U)
+    assert np.array_equal(b.to_normalized(np.array([[-10.0, 1.0]])), [[0.0, 1.0]])
 
 
 # ----------------------------------------------------------------------------- determinism

@@ -185,7 +185,7 @@ def _record(task: _Task) -> dict:
     with HealthHistory(task.db) as h:
         h.register(unit.id, description=unit.description, time_unit="h")
         if task.synthetic:
-            from ..verdict import diagnose
+            from ..diagnosis import diagnose
             from ..prognosis.uncertainty import IDENTIFICATION_ERROR_P90
 
             for t, k, k_true in zip(unit.times, _synthetic(unit), unit.k_true()):

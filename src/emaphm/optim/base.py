@@ -17,7 +17,7 @@ Every optimizer is a frozen configuration object with three pure methods
 
 The first ``ask`` returns the initial population, so the initial evaluation is an
 ordinary ask/tell pair and counts as iteration 1 (``nit`` counts ``tell`` calls).
-``tell`` takes the points it is given as the truth (mapped back to the unit box), so a
+``tell`` takes the points it is given as the truth (mapped back to the normalised box), so a
 caller that evaluates a modified copy of the asked points (rounded, repaired) stays
 consistent as long as it passes what it evaluated. All randomness is drawn in ``init``
 and ``tell`` from the state's own Generator, forked first, so ``ask`` is pure and
@@ -28,7 +28,7 @@ one unpickled from a checkpoint, and reproduces the uninterrupted run exactly.
 
 Coordinates
 -----------
-Populations are held normalised to the unit box ``[0, 1]^n_var`` (as in
+Populations are held normalised to the normalised box ``[0, 1]^n_var`` (as in
 :func:`scipy.optimize.differential_evolution`) and scaled at the boundary by
 :class:`Bounds`. Points that an update moves outside the box are **clipped** (projected
 onto the nearest face), never reflected or re-sampled. Projection is chosen on purpose:
@@ -74,7 +74,7 @@ Objective = Callable[[np.ndarray], Any]
 
 @dataclass(frozen=True, eq=False)
 class Bounds:
-    """A validated axis-aligned box ``lo <= x <= hi`` and the map to the unit box.
+    """A validated axis-aligned box ``lo <= x <= hi`` and the map to the normalised box.
 
     Build it with :func:`as_bounds`, which accepts a ``(lo, hi)`` pair.
 
@@ -99,8 +99,8 @@ class Bounds:
         """``hi - lo``, shape (n_var,)."""
         return self.hi - self.lo
 
-    def from_unit(self, U: np.ndarray) -> np.ndarray:
-        """Map unit-box points ``U`` (..., n_var) to problem units, clipped into the box.
+    def from_normalized(self, U: np.ndarray) -> np.ndarray:
+        """Map normalised points ``U`` (..., n_var) to problem units, clipped into the box.
 
         The final clip only removes floating-point round-off (``lo + 1.0 * (hi - lo)``
         can exceed ``hi`` by one ulp), so every returned point satisfies ``lo <= x <= hi``.
@@ -108,13 +108,31 @@ class Bounds:
         X = self.lo + np.asarray(U, dtype=np.float64) * (self.hi - self.lo)
         return np.clip(X, self.lo, self.hi, out=X)
 
-    def to_unit(self, X: np.ndarray) -> np.ndarray:
-        """Map problem-unit points ``X`` (..., n_var) to the unit box, clipped to [0, 1]."""
+    def to_normalized(self, X: np.ndarray) -> np.ndarray:
+        """Map problem-unit points ``X`` (..., n_var) to the normalised box, clipped to [0, 1]."""
         U = (np.asarray(X, dtype=np.float64) - self.lo) / (self.hi - self.lo)
         return np.clip(U, 0.0, 1.0, out=U)
 
+    def from_unit(self, U: np.ndarray) -> np.ndarray:
+        """The 0.3 name of :meth:`from_normalized` ("unit" means a production unit in
+        emaphm), kept for one release with a warning."""
+        _renamed("Bounds.from_unit", "Bounds.from_normalized")
+        return self.from_normalized(U)
+
+    def to_unit(self, X: np.ndarray) -> np.ndarray:
+        """The 0.3 name of :meth:`to_normalized`, kept for one release with a warning."""
+        _renamed("Bounds.to_unit", "Bounds.to_normalized")
+        return self.to_normalized(X)
+
     def __repr__(self) -> str:
         return f"Bounds(lo={self.lo.tolist()}, hi={self.hi.tolist()})"
+
+
+def _renamed(old: str, new: str) -> None:
+    import warnings
+
+    warnings.warn(f"{old} is renamed {new}; the old name goes in the next release",
+                  DeprecationWarning, stacklevel=3)
 
 
 def as_bounds(bounds: Any) -> Bounds:
@@ -237,7 +255,7 @@ def check_told(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Validate what is passed to ``tell``; return ``(X, U, y)``.
 
-    ``X`` is a float64 array, ``U`` is ``X`` mapped to the unit box; ``y`` is float64
+    ``X`` is a float64 array, ``U`` is ``X`` mapped to the normalised box; ``y`` is float64
     with every non-finite value (NaN, +inf, -inf) replaced by ``+inf``.
     """
     X = np.asarray(X, dtype=np.float64)
@@ -249,7 +267,7 @@ def check_told(
     if not np.isfinite(X).all():
         raise ValueError("tell: X contains NaN or inf; pass the array returned by ask")
     y = sanitize_fitness(y, n_pop)
-    return X, state.bounds.to_unit(X), y
+    return X, state.bounds.to_normalized(X), y
 
 
 def sanitize_fitness(y: Any, n_pop: int) -> np.ndarray:
@@ -288,7 +306,7 @@ def start(bounds: Bounds) -> dict[str, Any]:
     :func:`advance`.
     """
     return {
-        "best_x": frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))),
+        "best_x": frozen(bounds.from_normalized(np.full(bounds.n_var, 0.5))),
         "best_f": np.inf,
         "nfev": 0,
         "nit": 0,

@@ -11,7 +11,7 @@ name        what runs
 scipy-de    :class:`ScipyDE`: ``scipy.optimize.differential_evolution`` with
             ``vectorized=True, updating='deferred', polish=False`` (one batch per
             generation), driven one generation at a time
-cmaes       :class:`CMAES`: ``cma.CMAEvolutionStrategy`` (Hansen) in the unit box with
+cmaes       :class:`CMAES`: ``cma.CMAEvolutionStrategy`` (Hansen) in the normalised box with
             ``bounds=[0, 1]``, its own ask/tell
 ==========  ================================================================================
 
@@ -395,7 +395,7 @@ class ScipyDE:
         from scipy.stats import qmc
 
         U = qmc.LatinHypercube(d=bounds.n_var, **_rng_keyword(qmc.LatinHypercube, rng)).random(self.pop_size)
-        return bounds.from_unit(U)
+        return bounds.from_normalized(U)
 
     def solver(self, bounds: Bounds, init: np.ndarray, rng: np.random.Generator) -> Any:
         """The scipy solver this configuration drives (no objective calls yet)."""
@@ -507,7 +507,7 @@ class CMAESState:
 
 @dataclass(frozen=True)
 class CMAES:
-    """CMA-ES (Hansen), ``cma.CMAEvolutionStrategy``, searching the unit box ``[0, 1]^n_var``.
+    """CMA-ES (Hansen), ``cma.CMAEvolutionStrategy``, searching the normalised box ``[0, 1]^n_var``.
 
     ===========  ==============  =======  ===================================================
     Parameter    Type            Default  Meaning
@@ -574,7 +574,7 @@ class CMAES:
 
     def ask(self, state: CMAESState) -> np.ndarray:
         """cma's pending solutions in problem units, shape (lambda, n_var)."""
-        return state.bounds.from_unit(np.clip(np.array(state.pending), 0.0, 1.0))
+        return state.bounds.from_normalized(np.clip(np.array(state.pending), 0.0, 1.0))
 
     def tell(self, state: CMAESState, X: np.ndarray, y: np.ndarray) -> CMAESState:
         """Tell cma the fitness of the pending solutions and ask for the next ones."""

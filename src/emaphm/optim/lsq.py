@@ -95,6 +95,14 @@ def _sse(r: np.ndarray) -> float:
     return float(r @ r) if np.all(np.isfinite(r)) else np.inf
 
 
+def _forward_differences(f: _Counted, x: np.ndarray, r0: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """The Jacobian (n_res, n) by forward differences of ``step``, in one batch call."""
+    R = f.batch(x[None, :] + np.diag(step))
+    J = (R - r0[None, :]) / step[:, None]
+    J[~np.isfinite(J)] = 0.0               # a diverged neighbour tells nothing
+    return J.T
+
+
 def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any, bounds: Any, *,
                           diff_step: float | Sequence[float] = 1e-3, max_evals: float = 2000,
                           max_seconds: float = float("inf"), xtol: float = 1e-4,
@@ -165,11 +173,7 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
             raise _Stop
         if jac is not None:
             return np.asarray(jac(x, r0), dtype=float)
-        step = np.where(x + h <= b.hi, h, -h)
-        R = f.batch(x[None, :] + np.diag(step))
-        J = (R - r0[None, :]) / step[:, None]
-        J[~np.isfinite(J)] = 0.0               # a diverged neighbour tells nothing
-        return J.T
+        return _forward_differences(f, x, r0, np.where(x + h <= b.hi, h, -h))
 
     reason = "converged"
     res = None

@@ -335,14 +335,14 @@ class CallableSolver:
              callback: Callable[[Any], Any] | None = None) -> CallableState:
         st, termination = state, state.termination
         b = as_bounds(problem.bounds)
-        best = {"x": b.from_unit(np.full(b.n_var, 0.5)), "f": math.inf, "nfev": 0}
+        best = {"x": b.from_normalized(np.full(b.n_var, 0.5)), "f": math.inf, "nfev": 0}
 
         def objective(X: Any) -> np.ndarray:
             X = np.atleast_2d(np.asarray(X, dtype=float))
             if X.ndim != 2 or X.shape[1] != b.n_var:
                 raise ValueError(f"the objective takes points of shape (n, {b.n_var}), got {X.shape}")
             evals, seconds = remaining(termination, best["nfev"], time.perf_counter() - st.t0)
-            if best["nfev"] + X.shape[0] > evals or seconds <= 0:
+            if X.shape[0] > evals or seconds <= 0:
                 raise _Spent("max_evaluations" if seconds > 0 else "wall_clock")
             y = sanitize_fitness(problem.evaluate(np.clip(X, b.lo, b.hi)), X.shape[0])
             best["nfev"] += X.shape[0]

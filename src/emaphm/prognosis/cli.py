@@ -82,7 +82,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             if not Path(name).exists():
                 raise _usage(f"trace file {name} does not exist")
             traces.append(read_trace(name))
-        progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs")
+        progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs")
         if not args.quiet:
             warn_if_long("emaphm history calibrate",
                          calibration_seconds([t.duration for t in traces], base),

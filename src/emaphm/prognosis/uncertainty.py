@@ -242,10 +242,7 @@ def identify_with_spread(trace: Any, config: Any = None, *, seed: int,
     config = IdentificationConfig() if config is None else config
     suspect_ratio = misfit_limit() if config.suspect_ratio is None else config.suspect_ratio
     _check(method, level, n_runs, seed)
-    floor = np.broadcast_to(np.asarray(IDENTIFICATION_ERROR_P90 if error_floor is None
-                                       else error_floor, dtype=float), (8,))
-    if np.any(~np.isfinite(floor)) or np.any(floor < 0):
-        raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
+    floor = _error_floor(error_floor)
     t0 = time.perf_counter()
     problem = trace if isinstance(trace, IdentificationProblem) else config.problem(trace, params,
                                                                                     start=start)
@@ -301,15 +298,28 @@ def identify_with_spread(trace: Any, config: Any = None, *, seed: int,
         details.update(k_runs=kb.tolist(), block=ks[0])
         interval = KInterval(first.k.copy(), lo, hi, method, float(level), kb.shape[0], details)
         ident = first
-    if np.any(floor > 0):
-        lo = np.clip(np.minimum(interval.lo, interval.k - floor), 0.0, 1.0)
-        hi = np.clip(np.maximum(interval.hi, interval.k + floor), 0.0, 1.0)
-        interval = replace(interval, lo=lo, hi=hi,
-                           details={**interval.details, "error_floor": floor.tolist()})
-    return Assessment(identification=ident, interval=interval, runs=tuple(runs),
+    return Assessment(identification=ident, interval=_with_floor(interval, floor), runs=tuple(runs),
                       evaluations=spent + (0 if method != "bootstrap" else
                                            int(sum(r.evaluations for r in runs[1:]))),
                       elapsed_s=time.perf_counter() - t0)
+
+
+def _error_floor(error_floor: Any) -> np.ndarray:
+    """The least half-width of each component's interval (8,), checked."""
+    floor = np.broadcast_to(np.asarray(IDENTIFICATION_ERROR_P90 if error_floor is None
+                                       else error_floor, dtype=float), (8,))
+    if np.any(~np.isfinite(floor)) or np.any(floor < 0):
+        raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
+    return floor
+
+
+def _with_floor(interval: KInterval, floor: np.ndarray) -> KInterval:
+    """``interval`` joined with ``k +- floor`` (clipped to [0, 1])."""
+    if not np.any(floor > 0):
+        return interval
+    lo = np.clip(np.minimum(interval.lo, interval.k - floor), 0.0, 1.0)
+    hi = np.clip(np.maximum(interval.hi, interval.k + floor), 0.0, 1.0)
+    return replace(interval, lo=lo, hi=hi, details={**interval.details, "error_floor": floor.tolist()})
 
 
 def _bootstrap(problem: Any, first: Any, run: Any, seeds: list[int], tau: float) -> tuple[int, list]:
