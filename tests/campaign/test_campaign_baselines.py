@@ -129,7 +129,7 @@ def test_identify_reaches_the_baselines():
 
     trace = simulate(scenario="gain-high", sensors=DEFAULT_SENSORS, seed=1)
     for name in NAMES:
-        ident = identify(trace, name, seed=0, budget=400)
+        ident = identify(trace, name, seed=0, termination=400)
         assert ident.algorithm == name and 400 <= ident.evaluations < 460
         assert np.isfinite(ident.fitness) and ident.error_pct is not None
 
