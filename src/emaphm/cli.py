@@ -167,6 +167,7 @@ def _unit_options(args: argparse.Namespace, params) -> dict[str, Any]:
 def _table(ident, diag) -> str:
     from .faults import K_LABELS, K_NAMES
     from .search import nuisance_text
+    from .verdict import NOISELESS_NOTE
 
     lines = [f"{'k':4s} {'component':26s} {'identified':>10s}"
              + (f" {'true':>8s}" if ident.k_true is not None else "")]
@@ -187,11 +188,14 @@ def _table(ident, diag) -> str:
                  + (f"; plus {ident.compile_s:.1f} s compiling or loading the model kernels "
                     "(first run of a process)" if ident.compile_s > 0.5 else ""))
     ratio = ident.fitness / ident.noise_floor if ident.noise_floor > 0 else float("nan")
+    noiseless = NOISELESS_NOTE in diag.notes
+    if noiseless:
+        ratio = float("nan")              # a floor of round-off: no ratio worth printing
     lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}"
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
                  + (f" ({ident.restarts} restart{'s' if ident.restarts > 1 else ''})"
                     if ident.restarts else ""))
-    if ident.suspect and diag.unexplained is None:
+    if ident.suspect and diag.unexplained is None and not noiseless:
         lines.append("WARNING: the best fit stays far above the trace's noise floor: the search may "
                      "have missed the actuator's k, or the model parameters (--params) do not "
                      "describe this actuator; treat the verdict with care")
@@ -213,6 +217,8 @@ def _table(ident, diag) -> str:
             lines.append("  components above their thresholds, not a diagnosis: "
                          + ", ".join(f"{f.mode}{' ' + f.phase if f.phase else ''}"
                                      for f in diag.suspected))
+    for note in diag.notes:
+        lines.append(f"  note: {note}")
     return "\n".join(lines)
 
 

@@ -136,7 +136,9 @@ class Diagnosis:
     ``verdict`` is ``"healthy"``, ``"faulty"`` (``faults`` names them) or
     ``"unexplained"`` (``unexplained`` says why; ``faults`` is then empty, and the
     components above their thresholds are kept in ``suspected``). ``mismatch``: the
-    mismatch check's fit, where one was made (data-sheet parameters and a fault read).
+    mismatch check's fit, where one was made (data-sheet parameters and a fault read);
+    ``notes``: what the verdict could not test, in words (e.g. a trace without
+    measurement noise, on which the misfit test is not made).
     """
 
     k: np.ndarray
@@ -146,6 +148,7 @@ class Diagnosis:
     unexplained: Unexplained | None = None
     suspected: tuple[Fault, ...] = ()
     mismatch: MismatchFit | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def verdict(self) -> str:
@@ -167,7 +170,8 @@ class Diagnosis:
                 "unexplained": None if self.unexplained is None else asdict(self.unexplained),
                 "suspected": [asdict(f) for f in self.suspected],
                 "thresholds": asdict(self.thresholds), "fault_model": self.fault_model,
-                "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict()}
+                "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict(),
+                "notes": list(self.notes)}
 
     def summary(self) -> str:
         if self.unexplained is not None:

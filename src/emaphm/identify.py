@@ -143,7 +143,8 @@ class Identification:
     ``fault_model``: the mapping of k3..k5 the monitoring model used; ``compile_s``: the
     time to compile (or load from the disk cache) the model kernels and run the model
     once, before ``elapsed_s`` starts; ``config``: the settings it was made with (None for
-    a solver that has no name in :data:`ALGORITHM_NAMES`: a user's own).
+    a solver that has no name in :data:`ALGORITHM_NAMES`: a user's own); ``noise_sigma``:
+    the trace's white-noise level [A rms], the largest of the phases'.
     """
 
     algorithm: str
@@ -174,6 +175,7 @@ class Identification:
     compile_s: float = 0.0
     nuisance: dict = field(default_factory=dict)
     config: "IdentificationConfig | None" = field(default=None, compare=False, repr=False)
+    noise_sigma: float = float("nan")
 
     @property
     def evals_per_s(self) -> float:
@@ -204,6 +206,7 @@ class Identification:
             "restarts": int(self.restarts),
             "run_evaluations": int(self.run_evaluations),
             "noise_floor": float(self.noise_floor),
+            "noise_sigma": float(self.noise_sigma),
             "suspect": bool(self.suspect),
             "k_raw": None if self.k_raw is None else [float(x) for x in self.k_raw],
             "fitness_raw": self.fitness_raw,
@@ -456,7 +459,7 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         polish_evaluations=int(res.polish_evaluations), polish_s=float(res.polish_s),
         restarts=int(res.starts) - 1, noise_floor=floor,
         suspect=bool(res.fun > (ratio * floor if floor > 0 else np.inf)),
-        run_evaluations=int(res.run_evaluations),
+        run_evaluations=int(res.run_evaluations), noise_sigma=problem.noise_sigma,
         config=_config_of(problem, solver, budget, options, polish))
 
 

@@ -176,6 +176,13 @@ class IdentificationProblem:
         return self._floor
 
     @property
+    def noise_sigma(self) -> float:
+        """The trace's white-noise level [A rms], the largest of the phases' (0 for a
+        noise-free trace)."""
+        sigma = self.objective.noise_sigma
+        return float(np.max(sigma)) if sigma is not None and np.size(sigma) else 0.0
+
+    @property
     def healthy(self) -> np.ndarray:
         """The healthy fault vector (nominal k)."""
         return K_NOMINAL.copy()

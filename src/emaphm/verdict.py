@@ -31,15 +31,26 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any
 
+import numpy as np
+
 from .diagnosis import Diagnosis, MismatchFit, Thresholds, diagnose, fit_ratio_of
-from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
+from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit,
+                      misfit_p_value)
 from .params import ActuatorParams
 from .problem import IdentificationProblem
 from .traces import Trace
 
 __all__ = ["diagnose", "diagnose_identification", "mismatch_fit", "needs_mismatch_check",
-           "MISMATCH_NUISANCE", "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P",
+           "MISMATCH_NUISANCE", "NOISELESS_NOTE", "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P",
            "misfit_p_value", "misfit_limit", "fit_ratio_of"]
+
+#: The note of a verdict on a trace without measurement noise (every phase's white-noise
+#: level below :data:`emaphm.fitness.MIN_NOISE`, less than an ADC's quantisation): the
+#: misfit test compares the fit with the noise, and there is none to compare with.
+NOISELESS_NOTE = ("the trace carries no measurement noise (a simulation without sensors, or "
+                  "post-processed currents): the misfit test, which compares the fit with the "
+                  "noise, was not made, so a model that does not describe this actuator is not "
+                  "caught; record the currents as measured (or simulate with --seed)")
 
 #: What the mismatch check searches beside k: the winding resistance and magnet flux
 #: (relative) and an unreported constant load (N m), within
@@ -87,9 +98,11 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     else:
         problem = None
     k = ident.k if k is None else k
+    noiseless = 0.0 <= getattr(ident, "noise_sigma", np.inf) < MIN_NOISE
     kw = dict(thresholds=thresholds, params=params, fault_model=ident.fault_model,
-              fit_ratio=fit_ratio_of(ident))
-    diag = diagnose(k, **kw)
+              fit_ratio=None if noiseless else fit_ratio_of(ident))
+    notes = (NOISELESS_NOTE,) if noiseless else ()
+    diag = replace(diagnose(k, **kw), notes=notes)
     if not (check and diag.verdict == "faulty" and needs_mismatch_check(params)):
         return diag
     if problem is None:
@@ -100,4 +113,4 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
             n_sub=int(config.n_sub if config is not None else opts.get("n_sub", 1)),
             mode=str(config.mode if config is not None else opts.get("mode", "phases")))
     m = mismatch_fit(problem, k, seed=int(ident.seed or 0))
-    return diagnose(k, mismatch=m, **kw)
+    return replace(diagnose(k, mismatch=m, **kw), notes=notes)

@@ -208,3 +208,31 @@ def test_the_mismatch_module_of_version_0_3_still_imports_with_a_warning():
 
     assert old.diagnose_identification is verdict.diagnose_identification
     assert old.MISMATCH_NUISANCE == verdict.MISMATCH_NUISANCE
+
+
+def test_a_trace_without_noise_gets_no_misfit_verdict_and_says_so(capsys, tmp_path):
+    """A plant trace simulated without sensors: its 'noise floor' is round-off, so the
+    misfit test would call any model error unexplained at 1e4x; it is not made, and the
+    verdict says why (issue 25, item 15)."""
+    from emaphm.cli import main
+    from emaphm.identify import identify
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+    from emaphm.verdict import NOISELESS_NOTE, diagnose_identification
+
+    clean = simulate(scenario="friction-high")
+    ident = identify(clean, seed=0)
+    assert ident.noise_sigma < 1e-4
+    d = diagnose_identification(clean, ident)
+    assert d.notes == (NOISELESS_NOTE,) and d.unexplained is None
+    assert d.verdict == "faulty" and d.modes == ("friction",)
+    assert d.to_dict()["notes"] == [NOISELESS_NOTE]
+    noisy = simulate(scenario="friction-high", sensors=DEFAULT_SENSORS, seed=1)
+    n = identify(noisy, seed=0)
+    assert n.noise_sigma > 0.01 and diagnose_identification(noisy, n).notes == ()
+    from emaphm.traces import write_trace
+
+    write_trace(clean, tmp_path / "clean.csv")
+    assert main(["diagnose", str(tmp_path / "clean.csv"), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "note: the trace carries no measurement noise" in out
+    assert "noise floor of the trace" not in out and "WARNING" not in out
