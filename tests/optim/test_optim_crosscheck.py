@@ -205,3 +205,26 @@ def test_gwo_no_worse_than_niapy(problem):
     ref = summary(ref, problem)
     assert nfev == ref_nfev == {7_500}, "budgets differ"
     assert no_worse(ours, ref, problem), f"GWO on {problem}: ours {ours:.3g} vs niapy {ref:.3g}"
+
+
+def test_the_scipy_de_adapter_says_what_to_do_when_scipy_moves_its_private_solver(monkeypatch):
+    import builtins
+
+    import scipy
+
+    from emaphm.optim import baselines
+
+    real_import = builtins.__import__
+
+    def gone(name, *args, **kw):
+        if name == "scipy.optimize._differentialevolution":
+            raise ImportError("No module named 'scipy.optimize._differentialevolution'")
+        return real_import(name, *args, **kw)
+
+    monkeypatch.setattr(builtins, "__import__", gone)
+    with pytest.raises(RuntimeError, match="use emaphm's own 'de'"):
+        baselines.scipy_private()
+    monkeypatch.setattr(builtins, "__import__", real_import)
+    monkeypatch.setattr(scipy, "__version__", "9.1.0")
+    with pytest.warns(RuntimeWarning, match="checked on SciPy 1.13 to 1.17"):
+        baselines.scipy_private()
