@@ -132,8 +132,9 @@ def test_park_round_trip(ab, th):
 
 @given(theta=angle, current=amp, i_d=st.floats(-10, 10))
 def test_balanced_currents_are_a_q_axis_current(theta, current, i_d):
+    """The textbook frame: the d axis on the magnet's flux (psi_a = -psi_m cos theta_e)."""
     th_e = P_POLES * theta
-    i = current * np.sin(th_e - PHI) + i_d * np.cos(th_e - PHI)
+    i = current * np.sin(th_e - PHI) - i_d * np.cos(th_e - PHI)
     got_d, got_q = park(*clarke(*i), math.sin(th_e), math.cos(th_e))
     assert got_q == pytest.approx(current, abs=1e-11)
     assert got_d == pytest.approx(i_d, abs=1e-11)
@@ -329,3 +330,39 @@ def test_phase_step_at_standstill_with_a_shorted_phase_converges():
     errs = [np.abs(_phase_steps(**SHORTED, omega=0.0, V=V, n_sub=n) - ref).max() for n in (1, 4, 16)]
     assert errs[0] < 2e-3
     assert errs[1] < errs[0] / 4 and errs[2] < errs[1] / 4
+
+
+@pytest.mark.parametrize("i_d,i_q,omega_m", [(0.0, 3.0, 100.0), (-2.0, 2.5, 150.0),
+                                             (1.0, -1.5, 60.0)])
+def test_the_winding_model_meets_the_textbook_dq_steady_state(i_d, i_q, omega_m):
+    """Drive the healthy winding at constant speed with the textbook's steady-state dq
+    voltages ``u_d = R i_d - omega_e L i_q``, ``u_q = R i_q + omega_e (L i_d + psi_m)``
+    (``psi_m = c0 / p``, the d axis on the magnet): the currents settle at ``(i_d, i_q)``
+    in the model's own dq frame (emaphm.models.inverter)."""
+    from emaphm.models.layout import C_GAMMA, C_PHI, pack
+    from emaphm.models.pmsm import phase_currents, winding_input, winding_step
+    from emaphm.params import siemens_1fk7060
+
+    params = siemens_1fk7060()
+    m = params.motor
+    R, L, c0, p = m.R[0], m.L[0], m.c0[0], m.p
+    psi = c0 / p
+    w_e = p * omega_m
+    u_d = R * i_d - w_e * L * i_q
+    u_q = R * i_q + w_e * (L * i_d + psi)
+    n_sub = 64
+    _, cp = pack(params, 0.0, "physical", n_sub=n_sub)
+    Phi, Gam = tuple(cp[0, C_PHI:C_GAMMA]), tuple(cp[0, C_GAMMA:C_GAMMA + 25])
+    dt = params.inverter.T_s / n_sub
+    z = (0.0,) * 5
+    n = int(round(8 * L / R / dt))                 # eight electrical time constants
+    for k in range(n):
+        th = omega_m * (k + 0.5) * dt               # the step's mid-point
+        s_e, c_e = math.sin(p * th), math.cos(p * th)
+        u = inv_clarke(*inv_park(u_d, u_q, s_e, c_e))
+        e = [c0 * math.sin(p * th - ph) * omega_m for ph in PHI]
+        z = winding_step(*z, *winding_input(*u, *e, 0.0, 0.0, 0.0), Phi, Gam)
+    th = omega_m * n * dt
+    got_d, got_q = park(*clarke(*phase_currents(z[0], z[1])), math.sin(p * th), math.cos(p * th))
+    assert got_d == pytest.approx(i_d, abs=0.01 * max(abs(i_q), 1.0))
+    assert got_q == pytest.approx(i_q, abs=0.01 * max(abs(i_q), 1.0))

@@ -4,6 +4,7 @@ position PID -> speed reference (saturated at omega_max)
 speed PI     -> torque reference (saturated at T_max)
 i_q,ref = T_ref / k_T (saturated at I_max), i_d,ref = 0
 dq current PI with back-EMF feed-forward -> phase voltage references
+(the textbook dq frame, d on the magnet's flux: :mod:`emaphm.models.inverter`)
 
 Every integrator has back-calculation anti-windup (Astrom & Hagglund): while
 the output saturates, the integral is pulled towards the saturated value with

@@ -1,11 +1,19 @@
 """Clarke-Park transforms, space-vector modulation and the PWM carrier.
 
-Conventions (amplitude invariant, ``theta_e = p * theta_m``): a q-axis current
-``I`` gives ``i_j = I sin(theta_e - phi_j)``, in phase with the back-EMF, so
-``T_m = 1.5 c0 i_q``.
+Conventions (amplitude invariant, ``theta_e = p * theta_m``), the textbook's dq frame:
+the d axis on the magnet's flux, the q axis 90 electrical degrees ahead of it. The
+back-EMF of phase a is ``c0 omega_m sin(theta_e)``, so the magnet's flux linkage is
+``psi_a = -psi_m cos(theta_e)`` (``psi_m = c0 / p``) and the d axis points at
+``theta_e + pi``. A q-axis current ``I`` gives ``i_j = I sin(theta_e - phi_j)``, in
+phase with the back-EMF, so ``T_m = 1.5 c0 i_q``; a positive ``i_d`` strengthens the
+field, a negative one weakens it. In steady state at ``omega_e = p omega_m``,
+
+    u_d = R i_d - omega_e L i_q          u_q = R i_q + omega_e (L i_d + psi_m)
+
+(``tests/models/test_pmsm.py`` checks the winding model against it).
 
     i_alpha = 2/3 (i_a - i_b/2 - i_c/2)       i_beta = (i_b - i_c)/sqrt(3)
-    i_d = i_alpha cos(theta_e) + i_beta sin(theta_e)
+    i_d = -(i_alpha cos(theta_e) + i_beta sin(theta_e))
     i_q = i_alpha sin(theta_e) - i_beta cos(theta_e)
 """
 
@@ -32,14 +40,15 @@ def inv_clarke(x_alpha, x_beta):
 
 @jit
 def park(x_alpha, x_beta, sin_e, cos_e):
-    """alpha-beta -> dq at the electrical angle given by its sine and cosine."""
-    return x_alpha * cos_e + x_beta * sin_e, x_alpha * sin_e - x_beta * cos_e
+    """alpha-beta -> dq (d on the magnet's flux) at the electrical angle given by its sine
+    and cosine."""
+    return -(x_alpha * cos_e + x_beta * sin_e), x_alpha * sin_e - x_beta * cos_e
 
 
 @jit
 def inv_park(x_d, x_q, sin_e, cos_e):
-    """dq -> alpha-beta."""
-    return x_d * cos_e + x_q * sin_e, x_d * sin_e - x_q * cos_e
+    """dq -> alpha-beta (the inverse of :func:`park`)."""
+    return -x_d * cos_e + x_q * sin_e, -x_d * sin_e - x_q * cos_e
 
 
 @jit
