@@ -15,11 +15,13 @@ Bad input exits with status 2 and a message that says what to fix.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import json
 import os
 import sys
 import time
+import warnings
 from typing import Any, Sequence
 
 import numpy as np
@@ -437,6 +439,27 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+@contextlib.contextmanager
+def trace_warnings_as_lines(cmd: str):
+    """Inside: a :class:`~emaphm.traces.TraceWarning` (a trace read, but not quite as
+    written) is printed as one line on stderr, ``CMD: warning: ...``; other warnings as
+    Python prints them."""
+    from .traces import TraceWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", TraceWarning)
+        original = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, TraceWarning):
+                print(f"{cmd}: warning: {one_line(str(message))}", file=sys.stderr)
+            else:
+                original(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = show
+        yield
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(negative_values(parser, sys.argv[1:] if argv is None else argv))
@@ -450,7 +473,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     # the one error boundary: an expected failure is one line and exit 2, anything else is a
     # bug, shown with its traceback
     try:
-        return args.func(args)
+        with trace_warnings_as_lines(cmd):
+            return args.func(args)
     except UsageError as exc:
         return error(str(exc))
     except (ValueError, FileNotFoundError) as exc:   # TraceError, ParameterError, FaultVectorError...

@@ -42,6 +42,12 @@ class TraceError(ValueError):
     """
 
 
+class TraceWarning(UserWarning):
+    """A trace that was read, but not quite as written (its time shifted to start at 0),
+    or that may not hold the whole test (shorter than its profile). The command line
+    prints it as one line on stderr."""
+
+
 def _expected_columns() -> str:
     req = ", ".join(f"{c} [{UNITS[c]}]" for c in COLUMNS)
     opt = ", ".join(f"{c} [{UNITS[c]}]" for c in OPTIONAL_COLUMNS)
