@@ -4,7 +4,8 @@
     emaphm scenarios  list the named fault scenarios
     emaphm diagnose   identify the faults of a trace (or of a simulated scenario)
     emaphm calibrate  estimate a healthy unit's parameters from its traces
-    emaphm params     write the default parameters as a TOML file to edit
+    emaphm params     write the default parameters (or a motor's, from its data sheet) as TOML
+    emaphm import     read a bench export into a trace    (emaphm.traces.importers.cli)
     emaphm campaign, report                   (emaphm.campaign.cli)
     emaphm history, prognose, demo-degradation (emaphm.prognosis.cli)
     emaphm fleet report, fleet demo           (emaphm.fleet.cli)
@@ -428,7 +429,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_params)
 
     # subcommands of the campaign, prognosis and fleet layers live beside their code
-    for module in ("emaphm.campaign.cli", "emaphm.prognosis.cli", "emaphm.fleet.cli"):
+    for module in ("emaphm.traces.importers.cli", "emaphm.campaign.cli", "emaphm.prognosis.cli",
+                   "emaphm.fleet.cli"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as exc:

@@ -148,9 +148,13 @@ def _lines(path: Path, encoding: str) -> Iterator[tuple[int, int, str]]:
             yield index, offset, text.lstrip("\ufeff") if index == 0 else text
 
 
-def _guess_delimiter(header: str) -> str:
-    counts = {d: header.count(d) for d in (",", ";", "\t")}
-    return max(counts, key=counts.get) if max(counts.values()) else ","
+def _guess_delimiter(line: str) -> str:
+    """Tab or ``;`` where the line has them (a ``,`` beside them is a decimal comma or
+    part of a name), else ``,``."""
+    tabs, semicolons = line.count("\t"), line.count(";")
+    if tabs or semicolons:
+        return "\t" if tabs > semicolons else ";"
+    return ","
 
 
 def _looks_numeric(cells: Sequence[str], decimal: str) -> bool:
