@@ -100,9 +100,10 @@ class ChannelSpec:
                            f"declares none; add unit = \"{SI[kind]}\" (or the unit it was "
                            f"recorded in: {', '.join(_spellings(kind))})")
         try:
-            m = measure(unit, where=where)
-        except QuantityError as exc:
-            raise MapError(f"{exc}; known units of {kind}: {', '.join(_spellings(kind))}") from None
+            m = measure(unit)
+        except QuantityError:
+            raise MapError(f"{where}: unknown unit {unit.strip()[:40]!r}; known units of {kind}: "
+                           f"{', '.join(_spellings(kind))}") from None
         if m.kind == kind:
             if isinstance(self.scale, str):
                 raise MapError(f"{where}: scale {self.scale!r} is a ratio, but {self.target} is "
