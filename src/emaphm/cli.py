@@ -337,9 +337,21 @@ def cmd_params(args: argparse.Namespace) -> int:
     from .params import save_params, siemens_1fk7060
 
     out = out_path(args.out, (".toml",), "--out")
-    save_params(siemens_1fk7060(), out)
-    print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it and "
-          "pass it with --params", file=sys.stderr)
+    if args.datasheet is None:
+        save_params(siemens_1fk7060(), out)
+        print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it "
+              "and pass it with --params", file=sys.stderr)
+        return 0
+    from .datasheet import convert, load_nameplate
+
+    sheet = convert(load_nameplate(args.datasheet))
+    save_params(sheet.params, out)
+    if not args.quiet:
+        print(sheet.summary())
+    for text in sheet.warnings:
+        print(f"emaphm params: warning: {text}", file=sys.stderr)
+    print(f"wrote {out}: {sheet.params.name} in emaphm's per-phase SI parameters; pass it with "
+          "--params", file=sys.stderr)
     return 0
 
 
@@ -424,8 +436,13 @@ def build_parser() -> argparse.ArgumentParser:
     cal.add_argument("--quiet", action="store_true")
     cal.set_defaults(func=cmd_calibrate)
 
-    p = sub.add_parser("params", help="write the default actuator parameters to a TOML file")
+    p = sub.add_parser("params", help="write the default actuator parameters (or a motor's, from "
+                                      "its data sheet) to a TOML file")
     p.add_argument("--out", required=True)
+    p.add_argument("--datasheet", help="a [datasheet] TOML in catalogue units (poles, ke in V/krpm "
+                                       "line to line, r_ll, l_ll, j_rotor, t_max, i_max...; see "
+                                       "docs/bench-import.md): convert it instead")
+    p.add_argument("--quiet", action="store_true", help="do not print the converted values")
     p.set_defaults(func=cmd_params)
 
     # subcommands of the campaign, prognosis and fleet layers live beside their code

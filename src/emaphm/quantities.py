@@ -36,7 +36,7 @@ import re
 from dataclasses import dataclass
 from decimal import Decimal
 
-__all__ = ["Measure", "QuantityError", "SI", "measure", "quantity", "known_spellings",
+__all__ = ["Measure", "QuantityError", "SI", "measure", "quantity", "split", "known_spellings",
            "scale_ratio"]
 
 
@@ -196,6 +196,19 @@ def measure(text: str, kind: str | None = None, *, where: str = "") -> Measure:
 
 
 _NUMBER = re.compile(r"\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*")
+
+
+def split(value: float | int | str, kind: str, *, where: str = "") -> tuple[float, Measure | None]:
+    """A number with its measure as written: ``"40 V/krpm"`` -> ``(40.0, V/krpm)``; a bare
+    number -> ``(value, None)``."""
+    prefix = f"{where}: " if where else ""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return float(value), None
+    m = _NUMBER.fullmatch(value) if isinstance(value, str) else None
+    if not m:
+        raise QuantityError(f"{prefix}expected a number with its unit, e.g. '1.1 {SI[kind]}', "
+                            f"got {str(value).strip()[:40]!r}")
+    return float(m.group(1)), (measure(m.group(2), kind, where=where) if m.group(2) else None)
 
 
 def quantity(value: float | int | str, kind: str, *, where: str = "",

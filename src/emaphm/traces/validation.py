@@ -179,27 +179,30 @@ def _clock(seconds: float) -> str:
             if seconds >= 60 else f"{seconds:.3g} s")
 
 
-def _check_time_scale(trace: Trace) -> None:
-    """Time in s: a step above 0.01 s is milliseconds; a trace longer than 1000 s is
-    milliseconds where its step would then be a plausible sampling period (1 us or more),
-    else a long recording in seconds, which is said as such."""
-    dt, duration = trace.dt, trace.duration
-    ms = (f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, duration "
-          f"{duration:.6g} (a trace in seconds has a step <= {_MAX_TIME_STEP} s and lasts <= "
-          f"{_MAX_DURATION:g} s); divide t by 1000, or import the export with its time unit: "
-          "`emaphm import FILE --inspect`")
+def _check_time_scale(dt: float, duration: float) -> None:
+    """Time in s: a step above 0.01 s is milliseconds. A trace longer than 1000 s is a
+    long recording in seconds where its step read as ms would be under 1 us; with a step
+    of 1-10 ms it may be either, and both readings are said. ``dt`` is the mean step and
+    ``duration`` the span of the time column, in its own unit."""
     if dt > _MAX_TIME_STEP:
-        raise TraceError(ms)
+        raise TraceError(
+            f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, duration "
+            f"{duration:.6g} (a trace in seconds has a step <= {_MAX_TIME_STEP} s and lasts <= "
+            f"{_MAX_DURATION:g} s); divide t by 1000, or import the export with its time unit: "
+            "`emaphm import FILE --inspect`")
     if duration <= _MAX_DURATION:
         return
-    if dt >= _MIN_TIME_STEP_IF_MS:
-        raise TraceError(f"{ms}. If it really is in seconds, it lasts {_clock(duration)}: "
-                         "cut the test out of it (emaphm import --window START:END)")
+    cut = ("cut the test out of the recording with `emaphm import FILE --map MAP.toml --window "
+           "START:END --out TRACE.parquet`")
+    if dt < _MIN_TIME_STEP_IF_MS:
+        raise TraceError(
+            f"the trace lasts {_clock(duration)} ({duration:.6g} s at {1 / dt:.6g} Hz), longer "
+            f"than the {_MAX_DURATION:g} s a trace to diagnose may last; a diagnosis needs one "
+            f"test profile (0.5 s): {cut}")
     raise TraceError(
-        f"the trace lasts {_clock(duration)} ({duration:.6g} s at {1 / dt:.6g} Hz), longer than "
-        f"the {_MAX_DURATION:g} s a trace to diagnose may last; a diagnosis needs one test "
-        "profile (0.5 s): cut the test out of the recording with `emaphm import FILE --map "
-        "MAP.toml --window START:END --out TRACE.parquet`")
+        f"column 't' spans {duration:.6g} with a mean step of {dt:.6g}: in seconds the trace "
+        f"lasts {_clock(duration)}, longer than the {_MAX_DURATION:g} s a trace to diagnose may "
+        f"last ({cut}); in milliseconds it lasts {duration / 1000:.4g} s (divide t by 1000)")
 
 
 def _check_speed_plausible(trace: Trace) -> None:
@@ -330,7 +333,7 @@ def validate(
             "samples by time and drop duplicated time stamps"
         )
 
-    _check_time_scale(trace)
+    _check_time_scale(trace.dt, trace.duration)
     dt = trace.dt
 
     spread = float((steps.max() - steps.min()) / dt)
