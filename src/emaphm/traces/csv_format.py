@@ -91,7 +91,12 @@ class CsvLayout:
 
 
 def _split(line: str, delimiter: str) -> list[str]:
-    return [c.strip() for c in next(csv.reader([line], delimiter=delimiter, quotechar='"'))]
+    line = line.replace("\r", " ").replace("\x00", "")
+    try:
+        cells = next(csv.reader([line], delimiter=delimiter, quotechar='"'), [])
+    except csv.Error:
+        cells = line.split(delimiter)
+    return [c.strip() for c in cells]
 
 
 def _is_number(text: str, decimal: str = ".") -> bool:

@@ -17,7 +17,7 @@ __all__ = ["CsvSource"]
 
 
 def _layout(path: Path, options: SourceOptions) -> tuple[CsvLayout, str]:
-    encodings = [options.encoding] if options.encoding else ["utf-8", "cp1252"]
+    encodings = [options.encoding] if options.encoding else ["utf-8", "latin-1"]
     for k, encoding in enumerate(encodings):
         try:
             return sniff_csv(path, preamble=True, delimiter=options.delimiter,
