@@ -94,9 +94,8 @@ def test_inspect_lists_channels_and_its_starter_map_imports(reference, tmp_path,
     out = capsys.readouterr().out
     assert "decimal comma" in out and "2 line(s) of preamble" in out
     assert "Strom U" in out and "ms" in out
-    starter = out[out.index("# channel map"):]
-    (tmp_path / "m.toml").write_text(starter)
-    back = import_trace(source, _map(starter))
+    assert out.startswith("# bench.csv: csv (fields separated by ';'")
+    back = import_trace(source, _map(out))                  # the whole output is the map
     np.testing.assert_allclose(back.theta_m, trace.theta_m, atol=1e-12)
 
 

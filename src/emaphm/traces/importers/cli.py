@@ -30,8 +30,9 @@ def cmd_import(args: argparse.Namespace) -> int:
     cmap = load_map(args.map) if args.map else None
     if args.inspect:
         info = inspect_source(source, cmap.source if cmap else SourceOptions())
-        print(describe(info))
-        print()
+        # all of it TOML (the table as comments): `--inspect > map.toml` is a map to edit
+        print("\n".join(f"# {line}" for line in describe(info).splitlines()))
+        print("#")
         print(starter_map(info), end="")
         return 0
     if cmap is None or args.out is None:
@@ -59,7 +60,8 @@ def register(sub) -> None:
     p.add_argument("--map", help="channel map, .toml: which channel is which column, its unit")
     p.add_argument("--out", help="the trace to write, .csv or .parquet")
     p.add_argument("--inspect", action="store_true",
-                   help="list the channels, units and rates of SOURCE and print a starter map")
+                   help="list the channels, units and rates of SOURCE and print a starter map "
+                        "(all TOML: `--inspect > map.toml` gives a map to edit)")
     p.add_argument("--window", help="import START:END seconds of the recording's time only "
                                     "(either may be left out), e.g. 1800:1830")
     p.add_argument("--quiet", action="store_true", help="no summary line")
