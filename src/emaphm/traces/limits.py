@@ -5,7 +5,7 @@ message instead of filling the memory.
 A diagnosis needs one test profile (0.5 s, a few thousand samples); the limits leave two
 orders of magnitude above that. Reading a trace at the limit keeps about
 :data:`PEAK_BYTES_PER_SAMPLE` bytes per sample resident at its peak (measured by
-``benchmarks/bench_import.py``; the trace itself holds 56 or 64).
+``benchmarks/bench_import.py``; the trace itself holds 56, or 64 with a torque).
 """
 
 from __future__ import annotations
@@ -24,9 +24,10 @@ MAX_SAMPLES = 2_000_000
 #: about 280 MB.
 MAX_FILE_BYTES = 512 * 1024 * 1024
 #: Peak resident bytes per sample while a CSV trace is read and validated, measured on
-#: 2,000,000 rows (BENCHMARKS.md, the import section): the parsed blocks, the trace's
-#: arrays and the validation's temporaries.
-PEAK_BYTES_PER_SAMPLE = 200
+#: 2,000,000 rows (BENCHMARKS.md, the import section: 616 MB, 308 bytes per sample, the
+#: Python process and its libraries included): the parsed blocks, the trace's arrays and
+#: the validation's temporaries; 5.5 times the 56 bytes of the trace itself.
+PEAK_BYTES_PER_SAMPLE = 310
 
 
 def _mb(n: int) -> str:
