@@ -61,7 +61,7 @@ def run_unit(task: tuple[int, int]) -> dict:
     from emaphm.diagnosis import fit_ratio_of
     from emaphm.faults import K_NOMINAL
     from emaphm.identify import identify
-    from emaphm.mismatch import diagnose_identification
+    from emaphm.verdict import diagnose_identification
     from emaphm.params import siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
     from emaphm.units import draw_unit

@@ -34,7 +34,7 @@ EXPECTED = {"friction": ("friction", None), "backlash": ("backlash", None),
 
 def run(task):
     from emaphm.identify import identify
-    from emaphm.mismatch import diagnose_identification
+    from emaphm.verdict import diagnose_identification
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 
     scenario, algo, seed = task

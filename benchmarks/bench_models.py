@@ -24,7 +24,7 @@ the process CPU time, which time-sharing with other work does not inflate:
   fault models, repeats interleaved round-robin so that all three see the same load;
   the cost of packing a population (``pack_population``: the exact winding step of
   every candidate) and its share of a population evaluation;
-* the NumPy-vectorised MM (:mod:`emaphm.models.monitoring_numpy`) on the same
+* the NumPy-vectorised MM (``tests/monitoring_numpy.py``, the test oracle) on the same
   population, and its ratio to the kernel;
 * the reference model (RM), one trace at n_sub = 128 with and without PWM;
 * compile time: a fresh interpreter's first ``weighted_sse`` call with a warm
@@ -62,7 +62,8 @@ import numpy as np  # noqa: E402
 from emaphm.faults import K_NOMINAL  # noqa: E402
 from emaphm.models.layout import pack_population  # noqa: E402
 from emaphm.models.monitoring import MonitoringModel  # noqa: E402
-from emaphm.models.monitoring_numpy import simulate_population_numpy, weighted_sse_numpy  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))   # the NumPy oracle
+from monitoring_numpy import simulate_population_numpy, weighted_sse_numpy  # noqa: E402
 from emaphm.models.reference import run_reference  # noqa: E402
 from emaphm.profiles import diagnostic  # noqa: E402
 

@@ -69,7 +69,7 @@ def run_one(task: dict) -> dict:
     from dataclasses import replace
 
     from emaphm.identify import identify
-    from emaphm.mismatch import diagnose_identification
+    from emaphm.verdict import diagnose_identification
     from emaphm.params import siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 

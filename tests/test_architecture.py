@@ -76,10 +76,22 @@ def test_no_import_loop_inside(package):
 def test_the_kernels_share_their_constants_from_one_module():
     g = graph("emaphm.models")
     common = "emaphm.models._monitoring_common"
-    for kernel in ("monitoring", "monitoring_simd", "monitoring_numpy"):
+    for kernel in ("monitoring", "monitoring_simd", "step"):
         assert common in g[f"emaphm.models.{kernel}"], kernel
     assert "emaphm.models.monitoring" not in g["emaphm.models.monitoring_simd"]
-    assert "emaphm.models.monitoring" not in g["emaphm.models.monitoring_numpy"]
+
+
+def test_the_monitoring_step_exists_once():
+    """Both kernels run the step of emaphm.models.step; the package has no NumPy copy of
+    the monitoring model (the tests keep one as an oracle, tests/monitoring_numpy.py)."""
+    g = graph("emaphm.models")
+    for kernel in ("monitoring", "monitoring_simd"):
+        assert "emaphm.models.step" in g[f"emaphm.models.{kernel}"], kernel
+    assert not (SRC / "emaphm" / "models" / "monitoring_numpy.py").exists()
+    for path in (SRC / "emaphm").rglob("*.py"):
+        text = path.read_text(encoding="utf-8")
+        assert "def winding_step(" not in text or path.name == "pmsm.py", path
+        assert "def substep(" not in text or path.name == "step.py", path
 
 
 def test_the_cycle_finder_finds_a_loop():

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from kvectors import k_with
+from support import k_with
 from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays

@@ -8,13 +8,14 @@ import importlib
 
 import numpy as np
 import pytest
-from figures import assert_png_of, legend_texts
+from support import assert_png_of, legend_texts
 
 matplotlib = pytest.importorskip("matplotlib")
 
 from matplotlib.figure import Figure  # noqa: E402
 
-from emaphm.identify import identify  # noqa: E402
+from emaphm.identify import IdentificationConfig, identify  # noqa: E402
+from emaphm.optim import PSO  # noqa: E402
 from emaphm.plots import plot_identification, plot_trace, save_figure  # noqa: E402
 from emaphm.simulate import simulate  # noqa: E402
 
@@ -35,7 +36,8 @@ def nominal():
 
 @pytest.fixture(scope="module")
 def ident(faulty):
-    return identify(faulty, "pso", seed=0, budget=100, options={"pop_size": 20}, polish=False)
+    return identify(faulty, IdentificationConfig("pso", options={"pop_size": 20}, budget=100,
+                                                 polish=False), seed=0)
 
 
 def _covers(ax, lo, hi):
@@ -154,7 +156,7 @@ def test_plot_identification_marks_the_polish_and_the_noise_floor(tmp_path):
     from emaphm.simulate import DEFAULT_SENSORS
 
     tr = simulate(scenario="friction-high", model="monitoring", sensors=DEFAULT_SENSORS, seed=1)
-    ident = identify(tr, "pso", seed=0, options={"pop_size": 20})
+    ident = identify(tr, PSO(pop_size=20), seed=0)
     assert ident.polish_evaluations > 0 and ident.noise_floor > 0
     fig = plot_identification(tr, ident)
     conv = fig.axes[4]

@@ -19,7 +19,7 @@ name           what it scales                                         unit
 ``load``       a constant load torque the bench does not report       N m
 =============  =====================================================  ===========
 
-Method: SciPy's :func:`~scipy.optimize.least_squares` (trust-region
+Method: :func:`emaphm.optim.lsq.least_squares_batched` (SciPy's trust-region
 reflective, bounded) on the monitoring model's residuals, weighted as in
 Eq. 4 and scaled by each trace's white-noise level, with a finite-difference
 Jacobian (exact columns for the sensor gains and offsets, which act after the
@@ -62,8 +62,9 @@ from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
 from .profiles import Profile
 from .traces import Trace, TraceError, validate
 
-__all__ = ["PARAMETERS", "CORRELATION_LIMIT", "MULTIPLE_CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT", "CalibrationError",
-           "CalibrationResult", "calibrate", "apply_deviations"]
+__all__ = ["PARAMETERS", "CORRELATION_LIMIT", "MULTIPLE_CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT",
+           "CalibrationError", "CalibrationResult", "calibrate", "select_identifiable",
+           "estimates", "apply_deviations"]
 
 #: Calibrated parameters: name -> (lower bound, upper bound, unit) of the deviation.
 PARAMETERS: dict[str, tuple[float, float, str]] = {
@@ -245,6 +246,176 @@ class CalibrationResult:
         return "\n".join(lines)
 
 
+class _Fitter:
+    """The calibration's least squares: the residuals of every trace at a vector of
+    deviations, and their Jacobian (forward differences for the physical parameters, one
+    simulation each; exact columns for the sensor gains and offsets, which act after the
+    model), run on :func:`emaphm.optim.lsq.least_squares_batched`."""
+
+    def __init__(self, base: ActuatorParams, targets: list[_Target],
+                 progress: Callable[[int], Any] | None) -> None:
+        self.base, self.targets, self.progress = base, targets, progress
+        self.count = 0                    # model simulations so far
+        self.m = sum(t.i_meas.size for t in targets)
+        self._cache: dict[bytes, list[np.ndarray] | None] = {}
+
+    def currents(self, x: np.ndarray, names: list[str]) -> list[np.ndarray] | None:
+        """Model currents of each trace at ``x``, before the sensors' gains and offsets
+        (those act after the model, so their Jacobian columns need no simulation)."""
+        key = np.asarray(x, dtype=float).tobytes() + ",".join(names).encode()
+        if key not in self._cache:
+            p = apply_deviations(self.base, dict(zip(names, x)))
+            p = replace(p, sensors=CurrentSensors())      # applied below, after the model
+            out: list[np.ndarray] | None = []
+            for tg in self.targets:
+                self.count += 1
+                i = _model_currents(p, tg)
+                if self.progress is not None:
+                    self.progress(self.count)
+                if not np.all(np.isfinite(i)):
+                    out = None
+                    break
+                out.append(i)
+            self._cache.clear()
+            self._cache[key] = out
+        return self._cache[key]
+
+    def sensors(self, x: np.ndarray, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+        s = apply_deviations(self.base, dict(zip(names, x))).sensors
+        return np.asarray(s.gain), np.asarray(s.offset)
+
+    def residual(self, x: np.ndarray, names: list[str]) -> np.ndarray:
+        cur = self.currents(x, names)
+        if cur is None:
+            return np.full(self.m, 1e6)
+        g, o = self.sensors(x, names)
+        return np.concatenate([((i * g + o - tg.i_meas) * tg.sqrt_w).ravel()
+                               for i, tg in zip(cur, self.targets)])
+
+    def jacobian(self, x: np.ndarray, names: list[str]) -> np.ndarray:
+        r0 = self.residual(x, names)
+        cur = self.currents(x, names)
+        J = np.zeros((self.m, len(names)))
+        g0 = np.asarray(self.base.sensors.gain)
+        for c, n in enumerate(names):
+            if n.startswith("gain_") or n.startswith("offset_"):
+                j = "abc".index(n[-1])
+                col = []
+                for i, tg in zip(cur or [np.zeros_like(t.i_meas) for t in self.targets],
+                                 self.targets):
+                    d = np.zeros_like(tg.i_meas)
+                    d[:, j] = (g0[j] * i[:, j] if n.startswith("gain_") else 1.0) * tg.sqrt_w[:, j]
+                    col.append(d.ravel())
+                J[:, c] = np.concatenate(col)
+                continue
+            h = 1e-3 * max(1.0, abs(x[c]))
+            if x[c] + h > PARAMETERS[n][1]:
+                h = -h
+            xh = np.array(x, dtype=float)
+            xh[c] += h
+            J[:, c] = (self.residual(xh, names) - r0) / h
+        self.currents(x, names)             # leave the cache at x
+        return J
+
+    def fit(self, names: list[str], x0: np.ndarray) -> Any:
+        """SciPy's result (``x``, residual ``fun``, ``jac``) of the fit of ``names`` from
+        ``x0``, on :func:`emaphm.optim.lsq.least_squares_batched` (trust-region reflective,
+        one BLAS thread)."""
+        from .optim.lsq import least_squares_batched
+
+        lo = np.array([PARAMETERS[n][0] for n in names])
+        hi = np.array([PARAMETERS[n][1] for n in names])
+        _, res = least_squares_batched(
+            lambda X: np.stack([self.residual(x, names) for x in X]), np.clip(x0, lo, hi),
+            (lo, hi), jac=lambda x, r0: self.jacobian(x, names),
+            x_scale=np.maximum(hi - lo, 1e-3) / 10, xtol=1e-8, ftol=1e-8, gtol=1e-8,
+            max_nfev=60, max_evals=math.inf, full_output=True)
+        return res
+
+
+def select_identifiable(fitter: _Fitter, names: list[str], *,
+                        correlation_limit: float = CORRELATION_LIMIT,
+                        multiple_limit: float = MULTIPLE_CORRELATION_LIMIT) -> dict[str, Any]:
+    """Fit ``names`` and keep at the data sheet, one at a time, each estimate the profile
+    does not identify (:data:`MIN_EFFECT`) or cannot separate from the others
+    (``correlation_limit``, ``multiple_limit``), refitting from where the last fit ended.
+
+    Returns ``{"res", "names", "fixed", "pairs", "weak", "cov"}``: the last fit, the
+    estimated names, those kept at the data sheet, the non-separable pairs (or the
+    estimate and the others that predict it, with the multiple correlation), the weak
+    ones (with the change of the fit ratio a typical deviation makes) and the covariance.
+    """
+    names = list(names)
+    fixed: list[str] = []
+    pairs: list[tuple[str, str, float]] = []
+    weak: list[tuple[str, float]] = []
+    x0 = np.zeros(len(names))
+    floor_r = float(sum(np.sum(tg.w) for tg in fitter.targets))  # sum r^2 of white noise alone
+    while True:
+        res = fitter.fit(names, x0)
+        # practical identifiability: what a typical deviation of each parameter does to
+        # the fit ratio, against the misfit model error leaves
+        excess = max(float(res.fun @ res.fun) / floor_r - 1.0, MIN_EFFECT)
+        Jm = np.asarray(res.jac)
+        effect = np.array([float(np.sum(Jm[:, c] ** 2)) * TYPICAL[n] ** 2 / floor_r
+                           for c, n in enumerate(names)])
+        if len(names) > 1 and effect.min() < excess:
+            drop = int(np.argmin(effect))
+            weak.append((names[drop], float(effect[drop])))
+            fixed.append(names.pop(drop))
+            x0 = np.delete(res.x, drop)
+            continue
+        cov, corr = _covariance(res, fitter.targets)
+        if len(names) <= 1:
+            break
+        drop, pair = _inseparable(names, cov, corr, correlation_limit, multiple_limit)
+        if drop is None:
+            break
+        pairs.append(pair)
+        fixed.append(names.pop(drop))
+        x0 = np.delete(res.x, drop)          # the refit starts where the last fit ended
+    return {"res": res, "names": names, "fixed": fixed, "pairs": pairs, "weak": weak, "cov": cov}
+
+
+def _inseparable(names: list[str], cov: np.ndarray, corr: np.ndarray, correlation_limit: float,
+                 multiple_limit: float) -> tuple[int | None, tuple[str, str, float] | None]:
+    """The estimate to keep at the data sheet (the less certain, relative to its range, of
+    the most correlated pair past ``correlation_limit``; else the least certain of those
+    the others predict past ``multiple_limit``) and why; ``(None, None)`` when none."""
+    worst = None
+    for a in range(len(names)):
+        for b in range(a + 1, len(names)):
+            r = corr[a, b]
+            if abs(r) > correlation_limit and (worst is None or abs(r) > abs(worst[2])):
+                worst = (a, b, float(r))
+    span = lambda j: PARAMETERS[names[j]][1] - PARAMETERS[names[j]][0]  # noqa: E731
+    doubt = lambda j: math.sqrt(cov[j, j]) / span(j)                      # noqa: E731
+    if worst is not None:
+        a, b, r = worst
+        return (a if doubt(a) >= doubt(b) else b), (names[a], names[b], r)
+    multiple = _multiple_correlation(corr)
+    over = [j for j in range(len(names)) if multiple[j] > multiple_limit]
+    if not over:
+        return None, None
+    drop = max(over, key=doubt)
+    partners = [names[j] for j in np.argsort(-np.abs(corr[drop]))
+                if j != drop and abs(corr[drop, j]) > 0.5][:3] or ["the others"]
+    return drop, (names[drop], "+".join(partners), float(multiple[drop]))
+
+
+def estimates(names: list[str], x: np.ndarray, cov: np.ndarray) -> dict[str, dict[str, Any]]:
+    """Each estimate with its standard error: the statistical one (``se_stat``, from the
+    covariance) and the total with the model discrepancy (:data:`DISCREPANCY`) in
+    quadrature (``se``), and its 95 % interval."""
+    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    out = {}
+    for n, v, s in zip(names, x, se):
+        tot = math.hypot(float(s), DISCREPANCY.get(n, 0.0))
+        out[n] = {"value": float(v), "se": tot, "lo95": float(v - 1.96 * tot),
+                  "hi95": float(v + 1.96 * tot), "unit": PARAMETERS[n][2], "se_stat": float(s)}
+    return out
+
+
 def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
               sources: Sequence[str] | None = None, free: Sequence[str] | None = None,
               fit_limit: float = HEALTHY_FIT_LIMIT,
@@ -261,9 +432,6 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     when a trace does not look healthy after calibration (its fit stays above
     ``fit_limit`` times its noise floor) or cannot be used.
     """
-    from scipy.optimize import least_squares
-    from threadpoolctl import threadpool_limits
-
     base = params if params is not None else siemens_1fk7060()
     traces = list(traces)
     if not traces:
@@ -278,130 +446,11 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
                          + ", ".join(_NAMES))
     targets = [_target(tr, base, src) for tr, src in zip(traces, sources)]
     t0 = time.perf_counter()
-    count = [0]
-    m = sum(t.i_meas.size for t in targets)
-    cache: dict[bytes, list[np.ndarray]] = {}
-
-    def currents(x: np.ndarray, names: list[str]) -> list[np.ndarray] | None:
-        """Model currents of each trace at ``x``, before the sensors' gains and offsets
-        (those act after the model, so their Jacobian columns need no simulation)."""
-        key = np.asarray(x, dtype=float).tobytes() + ",".join(names).encode()
-        if key not in cache:
-            p = apply_deviations(base, dict(zip(names, x)))
-            p = replace(p, sensors=CurrentSensors())      # applied below, after the model
-            out = []
-            for tg in targets:
-                count[0] += 1
-                i = _model_currents(p, tg)
-                if progress is not None:
-                    progress(count[0])
-                if not np.all(np.isfinite(i)):
-                    out = None
-                    break
-                out.append(i)
-            cache.clear()
-            cache[key] = out
-        return cache[key]
-
-    def sensors(x: np.ndarray, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
-        s = apply_deviations(base, dict(zip(names, x))).sensors
-        return np.asarray(s.gain), np.asarray(s.offset)
-
-    def residual(x: np.ndarray, names: list[str]) -> np.ndarray:
-        cur = currents(x, names)
-        if cur is None:
-            return np.full(m, 1e6)
-        g, o = sensors(x, names)
-        return np.concatenate([((i * g + o - tg.i_meas) * tg.sqrt_w).ravel()
-                               for i, tg in zip(cur, targets)])
-
-    def jacobian(x: np.ndarray, names: list[str]) -> np.ndarray:
-        """Forward differences for the physical parameters (one simulation each),
-        exact columns for the sensor gains and offsets."""
-        r0 = residual(x, names)
-        cur = currents(x, names)
-        J = np.zeros((m, len(names)))
-        g0 = np.asarray(base.sensors.gain)
-        for c, n in enumerate(names):
-            if n.startswith("gain_") or n.startswith("offset_"):
-                j = "abc".index(n[-1])
-                col = []
-                for i, tg in zip(cur or [np.zeros_like(t.i_meas) for t in targets], targets):
-                    d = np.zeros_like(tg.i_meas)
-                    d[:, j] = (g0[j] * i[:, j] if n.startswith("gain_") else 1.0) * tg.sqrt_w[:, j]
-                    col.append(d.ravel())
-                J[:, c] = np.concatenate(col)
-                continue
-            h = 1e-3 * max(1.0, abs(x[c]))
-            if x[c] + h > PARAMETERS[n][1]:
-                h = -h
-            xh = np.array(x, dtype=float)
-            xh[c] += h
-            J[:, c] = (residual(xh, names) - r0) / h
-        currents(x, names)             # leave the cache at x
-        return J
-
-    def fit(names: list[str], x0: np.ndarray):
-        lo = np.array([PARAMETERS[n][0] for n in names])
-        hi = np.array([PARAMETERS[n][1] for n in names])
-        # SciPy's SVD of the tall Jacobian on one BLAS thread: a thread pool spinning beside
-        # busy cores made it many times slower (the same as in emaphm.optim.lsq)
-        with threadpool_limits(limits=1, user_api="blas"):
-            return least_squares(residual, np.clip(x0, lo, hi), jac=jacobian, args=(names,),
-                                 bounds=(lo, hi), method="trf",
-                                 x_scale=np.maximum(hi - lo, 1e-3) / 10,
-                                 xtol=1e-8, ftol=1e-8, max_nfev=60)
-
-    names = list(free)
-    fixed: list[str] = []
-    pairs: list[tuple[str, str, float]] = []
-    weak: list[tuple[str, float]] = []
-    x0 = np.zeros(len(names))
-    floor_r = float(sum(np.sum(tg.w) for tg in targets))    # sum r^2 of white noise alone
-    while True:
-        res = fit(names, x0)
-        # practical identifiability: what a typical deviation of each parameter does to
-        # the fit ratio, against the misfit model error leaves
-        excess = max(float(res.fun @ res.fun) / floor_r - 1.0, MIN_EFFECT)
-        Jm = np.asarray(res.jac)
-        effect = np.array([float(np.sum(Jm[:, c] ** 2)) * TYPICAL[n] ** 2 / floor_r
-                           for c, n in enumerate(names)])
-        if len(names) > 1 and effect.min() < excess:
-            drop = int(np.argmin(effect))
-            weak.append((names[drop], float(effect[drop])))
-            fixed.append(names.pop(drop))
-            x0 = np.delete(res.x, drop)
-            continue
-        cov, corr = _covariance(res, targets)
-        worst = None
-        for a in range(len(names)):
-            for b in range(a + 1, len(names)):
-                r = corr[a, b]
-                if abs(r) > correlation_limit and (worst is None or abs(r) > abs(worst[2])):
-                    worst = (a, b, float(r))
-        if len(names) <= 1:
-            break
-        # the less certain one (relative to its range) is kept at the data sheet
-        span = lambda j: PARAMETERS[names[j]][1] - PARAMETERS[names[j]][0]  # noqa: E731
-        doubt = lambda j: math.sqrt(cov[j, j]) / span(j)                      # noqa: E731
-        if worst is not None:
-            a, b, r = worst
-            pairs.append((names[a], names[b], r))
-            drop = a if doubt(a) >= doubt(b) else b
-        else:
-            multiple = _multiple_correlation(corr)
-            over = [j for j in range(len(names)) if multiple[j] > multiple_limit]
-            if not over:
-                break
-            drop = max(over, key=doubt)
-            partners = [names[j] for j in np.argsort(-np.abs(corr[drop]))
-                        if j != drop and abs(corr[drop, j]) > 0.5][:3] or ["the others"]
-            pairs.append((names[drop], "+".join(partners), float(multiple[drop])))
-        fixed.append(names.pop(drop))
-        x0 = np.delete(res.x, drop)          # the refit starts where the last fit ended
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
-    dev = dict(zip(names, res.x))
-    unit = apply_deviations(base, dev)
+    fitter = _Fitter(base, targets, progress)
+    sel = select_identifiable(fitter, free, correlation_limit=correlation_limit,
+                              multiple_limit=multiple_limit)
+    res, names = sel["res"], sel["names"]
+    unit = apply_deviations(base, dict(zip(names, res.x)))
     # the fit of each trace against its own noise floor
     fits = []
     ratios: dict[str, float] = {}
@@ -418,21 +467,15 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
             + f" (a healthy unit fits below {fit_limit:g}x); diagnose it (emaphm diagnose) "
             "before using it as a reference, or check that the traces are of this unit and "
             "its parameters (--params)")
-    estimates = {}
-    for n, v, s in zip(names, res.x, se):
-        tot = math.hypot(float(s), DISCREPANCY.get(n, 0.0))
-        estimates[n] = {"value": float(v), "se": tot, "lo95": float(v - 1.96 * tot),
-                        "hi95": float(v + 1.96 * tot), "unit": PARAMETERS[n][2],
-                        "se_stat": float(s)}
+    est = estimates(names, res.x, sel["cov"])
     calib = Calibration(date=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                         sources=tuple(sources),
-                        estimates=tuple((n, e["value"], e["se"]) for n, e in estimates.items()),
-                        fixed=tuple(fixed))
-    return CalibrationResult(params=replace(unit, calibration=calib), estimates=estimates,
-                             fixed=tuple(fixed), correlated=tuple(pairs), weak=tuple(weak),
-                             fit_ratio=ratios,
-                             evaluations=count[0], elapsed_s=elapsed,
-                             fits=tuple(fits))
+                        estimates=tuple((n, e["value"], e["se"]) for n, e in est.items()),
+                        fixed=tuple(sel["fixed"]))
+    return CalibrationResult(params=replace(unit, calibration=calib), estimates=est,
+                             fixed=tuple(sel["fixed"]), correlated=tuple(sel["pairs"]),
+                             weak=tuple(sel["weak"]), fit_ratio=ratios,
+                             evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits))
 
 
 def _multiple_correlation(corr: np.ndarray) -> np.ndarray:

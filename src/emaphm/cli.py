@@ -170,6 +170,7 @@ def _unit_options(args: argparse.Namespace, params) -> dict[str, Any]:
 def _table(ident, diag) -> str:
     from .faults import K_LABELS, K_NAMES
     from .search import nuisance_text
+    from .verdict import NOISELESS_NOTE
 
     lines = [f"{'k':4s} {'component':26s} {'identified':>10s}"
              + (f" {'true':>8s}" if ident.k_true is not None else "")]
@@ -190,11 +191,14 @@ def _table(ident, diag) -> str:
                  + (f"; plus {ident.compile_s:.1f} s compiling or loading the model kernels "
                     "(first run of a process)" if ident.compile_s > 0.5 else ""))
     ratio = ident.fitness / ident.noise_floor if ident.noise_floor > 0 else float("nan")
+    noiseless = NOISELESS_NOTE in diag.notes
+    if noiseless:
+        ratio = float("nan")              # a floor of round-off: no ratio worth printing
     lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}"
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
                  + (f" ({ident.restarts} restart{'s' if ident.restarts > 1 else ''})"
                     if ident.restarts else ""))
-    if ident.suspect and diag.unexplained is None:
+    if ident.suspect and diag.unexplained is None and not noiseless:
         lines.append("WARNING: the best fit stays far above the trace's noise floor: the search may "
                      "have missed the actuator's k, or the model parameters (--params) do not "
                      "describe this actuator; treat the verdict with care")
@@ -216,13 +220,15 @@ def _table(ident, diag) -> str:
             lines.append("  components above their thresholds, not a diagnosis: "
                          + ", ".join(f"{f.mode}{' ' + f.phase if f.phase else ''}"
                                      for f in diag.suspected))
+    for note in diag.notes:
+        lines.append(f"  note: {note}")
     return "\n".join(lines)
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from .mismatch import diagnose_identification
     from .faults import scenario
-    from .identify import ALGORITHM_NAMES, identify
+    from .identify import ALGORITHM_NAMES, IdentificationConfig, identify
+    from .verdict import diagnose_identification
     from .plots import plot_identification
     from .progress import SearchProgress, compile_notice
     from .simulate import DEFAULT_SENSORS, simulate
@@ -266,9 +272,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                      "cap it with --budget (e.g. --budget 60s)")
     try:
         with compile_notice(progress, enabled=not args.quiet):
-            ident = identify(trace, args.algorithm, seed=args.seed, budget=budget, params=params,
-                             callback=progress, fault_model=args.fault_model,
-                             nuisance=_nuisance_option(args.nuisance))
+            config = IdentificationConfig(algorithm=args.algorithm, budget=budget,
+                                          fault_model=args.fault_model,
+                                          nuisance=_nuisance_option(args.nuisance))
+            ident = identify(trace, config, seed=args.seed, params=params, callback=progress)
     except TraceError as exc:            # found in the trace's content: name the file
         raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
     finally:
@@ -301,7 +308,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     plot = plot_path(args.plot)
     params = _load_params(args.params)
     traces = [_trace_file(name) for name in args.traces]
-    progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs",
+    progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs",
                              header=f"calibrating on {len(traces)} healthy trace(s) around "
                                     f"{args.params or 'the default preset'}")
     if not args.quiet:

@@ -1,7 +1,7 @@
-"""From an identified fault vector to a health verdict (fault detection and identification).
+"""From an identified fault vector to the faults it names (fault detection and identification).
 
 A component of ``k`` raises a fault when it leaves its healthy value by more
-than its detection threshold. The thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`)
+than its detection threshold (:func:`read_faults`). The thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`)
 were set on reference-*plant* traces -- physics the monitoring model lacks
 (Stribeck friction, a compliant backlash contact, PWM ripple, leakage), realistic
 sensor noise -- of healthy and faulty units on tuning seeds
@@ -14,14 +14,10 @@ is the widest; all stay well below the paper's low fault magnitude (0.25).
 (Before the monitoring model had the compliant backlash contact, the plant's
 contact read as up to 0.11 of backlash and that threshold was 0.143.)
 
-The verdict is ``healthy``, ``faulty`` or ``unexplained``: a fit that the
-misfit test (:func:`emaphm.fitness.misfit_p_value`) finds too far above what the
-model reaches on actuators it describes, or a balanced change on all three
-phases (a calibration mismatch), is not read as faults. Nor, on data-sheet
-parameters, is a fault that the *mismatch check* explains away
-(:mod:`emaphm.mismatch`): the fit with the unit's likeliest deviations from its
-data sheet (winding resistance, magnet flux, an unreported constant load)
-searched beside k does not name it.
+:func:`diagnose` applies to the faults read the rules that make the verdict ``healthy``,
+``faulty`` or ``unexplained`` given the statistics of an identification (the misfit
+test on its fit ratio, balanced phases, the mismatch check's refit); the tests that
+produce those statistics for an identification are in :mod:`emaphm.verdict`.
 """
 
 from __future__ import annotations
@@ -36,11 +32,12 @@ from .faults import (K_NOMINAL, as_k, backlash_scale, check_fault_model, eccentr
                      friction_scale, gain_scale, shorted_fraction)
 from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
 from .params import ActuatorParams, siemens_1fk7060
+from .search import nuisance_text
 
 __all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fault", "Diagnosis",
-           "MismatchFit",
-           "Unexplained", "diagnose", "FAULT_MODES", "VERDICTS", "MISFIT_LOG_MEAN",
-           "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit", "fit_ratio_of"]
+           "MismatchFit", "Unexplained", "diagnose", "read_faults", "FAULT_MODES", "VERDICTS",
+           "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P", "misfit_p_value", "misfit_limit",
+           "fit_ratio_of"]
 
 VERDICTS = ("healthy", "faulty", "unexplained")
 
@@ -139,7 +136,9 @@ class Diagnosis:
     ``verdict`` is ``"healthy"``, ``"faulty"`` (``faults`` names them) or
     ``"unexplained"`` (``unexplained`` says why; ``faults`` is then empty, and the
     components above their thresholds are kept in ``suspected``). ``mismatch``: the
-    mismatch check's fit, where one was made (data-sheet parameters and a fault read).
+    mismatch check's fit, where one was made (data-sheet parameters and a fault read);
+    ``notes``: what the verdict could not test, in words (e.g. a trace without
+    measurement noise, on which the misfit test is not made).
     """
 
     k: np.ndarray
@@ -149,6 +148,7 @@ class Diagnosis:
     unexplained: Unexplained | None = None
     suspected: tuple[Fault, ...] = ()
     mismatch: MismatchFit | None = None
+    notes: tuple[str, ...] = ()
 
     @property
     def verdict(self) -> str:
@@ -170,7 +170,8 @@ class Diagnosis:
                 "unexplained": None if self.unexplained is None else asdict(self.unexplained),
                 "suspected": [asdict(f) for f in self.suspected],
                 "thresholds": asdict(self.thresholds), "fault_model": self.fault_model,
-                "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict()}
+                "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict(),
+                "notes": list(self.notes)}
 
     def summary(self) -> str:
         if self.unexplained is not None:
@@ -188,29 +189,41 @@ def fit_ratio_of(ident: Any) -> float | None:
 
 
 def diagnose(k, *, thresholds: Thresholds | None = None,
-             params: ActuatorParams | None = None, fault_model: str = "paper",
+             params: ActuatorParams | None = None, fault_model: str | None = None,
              fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
              mismatch: MismatchFit | None = None) -> Diagnosis:
-    """Read the faults out of an identified ``k``.
+    """The verdict on an identified ``k``: its faults (:func:`emaphm.diagnosis.read_faults`)
+    and the rules that make it ``healthy``, ``faulty`` or ``unexplained``.
 
     ``params`` (the healthy actuator, default preset) turns the components into
-    physical values for the readings; ``fault_model`` says what k3..k5 mean
-    (and picks the default thresholds, :data:`THRESHOLDS_BY_FAULT_MODEL`).
+    physical values for the readings; ``fault_model`` says what k3..k5 mean (an
+    identification's own: :meth:`emaphm.problem.IdentificationProblem.diagnose`) and
+    picks the default thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`). Give it: without
+    it a k is read under ``"paper"`` for one more release, with a DeprecationWarning,
+    then under ``"physical"`` like every bare k in emaphm (``simulate --k``, a bench
+    trace).
     ``fit_ratio`` (the identification's Eq. 4 over the trace's noise floor), when
     given, is tested: a fit whose probability under the fit ratios of explained
     actuators (:func:`misfit_p_value`) is below ``misfit_p`` makes the verdict
     ``unexplained``, as does a balanced short circuit on all three phases.
-    ``mismatch`` (the mismatch check's fit, :func:`emaphm.mismatch.mismatch_fit`),
+    ``mismatch`` (the mismatch check's fit, :func:`emaphm.verdict.mismatch_fit`),
     when given, keeps only the faults it names too; when it names none of them, the
     verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
     data sheet explains the reading as well as a fault does.
     """
     k = as_k(k)
+    if fault_model is None:
+        import warnings
+
+        warnings.warn("diagnose(k) without fault_model reads k3..k5 as the paper's turn "
+                      "removal; give fault_model='physical' or 'paper' (the default becomes "
+                      "'physical' in the next release)", DeprecationWarning, stacklevel=2)
+        fault_model = "paper"
     check_fault_model(fault_model)
     if thresholds is None:
         thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
     p = params if params is not None else siemens_1fk7060()
-    faults = _read_faults(k, thresholds, p, fault_model)
+    faults = read_faults(k, thresholds, p, fault_model)
     unexplained = None
     if fit_ratio is not None:
         pv = misfit_p_value(float(fit_ratio))
@@ -230,7 +243,7 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
             "current sensor gain between the unit and its parameters, not three simultaneous "
             "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
     if unexplained is None and mismatch is not None and faults:
-        named = {(f.mode, f.phase) for f in _read_faults(as_k(mismatch.k), thresholds, p,
+        named = {(f.mode, f.phase) for f in read_faults(as_k(mismatch.k), thresholds, p,
                                                           fault_model)}
         kept = [f for f in faults if (f.mode, f.phase) in named]
         if kept:
@@ -249,8 +262,6 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
 def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
     read = ", ".join(f"{f.mode.replace('_', ' ')}" + (f" (phase {f.phase})" if f.phase else "")
                      + f" ({f.component} {f.k:.3f})" for f in faults)
-    from .search import nuisance_text   # local: keeps this module free of the search stack
-
     devs = [nuisance_text(n, v) for n, v in mismatch.nuisance.items()]
     return (f"the reading of {read} on data-sheet parameters is explained as well by how this "
             f"unit may differ from its data sheet ({', '.join(devs)}: that fit names no such "
@@ -258,7 +269,7 @@ def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
             "--params to tell a small fault from the unit's own tolerances")
 
 
-def _read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
+def read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
                  fault_model: str) -> list[Fault]:
     """The components of ``k`` past their thresholds, as faults with physical readings."""
     tr, ctl = p.transmission, p.controller
@@ -297,3 +308,4 @@ def _read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
                             f"proportional gain {100 * (g - 1):+.0f}% (Kp {ctl.Kp * g:.1f} 1/s "
                             f"instead of {ctl.Kp:.1f})"))
     return faults
+

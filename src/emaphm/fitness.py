@@ -18,8 +18,7 @@ amplitude for balanced currents).
 from __future__ import annotations
 
 import math
-import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -240,28 +239,19 @@ def equivalent_current(i_abc: np.ndarray) -> np.ndarray:
     return np.hypot(i_al, i_be)
 
 
-@dataclass
-class _Stats:
-    calls: int = 0
-    evaluations: int = 0
-    kernel_s: float = 0.0
-    diverged: int = 0
-
-
 @dataclass(frozen=True)
 class Eq4Objective:
     """Eq. 4 between the monitoring model and measured currents, for a population.
 
-    Build it with :meth:`from_trace`. Calling it with ``K`` (n_pop, 8) returns
-    the fitness (n_pop,). ``stats`` counts calls, evaluations, diverged
-    candidates and the seconds spent in the model kernel.
+    Build it with :meth:`from_trace`. Calling it with ``K`` (n_pop, 8 + nuisance)
+    returns the fitness (n_pop,); it holds no state that a call changes (what a search
+    evaluated is counted by the search, :class:`emaphm.problem.SearchView`).
     """
 
     model: MonitoringModel
     target: np.ndarray            # (n, 3) measured currents on the model grid, or (n, 1)
     weights: np.ndarray           # same shape
     mode: Literal["phases", "equivalent"] = "phases"
-    stats: _Stats = field(default_factory=_Stats, compare=False)
     noise_sigma: np.ndarray | None = None   # (3,) or (1,) A, white noise of the measured currents
 
     @classmethod
@@ -327,32 +317,19 @@ class Eq4Objective:
         flattened: (n_pop, n * 3) (or (n_pop, n) in ``"equivalent"`` mode), so that a row's
         sum of squares is its Eq. 4 fitness. A diverged candidate's row is ``inf``."""
         K = np.atleast_2d(np.asarray(K, dtype=float))
-        t0 = time.perf_counter()
         pop = self.model.simulate_population(K)
         i = equivalent_current(pop.i_abc)[..., None] if self.mode == "equivalent" else pop.i_abc
         R = (np.sqrt(self.weights)[None] * (i - self.target[None])).reshape(K.shape[0], -1)
         R[pop.status == STATUS_DIVERGED] = np.inf
-        self._count(t0, pop.status)
         return R
 
     def __call__(self, K: np.ndarray) -> np.ndarray:
         K = np.atleast_2d(np.asarray(K, dtype=float))
-        t0 = time.perf_counter()
         if self.mode == "phases":
-            f, status = self.model.weighted_sse(K, self.target, self.weights)
-        else:
-            pop = self.model.simulate_population(K)
-            d = equivalent_current(pop.i_abc) - self.target[None, :, 0]
-            f = np.sum(self.weights[None, :, 0] * d * d, axis=1)
-            status = pop.status
-            f[status == STATUS_DIVERGED] = np.inf
-        self._count(t0, status)
+            f, _ = self.model.weighted_sse(K, self.target, self.weights)
+            return f
+        pop = self.model.simulate_population(K)
+        d = equivalent_current(pop.i_abc) - self.target[None, :, 0]
+        f = np.sum(self.weights[None, :, 0] * d * d, axis=1)
+        f[pop.status == STATUS_DIVERGED] = np.inf
         return f
-
-    def _count(self, t0: float, status: np.ndarray) -> None:
-        """Book one call started at ``t0`` of ``status.size`` candidates into :attr:`stats`."""
-        s = self.stats
-        s.kernel_s += time.perf_counter() - t0
-        s.calls += 1
-        s.evaluations += status.size
-        s.diverged += int(np.count_nonzero(status == STATUS_DIVERGED))

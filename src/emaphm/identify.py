@@ -1,69 +1,83 @@
 """Fault identification: the ``k`` whose monitoring-model currents best match a trace.
 
-:func:`identify` wires the problem layer (:class:`emaphm.fitness.Eq4Objective`,
-the box ``[0, 1]^8``) to an optimizer of :mod:`emaphm.optim` and returns an
-:class:`Identification` (results as data; plots and reports only read it).
+:func:`minimize` runs a solver (:mod:`emaphm.optim.solvers`) on an
+:class:`~emaphm.problem.IdentificationProblem` and returns an :class:`Identification`
+(results as data; plots and reports only read it), as pymoo's
+``minimize(problem, algorithm, termination, seed)``. :func:`identify` is the thin front
+that builds the problem from a trace and the solver from a name, an optimizer, a
+function or an :class:`IdentificationConfig`.
+
+A solver is any object of the protocol of :mod:`emaphm.optim.solvers`; by name
+(:func:`make_solver`): ``"lsq"`` (the default, :data:`DEFAULT_ALGORITHM`: multistart
+least squares on the weighted residuals of Eq. 4), the paper's ``"pso"``, ``"de"``,
+``"gwo"`` and the baselines ``"scipy-de"``, ``"cmaes"`` (each an ask/tell optimizer
+polished and restarted, :class:`emaphm.optim.solvers.Metaheuristic`). A user's own
+optimizer plugs in without touching emaphm: an object with the ask/tell protocol of
+:class:`emaphm.optim.Optimizer`, or a plain function ``f(objective, bounds, rng) -> x``
+(``docs/python-api.md``).
 """
 
 from __future__ import annotations
 
-import dataclasses
-import hashlib
-import itertools
 import json
 import re
-import threading
 import time
-from collections import OrderedDict
-from dataclasses import dataclass, field
-from typing import Any, Callable
+import warnings
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from .faults import K_NAMES, K_NOMINAL, N_K, as_k, error_pct
-from .fitness import Eq4Objective, _Stats, misfit_limit
-from .optim import (ALL_ALGORITHMS, MaxEvaluations, OptimizeResult, Termination, WallClock,
-                    get_optimizer, minimize)
-from .optim.local import compass_search
+from .faults import K_NAMES, error_pct
+from .fitness import FITNESS_MODES, misfit_limit
+from .optim import (ALL_ALGORITHMS, MaxEvaluations, Optimizer, Termination, WallClock,
+                    get_optimizer)
+from .optim.lsq import MultistartLeastSquares
+from .optim.solvers import CallableSolver, Metaheuristic, Solver, optimizer_options, solve
 from .params import ActuatorParams
-from .search import (default_search, from_k, least_squares_search, nuisance_from_unit,
-                     nuisance_to_unit, to_k)
-from .traces import Trace, TraceError, validate
+from .problem import (DRIFT_NUISANCE, LSQ_SAMPLE, LSQ_SINGLE_FAULT_LEVELS,
+                      IdentificationProblem, default_nuisance, single_fault_points)
+from .seeds import check_seed
+from .search import NUISANCE_RANGE, SEARCH_SPACES, default_search, least_squares_search
+from .traces import Trace, TraceError
 
-__all__ = ["Identification", "identify", "parse_budget", "DEFAULT_ALGORITHM", "ALGORITHM_NAMES"]
+__all__ = ["Identification", "IdentificationConfig", "identify", "minimize", "make_solver",
+           "parse_budget", "DEFAULT_ALGORITHM", "ALGORITHM_NAMES", "DRIFT_NUISANCE",
+           "default_nuisance", "single_fault_points", "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS",
+           "LSQ_RESTARTS", "LSQ_ACCEPT_P", "DEFAULT_RESTARTS", "POLISH_MAX_EVALUATIONS",
+           "POLISH_LSQ_EVALUATIONS"]
 
 
-#: The default identification pipeline (:func:`identify` without an algorithm): a
-#: space-filling sample and batched least squares from the best starts, see
-#: :func:`identify`. The paper's metaheuristics stay selectable by name.
+#: The default identification solver: multistart least squares (:func:`make_solver`).
+#: The paper's metaheuristics stay selectable by name.
 DEFAULT_ALGORITHM = "lsq"
 
-#: Every name :func:`identify` accepts: the default pipeline and the optimizers of
+#: Every name :func:`make_solver` accepts: the default pipeline and the optimizers of
 #: :data:`emaphm.optim.ALL_ALGORITHMS`.
 ALGORITHM_NAMES: tuple[str, ...] = (DEFAULT_ALGORITHM, *sorted(ALL_ALGORITHMS))
 
-#: Space-filling sample (scrambled Sobol points, seeded) from which the least-squares
-#: pipeline takes its further starts, when the nominal start is not good enough.
-LSQ_SAMPLE = 64
-
-#: Single-fault points added to that sample: each fault component alone at these values,
-#: the others healthy (:func:`single_fault_points`). Most actuators have one fault, and
-#: a fault whose effect is flat at the healthy value cannot be reached from it by a
-#: gradient: a backlash below the gear train's deflection under load (k2 up to about
-#: 0.05 with the preset's contact) hardly changes the currents, so least squares from
-#: the healthy k stays at k2 = 0 when the truth is 0.25.
-LSQ_SINGLE_FAULT_LEVELS = (0.1, 0.25, 0.5, 0.75)
-
-#: Further starts the least-squares pipeline may take after the first (without a budget).
+#: Further starts the least-squares solver may take after the first.
 LSQ_RESTARTS = 3
 
-#: A start of the least-squares pipeline is good enough when its fit ratio is below the
-#: misfit test's limit at this false-alarm probability (about 2.1): most fits of an
+#: A start of the least-squares solver is good enough when its fit ratio is below the
+#: misfit test's limit at this false-alarm probability (about 2.0): most fits of an
 #: actuator the model describes are (a stricter limit than the verdict's, so that a fit
 #: the verdict would accept is still checked against another start). Below the
 #: suspect limit, further starts stop once one improves the fit by less than 1 % (the
 #: model, not the basin, then limits it); above it every start is tried.
 LSQ_ACCEPT_P = 0.01
+
+#: Restarts of a metaheuristic after a fit far above the noise floor, when no budget is
+#: given and it is polished.
+DEFAULT_RESTARTS = 2
+
+#: Largest number of evaluations a metaheuristic's polish may spend (it usually needs
+#: 150-500).
+POLISH_MAX_EVALUATIONS = 2000
+
+#: The least-squares solver's polish: a finer, shorter compass search (it starts at a
+#: least-squares minimum, step 0.02 of the box down to 1e-3).
+POLISH_LSQ_EVALUATIONS = 200
 
 #: Largest budget accepted: 1e8 evaluations (hours of CPU) or a day of wall clock; a larger
 #: one is a typo, not a plan.
@@ -128,7 +142,9 @@ class Identification:
     (its metaheuristic and polish evaluations) are those of the best run.
     ``fault_model``: the mapping of k3..k5 the monitoring model used; ``compile_s``: the
     time to compile (or load from the disk cache) the model kernels and run the model
-    once, before ``elapsed_s`` starts.
+    once, before ``elapsed_s`` starts; ``config``: the settings it was made with (None for
+    a solver that has no name in :data:`ALGORITHM_NAMES`: a user's own); ``noise_sigma``:
+    the trace's white-noise level [A rms], the largest of the phases'.
     """
 
     algorithm: str
@@ -158,6 +174,8 @@ class Identification:
     fault_model: str = "paper"
     compile_s: float = 0.0
     nuisance: dict = field(default_factory=dict)
+    config: "IdentificationConfig | None" = field(default=None, compare=False, repr=False)
+    noise_sigma: float = float("nan")
 
     @property
     def evals_per_s(self) -> float:
@@ -188,6 +206,7 @@ class Identification:
             "restarts": int(self.restarts),
             "run_evaluations": int(self.run_evaluations),
             "noise_floor": float(self.noise_floor),
+            "noise_sigma": float(self.noise_sigma),
             "suspect": bool(self.suspect),
             "k_raw": None if self.k_raw is None else [float(x) for x in self.k_raw],
             "fitness_raw": self.fitness_raw,
@@ -199,431 +218,347 @@ class Identification:
         return d
 
 
-#: Nuisance parameters searched with k by default for a calibrated unit: what drifts most
-#: after a calibration (winding resistance and magnet flux, with temperature).
-DRIFT_NUISANCE = ("R", "flux")
 
-def default_nuisance(params: ActuatorParams | None) -> tuple[str, ...]:
-    """The nuisance parameters searched by default: :data:`DRIFT_NUISANCE` for calibrated
-    parameters, none for a data sheet."""
-    return DRIFT_NUISANCE if params is not None and params.calibration.date else ()
+# ----------------------------------------------------------------------------- solvers
 
 
-#: Restarts after a fit far above the noise floor, when no budget is given.
-DEFAULT_RESTARTS = 2
+def make_solver(name: str, *, options: Mapping[str, Any] | None = None, polish: bool = True,
+                restarts: int | None = None, suspect_ratio: float | None = None,
+                budget: bool = False) -> Solver:
+    """The solver registered as ``name`` with emaphm's identification defaults.
 
-#: Largest number of evaluations the polish may spend (it usually needs 150-500).
-POLISH_MAX_EVALUATIONS = 2000
+    ``"lsq"``: :class:`~emaphm.optim.lsq.MultistartLeastSquares` from a warm start (if
+    the problem has one) and the healthy actuator, then, while the fit is above the
+    misfit test's limit at :data:`LSQ_ACCEPT_P`, from the best points of the problem's
+    seeded sample (at most ``restarts`` further starts, default :data:`LSQ_RESTARTS`),
+    polished (:data:`POLISH_LSQ_EVALUATIONS`). It takes no ``options``.
 
-#: The least-squares pipeline's polish: a finer, shorter compass search (it starts at a
-#: least-squares minimum, step 0.02 of the box down to 1e-3).
-POLISH_LSQ_EVALUATIONS = 200
+    The others: :class:`~emaphm.optim.solvers.Metaheuristic` over the optimizer
+    :func:`emaphm.optim.get_optimizer` builds from ``name`` and ``options``, polished
+    (``polish``, at most :data:`POLISH_MAX_EVALUATIONS`), run again with spawned seeds
+    while the fit exceeds ``suspect_ratio`` times the trace's noise floor: ``restarts``
+    times (default :data:`DEFAULT_RESTARTS` with the polish and no ``budget``, else 0).
 
-
-def _terms(termination: Any) -> list[Any]:
-    if termination is None:
-        return []
-    return list(getattr(termination, "terms", None) or [termination])
-
-
-def _remaining_evaluations(termination: Any, used: int, cap: int) -> int:
-    left = cap
-    for term in _terms(termination):
-        if isinstance(term, MaxEvaluations):
-            left = min(left, term.n - used)
-    return left
-
-
-def _remaining_seconds(termination: Any, used: float) -> float:
-    left = float("inf")
-    for term in _terms(termination):
-        if isinstance(term, WallClock):
-            left = min(left, term.seconds - used)
-    return left
-
-
-def _jsonable(value: Any) -> Any:
-    """Options as plain JSON values (NumPy scalars and arrays included)."""
-    return json.loads(json.dumps(value, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o)))
-
-
-@dataclass(frozen=True)
-class _Run:
-    """One metaheuristic run and its polish, in search-space coordinates."""
-
-    res: OptimizeResult
-    z: np.ndarray
-    fun: float
-    history: np.ndarray
-    polish_evaluations: int
-    polish_s: float
-
-
-def _search(fitness: Callable[[np.ndarray], np.ndarray], optimizer: Any, seed: int,
-            termination: Any, callback: Any, polish: bool, t0: float, n_var: int = 8) -> _Run:
-    box = (np.zeros(n_var), np.ones(n_var))
-    res: OptimizeResult = minimize(fitness, box, optimizer, seed=seed, termination=termination,
-                                   callback=callback)
-    z, fun, history = res.x, float(res.fun), np.asarray(res.history, dtype=float)
-    # the polish is charged to the budget and skipped when a callback stopped the run
-    evals = _remaining_evaluations(termination, res.nfev, POLISH_MAX_EVALUATIONS)
-    seconds = _remaining_seconds(termination, time.perf_counter() - t0)
-    if polish and np.isfinite(fun) and res.reason != "callback" and evals >= 2 * z.size \
-            and seconds > 0:
-        pol = compass_search(fitness, z, box, f0=fun, max_evals=evals, max_seconds=seconds)
-        return _Run(res, pol.x, float(pol.fun), np.concatenate([history, pol.history[1:]]),
-                    pol.nfev, pol.elapsed_s)
-    return _Run(res, z, fun, history, 0, 0.0)
-
-
-#: Objectives :func:`identify` built, kept per thread (least recently used dropped): a
-#: campaign identifies the same trace with several algorithms and seeds.
-OBJECTIVE_CACHE_SIZE = 8
-
-_OBJECTIVES = threading.local()
-
-
-def _trace_digest(trace: Trace) -> bytes:
-    """A digest of the trace's value: every array's bytes and its metadata."""
-    h = hashlib.blake2b(digest_size=20)
-    for a in (trace.t, trace.theta_ref, trace.theta_m, trace.omega_m, trace.i_abc, trace.torque):
-        h.update(b"-" if a is None else np.ascontiguousarray(a).tobytes())
-        h.update(b"|")
-    h.update(json.dumps(trace.meta, sort_keys=True, default=str).encode())
-    return h.digest()
-
-
-def _cached_objective(trace: Trace, params: ActuatorParams | None, n_sub: int, mode: str,
-                      fault_model: str | None, nuisance: tuple[str, ...]) -> tuple[Eq4Objective, bool]:
-    """``(objective, warm)``: the objective :func:`identify` builds for ``trace``, from
-    the cache (``warm``, its ``stats`` fresh) when it was built before for an equal trace
-    with equal settings.
-
-    Keyed by value (the trace's digest and the frozen parameters), so a hit is the
-    objective a fresh build would give; the trace was validated when it was built, and
-    its model has run (its kernels are compiled).
+    ``suspect_ratio`` (default: the misfit test's limit,
+    :func:`emaphm.fitness.misfit_limit`, the fit ratio an actuator the model describes
+    exceeds with probability :data:`emaphm.fitness.MISFIT_P`) also says when a further
+    least-squares start is worth it. ``budget``: whether a budget caps the search (then
+    the metaheuristics restart by default no more).
     """
-    cache = getattr(_OBJECTIVES, "cache", None)
-    if cache is None:
-        cache = _OBJECTIVES.cache = OrderedDict()
-    key = (_trace_digest(trace), params, n_sub, mode, fault_model, nuisance)
-    hit = cache.get(key)
-    if hit is not None:
-        cache.move_to_end(key)
-        return dataclasses.replace(hit, stats=_Stats()), True
-    validate(trace)
-    objective = Eq4Objective.from_trace(trace, params, n_sub=n_sub, mode=mode,
-                                        fault_model=fault_model, nuisance=nuisance)
-    cache[key] = objective
-    while len(cache) > OBJECTIVE_CACHE_SIZE:
-        cache.popitem(last=False)
-    return objective, False
-
-
-def _restart_seeds(seed: int, n: int) -> list[int]:
-    """Seeds of the restarts, spawned from the identification's seed."""
-    return [int(s.generate_state(1)[0] % 2**31) for s in np.random.SeedSequence([seed, 1]).spawn(n)]
-
-
-def _k_true(trace: Trace) -> np.ndarray | None:
-    k = trace.meta.get("k") if isinstance(trace.meta, dict) else None
-    if k is None:
-        return None
-    try:
-        return as_k(k)
-    except ValueError:
-        return None
-
-
-def single_fault_points() -> np.ndarray:
-    """``(n, 8)``: each fault component (k1..k6, k8) alone at each of
-    :data:`LSQ_SINGLE_FAULT_LEVELS` (k8 that far below and above its healthy 0.5), the
-    others healthy."""
-    rows = []
-    for j in (0, 1, 2, 3, 4, 5, 7):
-        for v in LSQ_SINGLE_FAULT_LEVELS:
-            for x in ((0.5 - v / 2, 0.5 + v / 2) if j == 7 else (v,)):
-                k = K_NOMINAL.copy()
-                k[j] = x
-                rows.append(k)
-    return np.array(rows)
-
-
-def _least_squares(objective: Eq4Objective, full: Callable[[np.ndarray], np.ndarray], search: str,
-                   nu_names: tuple[str, ...], fault_model: str, start: np.ndarray | None, seed: int,
-                   termination: Any, callback: Any, polish: bool, floor: float,
-                   restarts: int, limit: float) -> tuple[_Run, int]:
-    """The default pipeline (see :func:`identify`): ``(run, starts taken)``."""
-    from scipy.stats import qmc
-
-    from .optim.lsq import multistart_least_squares
-
-    n_var = N_K + len(nu_names)
-    ev0 = objective.stats.evaluations
-    nu0 = nuisance_to_unit(np.zeros((1, len(nu_names))), nu_names) if nu_names else np.zeros((1, 0))
-
-    def point(k: np.ndarray, nu_unit: np.ndarray) -> np.ndarray:
-        return np.clip(np.hstack([from_k(k[None, :], search), nu_unit.reshape(1, -1)])[0], 0.0, 1.0)
-
-    max_evals = _remaining_evaluations(termination, 0, np.iinfo(np.int64).max)
-    sampled = [0]                       # the sample's evaluations, charged to the budget
-
-    def starts():
-        if start is not None:
-            yield point(start, nu0)
-        yield point(K_NOMINAL, nu0)
-        # the best of a seeded space-filling sample, drawn in the metaheuristics' space
-        # (short circuits sparse), only when the first starts were not good enough and
-        # the budget leaves room for it and one more start
-        axes = single_fault_points()
-        n_sample = LSQ_SAMPLE + len(axes)
-        if max_evals - objective.stats.evaluations + ev0 < n_sample + n_var + 1:
-            return
-        sampled[0] = n_sample
-        sample_space = default_search(fault_model)
-        Z = qmc.Sobol(n_var, scramble=True, seed=seed).random(LSQ_SAMPLE)
-        K = np.vstack([to_k(Z[:, :N_K], sample_space), axes])
-        Z = np.vstack([Z, np.tile(np.concatenate([np.zeros(N_K), nu0[0]]), (len(axes), 1))])
-        nu = nuisance_from_unit(Z[:, N_K:], nu_names) if nu_names else np.zeros((n_sample, 0))
-        f = objective(np.hstack([K, nu]))
-        for i in np.argsort(f, kind="stable")[:restarts]:
-            if np.isfinite(f[i]):
-                yield point(K[i], Z[i, N_K:])
-
-    max_seconds = _remaining_seconds(termination, 0.0)
-    accept = misfit_limit(LSQ_ACCEPT_P) * floor
-    box = (np.zeros(n_var), np.ones(n_var))
-    res, info = multistart_least_squares(
-        lambda Z: objective.residuals(full(Z)), itertools.islice(starts(), 1 + restarts), box,
-        accept=accept, settle=limit, polish_evals=POLISH_LSQ_EVALUATIONS if polish else 0,
-        max_evals=max_evals, max_seconds=max_seconds, callback=callback,
-        fitness=lambda Z: objective(full(Z)), charged=lambda: sampled[0])
-    raw = OptimizeResult(x=info["x_raw"], fun=info["f_raw"],
-                         nfev=res.nfev - info["polish_evaluations"], nit=res.nit,
-                         history=res.history, reason=res.reason, elapsed_s=res.elapsed_s,
-                         algorithm=DEFAULT_ALGORITHM)
-    return _Run(raw, res.x, float(res.fun), res.history, info["polish_evaluations"],
-                info["polish_s"]), info["starts"]
-
-
-def identify(trace: Trace, algorithm: str = DEFAULT_ALGORITHM, *, seed: int,
-             budget: Any = None, params: ActuatorParams | None = None,
-             options: dict[str, Any] | None = None, n_sub: int = 1, mode: str = "phases",
-             polish: bool = True, search: str | None = None, restarts: int | None = None,
-             suspect_ratio: float | None = None,
-             callback: Callable[[Any], bool | None] | None = None,
-             objective: Eq4Objective | None = None,
-             fault_model: str | None = None,
-             nuisance: tuple[str, ...] | None = None,
-             start: Any = None) -> Identification:
-    """Identify the fault vector of ``trace``.
-
-    Parameters
-    ----------
-    trace
-        Measured (or simulated) trace; validated first.
-    algorithm
-        ``"lsq"`` (default, :data:`DEFAULT_ALGORITHM`): batched least squares on the
-        weighted residuals of Eq. 4 (:func:`emaphm.optim.lsq.multistart_least_squares`,
-        SciPy's trust-region reflective method with a Jacobian from one batched kernel
-        call), started from ``start`` if given, then the healthy actuator, then, while
-        the fit is above the misfit test's limit at :data:`LSQ_ACCEPT_P`, the best
-        points of a seeded space-filling sample of :data:`LSQ_SAMPLE` candidates and
-        the single-fault points (:func:`single_fault_points`; charged to the budget; at
-        most ``restarts`` further starts, default :data:`LSQ_RESTARTS`), searched in
-        :func:`emaphm.search.least_squares_search`; the best refined and polished. It
-        needs some hundreds of model runs where the metaheuristics need thousands. Or
-        ``"pso"``, ``"de"``, ``"gwo"`` (the paper's) or the baselines ``"scipy-de"``,
-        ``"cmaes"`` (:data:`emaphm.optim.ALL_ALGORITHMS`).
-    seed
-        Seed of the optimizer (an int; same seed, same result).
-    budget
-        See :func:`parse_budget`; ``None`` keeps the algorithm's paper defaults.
-    params
-        The healthy actuator the monitoring model assumes (default preset).
-    options
-        Optimizer settings, e.g. ``{"pop_size": 40}``.
-    n_sub, mode
-        Monitoring model sub-steps and fitness mode (:class:`Eq4Objective`).
-    polish
-        Refine the metaheuristic's best point by a batched compass search
-        (:func:`emaphm.optim.local.compass_search`, step 0.05 down to 1e-4,
-        at most 2000 evaluations; about 0.1 s). It is charged to an evaluation
-        or wall-clock budget (and skipped when too little is left), and skipped
-        when a callback stopped the run. False gives the bare algorithm, as in
-        the paper.
-    search
-        Search space (:mod:`emaphm.search`): ``"ecc-xy"`` (Cartesian
-        eccentricity), ``"ecc-xy-sc"`` (and sparse short circuits) or ``"k"`` (the
-        paper's, k itself); default :func:`emaphm.search.default_search` of the
-        fault model (``"ecc-xy-sc"`` under physical, ``"ecc-xy"`` under paper).
-    restarts, suspect_ratio
-        A fit whose Eq. 4 value exceeds ``suspect_ratio`` times the trace's noise
-        floor (:meth:`Eq4Objective.noise_floor`, the value a perfect model would
-        reach) ended in a wrong basin; it is run again, up to ``restarts`` times,
-        with seeds spawned from ``seed``, and the best run is kept. ``None``: 2
-        restarts without an explicit ``budget`` and with the polish, none with a
-        budget (it caps the evaluations) or with ``polish=False`` (the bare
-        algorithm); an explicit number applies in any case, each run with the
-        budget. A result still above the limit is flagged ``suspect``. Default
-        ``suspect_ratio``: the misfit test's limit (:func:`emaphm.fitness.misfit_limit`,
-        the fit ratio an actuator the model describes exceeds with probability
-        :data:`emaphm.fitness.MISFIT_P`), the same test that makes a verdict
-        ``unexplained``.
-    callback
-        Called with the optimizer state after every iteration; True stops.
-    objective
-        A prebuilt objective for this trace (reused across runs to skip setup).
-    fault_model
-        Mapping of k3..k5 in the monitoring model (:data:`emaphm.faults.FAULT_MODELS`);
-        default the trace's own (:func:`emaphm.fitness.trace_fault_model`: its
-        metadata's, ``"physical"`` for a bench trace).
-    start
-        ``"lsq"`` only: a fault vector to start from first (the actuator's previous
-        inspection; a warm start), before the healthy actuator.
-    nuisance
-        Nuisance parameters searched jointly with k (names of
-        :data:`emaphm.search.NUISANCE_RANGE`: ``"R"`` the winding resistance, ``"flux"``
-        the magnet flux, as relative deviations from ``params`` within that range), so
-        that a unit that drifted since its calibration is not read as faulty; reported
-        in ``Identification.nuisance``, never in k. Default: ``("R", "flux")`` when
-        ``params`` carry a calibration (``emaphm calibrate``; the parameters that drift
-        most after it, with the winding's and the magnets' temperature), none for data-sheet
-        parameters (a prebuilt ``objective`` brings its own).
-    """
-    if algorithm not in ALGORITHM_NAMES:
-        raise ValueError(f"unknown algorithm {algorithm!r}; choose one of "
-                         f"{', '.join(ALGORITHM_NAMES)}")
-    if start is not None:
-        if algorithm != DEFAULT_ALGORITHM:
-            raise ValueError(f"start (a warm start) is an option of {DEFAULT_ALGORITHM!r}, not of "
-                             f"{algorithm!r}")
-        start = as_k(start)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    if restarts is None:          # none under a budget (a cap) or for the bare algorithm
-        if algorithm == DEFAULT_ALGORITHM:
-            restarts = LSQ_RESTARTS
-        else:
-            restarts = DEFAULT_RESTARTS if budget is None and polish else 0
-    if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) or restarts < 0:
+    if name not in ALGORITHM_NAMES:
+        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(ALGORITHM_NAMES)}")
+    if restarts is not None and (isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer))
+                                 or restarts < 0):
         raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
     if suspect_ratio is None:
         suspect_ratio = misfit_limit()
     if isinstance(suspect_ratio, bool) or not isinstance(suspect_ratio, (int, float)) \
             or not suspect_ratio > 1:
         raise ValueError(f"suspect_ratio must be a number > 1, got {suspect_ratio!r}")
-    if search is not None:
-        to_k(np.zeros((1, 8)), search)   # validates the search space name
-    termination = parse_budget(budget)
-    if algorithm == DEFAULT_ALGORITHM:
+    if name == DEFAULT_ALGORITHM:
         if options:
-            raise ValueError(f"{DEFAULT_ALGORITHM!r} takes no optimizer options, got {options}")
-        optimizer = None
-    else:
-        optimizer = get_optimizer(algorithm, **(options or {}))
-    if objective is None:
-        if nuisance is None:
-            nuisance = default_nuisance(params)
-        objective, warm = _cached_objective(trace, params, n_sub, mode, fault_model,
-                                            tuple(nuisance))
-    elif nuisance is not None and tuple(nuisance) != objective.model.nuisance:
-        raise ValueError(f"nuisance {tuple(nuisance)} differs from the prebuilt objective's "
-                         f"{objective.model.nuisance}")
-    elif fault_model is not None and fault_model != objective.model.fault_model:
-        raise ValueError(f"fault_model {fault_model!r} differs from the prebuilt objective's "
-                         f"{objective.model.fault_model!r}")
-    else:
-        validate(trace)
-        warm = False
-    fault_model = objective.model.fault_model
-    if search is None:
-        search = (least_squares_search(fault_model) if algorithm == DEFAULT_ALGORITHM
-                  else default_search(fault_model))
-    # compile (or load from the disk cache) the kernels before the clock starts; an
-    # objective that has run already has them
+            raise ValueError(f"{DEFAULT_ALGORITHM!r} takes no optimizer options, got {dict(options)}")
+        return MultistartLeastSquares(
+            restarts=LSQ_RESTARTS if restarts is None else int(restarts),
+            accept_ratio=misfit_limit(LSQ_ACCEPT_P), settle_ratio=float(suspect_ratio),
+            polish_evaluations=POLISH_LSQ_EVALUATIONS if polish else 0)
+    optimizer = get_optimizer(name, **dict(options or {}))
+    return _metaheuristic(optimizer, polish, restarts, suspect_ratio, budget)
+
+
+def _metaheuristic(optimizer: Any, polish: bool, restarts: int | None, suspect_ratio: float,
+                   budget: bool) -> Metaheuristic:
+    if restarts is None:          # none under a budget (a cap) or for the bare algorithm
+        restarts = DEFAULT_RESTARTS if not budget and polish else 0
+    return Metaheuristic(optimizer, polish=bool(polish), restarts=int(restarts),
+                         restart_ratio=float(suspect_ratio),
+                         polish_evaluations=POLISH_MAX_EVALUATIONS)
+
+
+def as_solver(solver: Any, *, budget: bool = False) -> Solver:
+    """A solver from what :func:`identify` accepts: a registered name (:func:`make_solver`),
+    a solver object, an ask/tell optimizer (a :class:`Metaheuristic` with the
+    identification's defaults) or a function ``f(objective, bounds, rng) -> x``
+    (:class:`~emaphm.optim.solvers.CallableSolver`)."""
+    if isinstance(solver, str):
+        return make_solver(solver, budget=budget)
+    if all(hasattr(solver, m) for m in ("init", "step", "result")):
+        return solver
+    if isinstance(solver, Optimizer):
+        return _metaheuristic(solver, True, None, misfit_limit(), budget)
+    if callable(solver):
+        return CallableSolver(solver)
+    raise ValueError(f"solver must be a name ({', '.join(ALGORITHM_NAMES)}), a solver, an ask/tell "
+                     f"optimizer or a function f(objective, bounds, rng) -> x; got "
+                     f"{type(solver).__name__}")
+
+
+def _solver_settings(solver: Solver) -> tuple[dict, bool]:
+    """``(options, polish)`` of a solver as :attr:`Identification.options` reports them."""
+    if isinstance(solver, Metaheuristic):
+        return optimizer_options(solver.optimizer), solver.polish
+    if isinstance(solver, MultistartLeastSquares):
+        return {}, solver.polish_evaluations > 0
+    return {}, False
+
+
+# ----------------------------------------------------------------------------- config
+
+
+@dataclass(frozen=True)
+class IdentificationConfig:
+    """The problem and solver settings of an identification, as one typed value.
+
+    Campaigns, the health history, the spread estimate and the mismatch check carry this
+    instead of identify's keywords; it round-trips to JSON (:meth:`to_dict`,
+    :meth:`from_dict`). What it does not hold is the data: the trace, the parameters and
+    the seed.
+
+    ==============  ========================================================================
+    field           meaning
+    ==============  ========================================================================
+    algorithm       a name of :data:`ALGORITHM_NAMES` (:func:`make_solver`)
+    options         the optimizer's settings (e.g. ``{"pop_size": 30}``); none for ``lsq``
+    budget          evaluations (int), wall-clock seconds (``"30s"``) or None (the
+                    algorithm's own stopping rule), :func:`parse_budget`
+    polish          refine the best point by a compass search
+    restarts        further runs or starts (None: :func:`make_solver`'s default)
+    suspect_ratio   fit ratio of a wrong basin (None: the misfit test's limit)
+    search          search space (None: the solver's own)
+    n_sub, mode     monitoring-model sub-steps and fitness mode
+    fault_model     what k3..k5 mean (None: the trace's own)
+    nuisance        parameters searched beside k (None: by the parameters' calibration)
+    ==============  ========================================================================
+    """
+
+    algorithm: str = DEFAULT_ALGORITHM
+    options: Mapping[str, Any] = field(default_factory=dict, hash=False)
+    budget: Any = None
+    polish: bool = True
+    restarts: int | None = None
+    suspect_ratio: float | None = None
+    search: str | None = None
+    n_sub: int = 1
+    mode: str = "phases"
+    fault_model: str | None = None
+    nuisance: tuple[str, ...] | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "options", dict(_jsonable(dict(self.options or {}))))
+        if self.nuisance is not None:
+            object.__setattr__(self, "nuisance", tuple(self.nuisance))
+            bad = [n for n in self.nuisance if n not in NUISANCE_RANGE]
+            if bad:
+                raise ValueError(f"nuisance: unknown {bad}; choose from {', '.join(NUISANCE_RANGE)}")
+        if self.search is not None and self.search not in SEARCH_SPACES:
+            raise ValueError(f"unknown search space {self.search!r}; choose one of "
+                             f"{', '.join(SEARCH_SPACES)}")
+        if self.mode not in FITNESS_MODES:
+            raise ValueError(f"unknown fitness mode {self.mode!r}; choose one of "
+                             f"{', '.join(FITNESS_MODES)}")
+        if not isinstance(self.polish, bool):
+            raise ValueError(f"polish must be True or False, got {self.polish!r}")
+        parse_budget(self.budget)
+        self.solver()                      # validates the name, the options, the restarts
+
+    def solver(self) -> Solver:
+        """The solver these settings describe (:func:`make_solver`)."""
+        return make_solver(self.algorithm, options=self.options, polish=self.polish,
+                           restarts=self.restarts, suspect_ratio=self.suspect_ratio,
+                           budget=self.budget is not None)
+
+    def termination(self) -> Termination | None:
+        """The budget as a termination (:func:`parse_budget`)."""
+        return parse_budget(self.budget)
+
+    def problem(self, trace: Trace, params: ActuatorParams | None = None, *,
+                start: Any = None) -> IdentificationProblem:
+        """The identification problem of ``trace`` with these settings."""
+        return IdentificationProblem(trace, params=params, fault_model=self.fault_model,
+                                     nuisance=self.nuisance, n_sub=self.n_sub, mode=self.mode,
+                                     search=self.search, start=start)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON values; :meth:`from_dict` of it gives an equal config."""
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d["options"] = dict(self.options)
+        d["nuisance"] = None if self.nuisance is None else list(self.nuisance)
+        d["budget"] = self.budget if self.budget is None or isinstance(self.budget, (int, str)) \
+            else str(self.budget)
+        return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "IdentificationConfig":
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"identification config: unknown key(s) {', '.join(unknown)}; "
+                             f"known: {', '.join(sorted(known))}")
+        return cls(**dict(data))
+
+
+# ----------------------------------------------------------------------------- minimize
+
+
+def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
+             termination: Any = None, *, seed: int,
+             callback: Callable[[Any], bool | None] | None = None) -> Identification:
+    """Identify the fault vector of ``problem`` with ``solver`` (a name, a solver, an
+    optimizer or a function, :func:`as_solver`), stopped by ``termination`` (a
+    :class:`~emaphm.optim.Termination` or a budget, :func:`parse_budget`; None: the
+    solver's own rule). ``seed`` (an int) seeds every random choice; ``callback(state)``
+    is called as the search progresses (True stops it).
+
+    The model kernels are compiled (or loaded from the disk cache) before the clock
+    starts (:attr:`Identification.compile_s`). Raises :class:`~emaphm.traces.TraceError`
+    when every candidate diverged (no k reproduces the trace).
+    """
+    seed = check_seed(seed)
+    budget = termination
+    term = parse_budget(termination)
+    solver = as_solver(solver, budget=term is not None)
+    if problem.start is not None and getattr(solver, "kind", "") != "least_squares":
+        raise ValueError(f"the problem's warm start is used by the least-squares solver, not by "
+                         f"{solver.name!r}; drop start= or identify with 'lsq'")
+    search = problem.search or (least_squares_search(problem.fault_model)
+                                if getattr(solver, "kind", "") == "least_squares"
+                                else default_search(problem.fault_model))
+    view = problem.view(search)
     tc = time.perf_counter()
-    if algorithm == DEFAULT_ALGORITHM:
+    if getattr(solver, "kind", "") == "least_squares":
         import scipy.optimize  # noqa: F401  (imported before the clock, like the kernels)
         import scipy.stats  # noqa: F401
-    if not warm:
-        objective.model.simulate(K_NOMINAL)                         # the scalar kernel
-        objective.model.simulate_population(                         # the SIMD one
-            np.tile(np.concatenate([K_NOMINAL, np.zeros(len(objective.model.nuisance))]), (2, 1)))
+    problem.warm_up()
     compile_s = time.perf_counter() - tc
-    k0 = objective.stats.kernel_s
-    e0 = objective.stats.diverged
-    ev0 = objective.stats.evaluations
     t0 = time.perf_counter()
-
-    nu_names = objective.model.nuisance
-    n_var = N_K + len(nu_names)
-
-    def full(Z: np.ndarray) -> np.ndarray:
-        """Search points -> candidate rows [k, nuisance]."""
-        Z = np.atleast_2d(Z)
-        if not nu_names:
-            return to_k(Z, search)
-        return np.hstack([to_k(Z[:, :N_K], search), nuisance_from_unit(Z[:, N_K:], nu_names)])
-
-    def fitness(Z: np.ndarray) -> np.ndarray:
-        return objective(full(Z))
-
-    def run(run_seed: int) -> _Run:
-        return _search(fitness, optimizer, run_seed, termination, callback, polish, t0, n_var)
-
-    floor = objective.noise_floor()
-    limit = suspect_ratio * floor if floor > 0 else np.inf
-    if algorithm == DEFAULT_ALGORITHM:
-        best, n_starts = _least_squares(objective, full, search, nu_names, fault_model, start,
-                                        int(seed), termination, callback, polish, floor,
-                                        int(restarts), limit)
-        runs = [best]
-    else:
-        best = run(int(seed))
-        runs = [best]
-        # a fit far above the trace's noise floor ended in a wrong basin: run again with
-        # seeds spawned from ``seed`` (unless a callback asked to stop)
-        for run_seed in _restart_seeds(int(seed), int(restarts)):
-            if best.fun <= limit or runs[-1].res.reason == "callback":
-                break
-            runs.append(run(run_seed))
-            if runs[-1].fun < best.fun:
-                best = runs[-1]
-        n_starts = len(runs)
-    z, fit, history, res = best.z, best.fun, best.history, best.res
-    if not np.isfinite(fit):
+    res = solve(view, solver, term, seed=seed, callback=callback)
+    if not np.isfinite(res.fun):
         raise TraceError("no fault vector reproduces this trace: every candidate of the monitoring "
                          "model diverged (infinite fitness); the trace's command or load "
                          "(metadata) or the parameters (--params) do not describe a working "
                          "actuator")
-    k_raw = np.clip(to_k(np.atleast_2d(res.x)[:, :N_K], search)[0], 0.0, 1.0)
-    k = np.clip(to_k(np.atleast_2d(z)[:, :N_K], search)[0], 0.0, 1.0)
-    nu = full(z)[0, N_K:]
+    k_raw, _ = problem.decode(res.x_raw, search)
+    k, nu = problem.decode(res.x, search)
     elapsed = time.perf_counter() - t0
-    pop = objective.model.simulate(k, nu)
-    model_trace = Trace(t=pop.t + float(trace.t[0]), theta_ref=pop.theta_ref, theta_m=pop.theta_m[0],
-                        omega_m=pop.omega_m[0], i_abc=pop.i_abc[0], torque=pop.torque[0],
-                        meta={"model": "monitoring", "k": k.tolist(), "identified_from":
-                              trace.meta.get("scenario") or trace.meta.get("source")})
-    k_true = _k_true(trace)
+    k_true = problem.k_true
+    floor = problem.noise_floor
+    ratio = getattr(solver, "settle_ratio", getattr(solver, "restart_ratio", misfit_limit()))
+    options, polish = _solver_settings(solver)
     return Identification(
-        algorithm=algorithm, seed=int(seed), k=k, fitness=fit,
-        evaluations=(objective.stats.evaluations - ev0 if algorithm == DEFAULT_ALGORITHM
-                     else sum(r.res.nfev + r.polish_evaluations for r in runs)),
-        iterations=int(res.nit), elapsed_s=elapsed, kernel_s=objective.stats.kernel_s - k0,
-        history=history, reason=res.reason, model_trace=model_trace,
+        algorithm=solver.name, seed=seed, k=k, fitness=float(res.fun), evaluations=int(res.nfev),
+        iterations=int(res.nit), elapsed_s=elapsed, kernel_s=view.kernel_s,
+        history=res.history, reason=res.reason, model_trace=problem.model_trace(k, nu),
         k_true=k_true, error_pct=None if k_true is None else float(error_pct(k, k_true)),
-        diverged=objective.stats.diverged - e0,
-        fault_model=fault_model, compile_s=compile_s,
-        nuisance={n: float(v) for n, v in zip(nu_names, nu)},
-        options={**(options or {}), "n_sub": n_sub, "mode": mode, "polish": bool(polish),
-                 "search": search,
+        diverged=view.diverged, fault_model=problem.fault_model, compile_s=compile_s,
+        nuisance={n: float(v) for n, v in zip(problem.nuisance, nu)},
+        options={**options, "n_sub": problem.n_sub, "mode": problem.mode,
+                 "polish": bool(polish), "search": search,
                  "budget": None if budget is None else str(budget)},
-        k_raw=k_raw, fitness_raw=float(res.fun),
+        k_raw=k_raw, fitness_raw=float(res.fun_raw),
         error_pct_raw=None if k_true is None else float(error_pct(k_raw, k_true)),
-        polish_evaluations=best.polish_evaluations, polish_s=sum(r.polish_s for r in runs),
-        restarts=n_starts - 1, noise_floor=floor, suspect=bool(fit > limit),
-        run_evaluations=int(best.res.nfev) + best.polish_evaluations,
-    )
+        polish_evaluations=int(res.polish_evaluations), polish_s=float(res.polish_s),
+        restarts=int(res.starts) - 1, noise_floor=floor,
+        suspect=bool(res.fun > (ratio * floor if floor > 0 else np.inf)),
+        run_evaluations=int(res.run_evaluations), noise_sigma=problem.noise_sigma,
+        config=_config_of(problem, solver, budget, options, polish))
 
+
+def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, options: dict,
+               polish: bool) -> IdentificationConfig | None:
+    """The settings an identification was made with (None for a solver without a name of
+    :data:`ALGORITHM_NAMES`); the restarts and the suspect ratio as resolved."""
+    if solver.name not in ALGORITHM_NAMES:
+        return None
+    return IdentificationConfig(
+        algorithm=solver.name, options=options,
+        budget=budget if budget is None or isinstance(budget, (int, np.integer, str)) else None,
+        polish=polish, restarts=getattr(solver, "restarts", None),
+        suspect_ratio=getattr(solver, "settle_ratio", getattr(solver, "restart_ratio", None)),
+        search=problem.search, n_sub=problem.n_sub, mode=problem.mode,
+        fault_model=problem.fault_model, nuisance=problem.nuisance)
+
+
+# ----------------------------------------------------------------------------- identify
+
+#: identify()'s keywords of version 0.3, kept for one release with a warning, and where
+#: each belongs now: the problem's or the solver's settings (IdentificationConfig).
+_OLD_KEYWORDS = {"budget": "termination", "options": "config", "polish": "config",
+                 "restarts": "config", "suspect_ratio": "config", "n_sub": "problem",
+                 "mode": "problem", "search": "problem", "nuisance": "problem",
+                 "start": "problem", "objective": "problem"}
+
+
+def identify(trace: Trace | IdentificationProblem, solver: Any = DEFAULT_ALGORITHM, *,
+             seed: int, termination: Any = None, params: ActuatorParams | None = None,
+             fault_model: str | None = None,
+             callback: Callable[[Any], bool | None] | None = None,
+             **deprecated: Any) -> Identification:
+    """Identify the fault vector of a trace (see :func:`minimize`).
+
+    ``trace`` is a :class:`~emaphm.traces.Trace` (its problem is built with ``params``,
+    default the preset, and ``fault_model``, default the trace's own) or an
+    :class:`~emaphm.problem.IdentificationProblem` (for the nuisance, a warm start, the
+    fitness mode, ...). ``solver`` is a name of :data:`ALGORITHM_NAMES` (default
+    ``"lsq"``), an :class:`IdentificationConfig` (its settings, the budget included), a
+    solver, an ask/tell optimizer or a function ``f(objective, bounds, rng) -> x``.
+    ``termination``: a budget or a termination (:func:`parse_budget`). ``seed``: an int,
+    required (same seed, same result). ``callback(state)``: progress; True stops.
+
+    The keywords of version 0.3 (``budget``, ``options``, ``polish``, ``restarts``,
+    ``suspect_ratio``, ``n_sub``, ``mode``, ``search``, ``nuisance``, ``start``,
+    ``objective``) still work for one release, with a DeprecationWarning.
+    """
+    seed = check_seed(seed)
+    if isinstance(trace, IdentificationProblem) and (params is not None or fault_model is not None):
+        raise ValueError("give params and fault_model to the IdentificationProblem, not beside it")
+    if deprecated:
+        trace, solver, termination = _old_keywords(trace, solver, termination, params,
+                                                   fault_model, deprecated)
+    if isinstance(solver, IdentificationConfig):
+        termination = solver.budget if termination is None else termination
+        problem = (trace if isinstance(trace, IdentificationProblem) else
+                   replace(solver, fault_model=fault_model or solver.fault_model).problem(trace, params))
+        solver = solver.solver()
+    else:
+        solver = as_solver(solver, budget=parse_budget(termination) is not None)
+        problem = (trace if isinstance(trace, IdentificationProblem) else
+                   IdentificationProblem(trace, params=params, fault_model=fault_model))
+    return minimize(problem, solver, termination, seed=seed, callback=callback)
+
+
+def _old_keywords(trace: Any, solver: Any, termination: Any, params: Any, fault_model: Any,
+                  kw: dict[str, Any]) -> tuple[Any, Any, Any]:
+    """identify()'s 0.3 keywords as a problem, a config and a termination (with a warning)."""
+    unknown = sorted(set(kw) - set(_OLD_KEYWORDS))
+    if unknown:
+        raise TypeError(f"identify() got unexpected keyword argument(s) {', '.join(unknown)}")
+    warnings.warn(f"identify({', '.join(f'{k}=' for k in kw)}) is the 0.3 spelling, kept for one "
+                  "release: give the problem's settings (nuisance, start, mode, n_sub, search, "
+                  "objective) in an IdentificationProblem, the solver's (options, polish, "
+                  "restarts, suspect_ratio) in an IdentificationConfig or a solver, and the "
+                  "budget as termination=", DeprecationWarning, stacklevel=3)
+    if "budget" in kw:
+        if termination is not None:
+            raise ValueError("give termination= or the old budget=, not both")
+        termination = kw["budget"]
+    if any(_OLD_KEYWORDS[k] == "config" for k in kw):
+        if not isinstance(solver, str):
+            raise ValueError("options, polish, restarts and suspect_ratio go with a solver name")
+        if "start" in kw and solver != DEFAULT_ALGORITHM and kw.get("start") is not None:
+            raise ValueError(f"start (a warm start) is an option of {DEFAULT_ALGORITHM!r}, not of "
+                             f"{solver!r}")
+        solver = make_solver(solver, options=kw.get("options"), polish=kw.get("polish", True),
+                             restarts=kw.get("restarts"), suspect_ratio=kw.get("suspect_ratio"),
+                             budget=parse_budget(termination) is not None)
+    elif kw.get("start") is not None and isinstance(solver, str) and solver != DEFAULT_ALGORITHM:
+        raise ValueError(f"start (a warm start) is an option of {DEFAULT_ALGORITHM!r}, not of "
+                         f"{solver!r}")
+    problem_kw = {k: v for k, v in kw.items() if _OLD_KEYWORDS[k] == "problem"}
+    if problem_kw and not isinstance(trace, IdentificationProblem):
+        trace = IdentificationProblem(trace, params=params, fault_model=fault_model, **problem_kw)
+    return trace, solver, termination
+
+
+def _jsonable(value: Any) -> Any:
+    """Options as plain JSON values (NumPy scalars and arrays included)."""
+    return json.loads(json.dumps(value, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o)))

@@ -209,20 +209,20 @@ class SearchProgress(StatusLine):
 
 
 class CountProgress(StatusLine):
-    """Steps of a loop: ``update(i, n)`` shows ``"{what} i/n, elapsed"`` (``n`` None: no
-    total)."""
+    """Steps of a loop: ``update(i, n)`` shows ``"{what} i/n{noun}, elapsed"`` (``n``
+    None: no total; ``noun`` what is counted, e.g. ``" model runs"``)."""
 
     def __init__(self, what: str, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True, unit: str = "", header: str | None = None) -> None:
+                 enabled: bool = True, noun: str = "", header: str | None = None) -> None:
         super().__init__(stream, tty=tty, enabled=enabled, header=header)
         self.what = what
-        self.unit = unit
+        self.noun = noun
         self.t0 = time.perf_counter()
 
     def update(self, i: int, n: int | None = None) -> None:
         self.begin()
         count = f"{i}/{n}" if n else f"{i}"
-        self.show(f"{self.what} {count}{self.unit}, {clock(time.perf_counter() - self.t0)}",
+        self.show(f"{self.what} {count}{self.noun}, {clock(time.perf_counter() - self.t0)}",
                   force=bool(n) and i >= n)
 
 

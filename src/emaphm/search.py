@@ -39,8 +39,8 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search",
-           "least_squares_search", "nuisance_to_unit",
-           "NUISANCE_RANGE", "nuisance_from_unit", "nuisance_text"]
+           "least_squares_search", "nuisance_to_box",
+           "NUISANCE_RANGE", "nuisance_from_box", "nuisance_text"]
 
 SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc", "ecc-xy-sq")
 
@@ -68,17 +68,17 @@ def nuisance_text(name: str, value: float) -> str:
     return f"{word} {100 * value:+.1f} %"
 
 
-def nuisance_from_unit(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Nuisance values (n_pop, m) from their unit-box coordinates (n_pop, m)."""
+def nuisance_from_box(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Nuisance values (n_pop, m) from their coordinates in the search box [0, 1]^m."""
     Z = np.atleast_2d(np.asarray(Z, dtype=float))
     lo = np.array([NUISANCE_RANGE[n][0] for n in names])
     hi = np.array([NUISANCE_RANGE[n][1] for n in names])
     return lo + Z * (hi - lo)
 
 
-def nuisance_to_unit(values: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Unit-box coordinates (n_pop, m) of nuisance values (n_pop, m): the inverse of
-    :func:`nuisance_from_unit`."""
+def nuisance_to_box(values: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Search-box coordinates (n_pop, m) of nuisance values (n_pop, m): the inverse of
+    :func:`nuisance_from_box`."""
     values = np.atleast_2d(np.asarray(values, dtype=float))
     lo = np.array([NUISANCE_RANGE[n][0] for n in names])
     hi = np.array([NUISANCE_RANGE[n][1] for n in names])
@@ -135,3 +135,16 @@ def from_k(K: np.ndarray, space: str = "ecc-xy") -> np.ndarray:
     elif space == "ecc-xy-sq":
         Z[:, 2:5] = np.clip(K[:, 2:5] / SC_SEARCH_MAX, 0.0, 1.0) ** 2
     return Z
+
+
+def __getattr__(name: str):
+    """The names of version 0.3 (``nuisance_from_unit``, ``nuisance_to_unit``), kept for one
+    release with a warning: "unit" means a production unit in emaphm."""
+    renamed = {"nuisance_from_unit": nuisance_from_box, "nuisance_to_unit": nuisance_to_box}
+    if name in renamed:
+        import warnings
+
+        warnings.warn(f"emaphm.search.{name} is renamed {renamed[name].__name__}; the old name "
+                      "goes in the next release", DeprecationWarning, stacklevel=2)
+        return renamed[name]
+    raise AttributeError(f"module 'emaphm.search' has no attribute {name!r}")

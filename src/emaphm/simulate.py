@@ -14,6 +14,7 @@ from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
 from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
+from .seeds import check_seed
 from .traces import Trace
 from .units import Tolerances, Unit, draw_unit, nominal_unit
 
@@ -83,28 +84,12 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     if fault_model is None:
         fault_model = scenario_fault_model(scenario) if scenario is not None else "physical"
     check_fault_model(fault_model)
-    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
-        raise ValueError(f"seed must be an integer, got {seed!r}")
+    if seed is not None:
+        check_seed(seed)
     params = params if params is not None else siemens_1fk7060()
     profile = profile if profile is not None else diagnostic()
     sensors = sensors if sensors is not None else Sensors()
-    if unit is not None and unit_seed is not None:
-        raise ValueError("give either a unit or a unit_seed, not both")
-    if unit_seed is not None:
-        unit = draw_unit(params, unit_seed, tolerances) if tolerances is not None \
-            else draw_unit(params, unit_seed)
-    elif tolerances is not None:
-        raise ValueError("tolerances need a unit_seed to draw a unit with")
-    if unreported_load is not None:
-        if not (isinstance(unreported_load, (int, float)) and np.isfinite(unreported_load)
-                and abs(unreported_load) <= 5.0):
-            raise ValueError(f"unreported_load [N m] must be a number within +-5, "
-                             f"got {unreported_load!r}")
-        unit = replace(unit or nominal_unit(params), load=float(unreported_load))
-    if unit is not None and model != "reference":
-        raise ValueError("a production unit (unit, unit_seed, unreported_load) is what the "
-                         "plant plays: use model='reference'")
-    unit = unit if unit is not None else nominal_unit(params)
+    unit = _production_unit(params, model, unit, unit_seed, tolerances, unreported_load)
     if model == "reference":
         sensors = sensors.with_unit(unit.sensor_gain, unit.sensor_offset)
         out = run_reference(unit.params, kk, profile, fault_model=fault_model,
@@ -141,3 +126,26 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         meta["unit"] = unit.to_dict()
     return Trace(t=t_rec, theta_ref=rec["theta_ref"], theta_m=rec["theta_m"], omega_m=rec["omega_m"],
                  i_abc=rec["i_abc"], torque=rec["torque"], meta=meta)
+
+
+def _production_unit(params: ActuatorParams, model: str, unit: Unit | None, unit_seed: int | None,
+                     tolerances: Tolerances | None, unreported_load: float | None) -> Unit:
+    """The production unit the plant plays: given, drawn from ``unit_seed`` within
+    ``tolerances``, or the nominal one; with ``unreported_load`` [N m] as its load."""
+    if unit is not None and unit_seed is not None:
+        raise ValueError("give either a unit or a unit_seed, not both")
+    if unit_seed is not None:
+        unit = draw_unit(params, unit_seed, tolerances) if tolerances is not None \
+            else draw_unit(params, unit_seed)
+    elif tolerances is not None:
+        raise ValueError("tolerances need a unit_seed to draw a unit with")
+    if unreported_load is not None:
+        if not (isinstance(unreported_load, (int, float)) and np.isfinite(unreported_load)
+                and abs(unreported_load) <= 5.0):
+            raise ValueError(f"unreported_load [N m] must be a number within +-5, "
+                             f"got {unreported_load!r}")
+        unit = replace(unit or nominal_unit(params), load=float(unreported_load))
+    if unit is not None and model != "reference":
+        raise ValueError("a production unit (unit, unit_seed, unreported_load) is what the "
+                         "plant plays: use model='reference'")
+    return unit if unit is not None else nominal_unit(params)

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from .params import ActuatorParams, read_toml
+from .seeds import check_seed
 
 __all__ = ["Tolerances", "DEFAULT_TOLERANCES", "Unit", "draw_unit", "nominal_unit",
            "load_tolerances"]
@@ -145,8 +146,7 @@ def nominal_unit(params: ActuatorParams, *, load: float = 0.0) -> Unit:
 def draw_unit(params: ActuatorParams, seed: int,
               tolerances: Tolerances = DEFAULT_TOLERANCES) -> Unit:
     """Draw a unit around the data sheet ``params`` (healthy; faults are applied later)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"unit seed must be a non-negative integer, got {seed!r}")
+    check_seed(seed, "unit seed")
     rng = np.random.default_rng([0x756E6974, int(seed)])    # "unit": apart from noise seeds
     t = tolerances
 

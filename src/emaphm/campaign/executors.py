@@ -95,12 +95,12 @@ def warm_up() -> float:
     global _WARM
     if _WARM:
         return 0.0
-    from emaphm.identify import identify
+    from emaphm.identify import IdentificationConfig, identify
     from emaphm.simulate import simulate
 
     t0 = time.perf_counter()
     trace = simulate(scenario="nominal")
-    identify(trace, "pso", seed=0, budget=1, polish=True, options={"pop_size": 4})
+    identify(trace, IdentificationConfig("pso", options={"pop_size": 4}, budget=1), seed=0)
     _WARM = True
     return time.perf_counter() - t0
 

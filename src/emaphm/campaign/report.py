@@ -384,32 +384,53 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
     ok = [r for r in results if r.ok]
     cells = summarize(ok)
     algos = [a.label for a in spec.algorithms]
+    md = _header_section(spec, algos, counts, meta, versions, store_name)
     written: list[Path] = []
+    for section in (_paper_tables_section, _per_scenario_section, _comparison_section):
+        lines, paths = section(spec, cells, algos, out)
+        md += lines
+        written += paths
+    written.append(_runs_csv(results, out))
+    if figures and ok:
+        lines, paths = _figures_section(spec, cells, ok, out)
+        md += lines
+        written += paths
+    report = atomic_write_text(out / "report.md", "\n".join(md))
+    written.insert(0, report)
+    return written
+
+
+def _header_section(spec: Any, algos: list[str], counts: dict, meta: dict, versions: list[str],
+                    store_name: str) -> list[str]:
+    """The report's title and what the campaign ran."""
+    return [
+        f"# Campaign report: {spec.name}\n",
+        f"Store `{store_name}`: {counts['ok']} of {counts['total']} runs stored"
+        + (f", {counts['failed']} failed (run the campaign again to retry them)" if counts["failed"] else "")
+        + f"; emaphm {', '.join(versions)}; created {meta.get('created_at', '?')}.\n",
+        f"{len(spec.scenarios)} scenarios x {len(algos)} algorithms ({', '.join(algo_label(a) for a in algos)}) "
+        f"x {spec.runs} run{'s' if spec.runs != 1 else ''}; master seed {spec.master_seed}; sensor noise {spec.noise * 1e3:g} mA rms, "
+        f"ADC step {spec.adc_lsb * 1e3:.3g} mA; budget "
+        f"{'each algorithm’s default stopping rule' if spec.budget in (None, 'default') else spec.budget}; "
+        f"polish {'on' if spec.polish else 'off'}; search space {spec.search}.\n",
+        "Time is the wall time of one identification on one core (the metaheuristic"
+        + (" and the polish" if spec.polish else "") + "), mean over the runs; error is Eq. 9; "
+        "PC is Eq. 10 over the algorithms of the table. Per fault mode, time and error are the "
+        "mean of the two magnitudes; the total row takes the mean time and mean error over "
+        "the modes and computes PC from them, as the paper does. The best PC of a row is in bold.\n"]
+
+
+def _paper_tables_section(spec: Any, cells: dict, algos: list[str],
+                          out: Path) -> tuple[list[str], list[Path]]:
+    """The layouts of the paper's Tables 3 (single faults) and 4 (multiple faults)."""
     md: list[str] = []
-
-    md.append(f"# Campaign report: {spec.name}\n")
-    md.append(f"Store `{store_name}`: {counts['ok']} of {counts['total']} runs stored"
-              + (f", {counts['failed']} failed (run the campaign again to retry them)" if counts["failed"] else "")
-              + f"; emaphm {', '.join(versions)}; created {meta.get('created_at', '?')}.\n")
-    md.append(f"{len(spec.scenarios)} scenarios x {len(algos)} algorithms ({', '.join(algo_label(a) for a in algos)}) "
-              f"x {spec.runs} run{'s' if spec.runs != 1 else ''}; master seed {spec.master_seed}; sensor noise {spec.noise * 1e3:g} mA rms, "
-              f"ADC step {spec.adc_lsb * 1e3:.3g} mA; budget "
-              f"{'each algorithm’s default stopping rule' if spec.budget in (None, 'default') else spec.budget}; "
-              f"polish {'on' if spec.polish else 'off'}; search space {spec.search}.\n")
-    md.append("Time is the wall time of one identification on one core (the metaheuristic"
-              + (" and the polish" if spec.polish else "") + "), mean over the runs; error is Eq. 9; "
-              "PC is Eq. 10 over the algorithms of the table. Per fault mode, time and error are the "
-              "mean of the two magnitudes; the total row takes the mean time and mean error over "
-              "the modes and computes PC from them, as the paper does. The best PC of a row is in bold.\n")
-
-    # Table 3
+    written: list[Path] = []
     rows3 = single_fault_table(spec, cells)
     if rows3:
         header, mdrows, raw = _wide(rows3, algos)
         md.append("## Single faults (layout of the paper's Table 3)\n")
         md.append(_md_table(header, mdrows) + "\n")
         written.append(_csv(out / "table3_single_faults.csv", _wide_csv_header(algos), raw))
-    # Table 4
     rows4 = multiple_fault_table(spec, cells)
     if rows4:
         header, mdrows, raw = _wide(rows4, algos)
@@ -419,11 +440,15 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
             md.append(f"`{r['mode']}`: k_true = {list(ks[r['mode']])}\n")
         md.append(_md_table(header, mdrows) + "\n")
         written.append(_csv(out / "table4_multiple_faults.csv", _wide_csv_header(algos), raw))
+    return md, written
 
-    # per scenario
-    md.append("## Per scenario and magnitude\n")
-    md.append("Mean ± standard deviation over the runs; min-max in the CSV. "
-              "`err. raw` is the metaheuristic's own error, before the polish.\n")
+
+def _per_scenario_section(spec: Any, cells: dict, algos: list[str],
+                          out: Path) -> tuple[list[str], list[Path]]:
+    """Per scenario and algorithm: runs, time and error (mean, std, min, max), PC."""
+    md = ["## Per scenario and magnitude\n",
+          "Mean ± standard deviation over the runs; min-max in the CSV. "
+          "`err. raw` is the metaheuristic's own error, before the polish.\n"]
     head = ["Scenario", "Algorithm", "runs", "time (s)", "err. (%)", "err. raw (%)", "evaluations", "PC (%)"]
     mdrows, raw = [], []
     for s in spec.scenarios:
@@ -447,32 +472,39 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
                         c.stat("error_raw"), c.stat("fitness", "median"), c.stat("evaluations"),
                         c.stat("iterations"), pc_of[a]])
     md.append(_md_table(head, mdrows) + "\n")
-    written.append(_csv(out / "per_scenario.csv",
-                        ["scenario", "mode", "magnitude", "algorithm", "runs", "time_mean_s", "time_std_s",
-                         "time_min_s", "time_max_s", "error_mean_pct", "error_std_pct", "error_min_pct",
-                         "error_max_pct", "error_raw_mean_pct", "fitness_median", "evaluations_mean",
-                         "iterations_mean", "pc_pct"], raw))
+    path = _csv(out / "per_scenario.csv",
+                ["scenario", "mode", "magnitude", "algorithm", "runs", "time_mean_s", "time_std_s",
+                 "time_min_s", "time_max_s", "error_mean_pct", "error_std_pct", "error_min_pct",
+                 "error_max_pct", "error_raw_mean_pct", "fitness_median", "evaluations_mean",
+                 "iterations_mean", "pc_pct"], raw)
+    return md, [path]
 
-    # paper comparison
+
+def _comparison_section(spec: Any, cells: dict, algos: list[str],
+                        out: Path) -> tuple[list[str], list[Path]]:
+    """Our totals beside the paper's Table 3 totals."""
     comp = paper_comparison(spec, cells)
-    if comp:
-        md.append("## Our totals beside the paper's\n")
-        md.append("The paper's Table 3 totals (Simulink models on an Intel i7-8750H). Its printed GWO "
-                  "total time, 2530.7 s, is a typo: the mean of its column is 2630.7 s, the only value "
-                  "that reproduces its PCs; 2630.7 is used. Our PC here is over DE, PSO and GWO only, "
-                  "like the paper's (n/a unless all three ran); `speed-up` is the paper's time over "
-                  "ours (different models, solver and machine: it compares orders of magnitude, "
-                  "not implementations).\n")
-        head = ["Algorithm", "time (s)", "paper time (s)", "speed-up", "err. (%)", "paper err. (%)",
-                "PC (%)", "paper PC (%)"]
-        mdrows = [[algo_label(c["algorithm"]), _f(c["time_s"]), _f(c["paper_time_s"], 1),
-                   f"{c['speedup']:.0f}x" if np.isfinite(c["speedup"]) else "n/a",
-                   _f(c["error_pct"]), _f(c["paper_error_pct"]), _f(c["pc_pct"]), _f(c["paper_pc_pct"])]
-                  for c in comp]
-        md.append(_md_table(head, mdrows) + "\n")
-        written.append(_csv(out / "paper_comparison.csv", list(comp[0]), [list(c.values()) for c in comp]))
+    if not comp:
+        return [], []
+    md = ["## Our totals beside the paper's\n",
+          "The paper's Table 3 totals (Simulink models on an Intel i7-8750H). Its printed GWO "
+          "total time, 2530.7 s, is a typo: the mean of its column is 2630.7 s, the only value "
+          "that reproduces its PCs; 2630.7 is used. Our PC here is over DE, PSO and GWO only, "
+          "like the paper's (n/a unless all three ran); `speed-up` is the paper's time over "
+          "ours (different models, solver and machine: it compares orders of magnitude, "
+          "not implementations).\n"]
+    head = ["Algorithm", "time (s)", "paper time (s)", "speed-up", "err. (%)", "paper err. (%)",
+            "PC (%)", "paper PC (%)"]
+    mdrows = [[algo_label(c["algorithm"]), _f(c["time_s"]), _f(c["paper_time_s"], 1),
+               f"{c['speedup']:.0f}x" if np.isfinite(c["speedup"]) else "n/a",
+               _f(c["error_pct"]), _f(c["paper_error_pct"]), _f(c["pc_pct"]), _f(c["paper_pc_pct"])]
+              for c in comp]
+    md.append(_md_table(head, mdrows) + "\n")
+    return md, [_csv(out / "paper_comparison.csv", list(comp[0]), [list(c.values()) for c in comp])]
 
-    # runs
+
+def _runs_csv(results: Sequence[RunResult], out: Path) -> Path:
+    """Every stored run, one row each (failures included)."""
     run_head = ["run_key", "scenario", "algorithm", "optimizer", "run", "seed", "noise_seed", "spawn_key",
                 "status", "error_pct", "error_pct_raw", "fitness", "fitness_raw", "evaluations",
                 "iterations", "polish_evaluations", "elapsed_s", "simulate_s", "reason", "k", "k_true",
@@ -481,33 +513,34 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
     def _vec(v):
         return "" if v is None else " ".join(repr(float(x)) for x in v)
 
-    written.append(_csv(out / "runs.csv", run_head, [
+    return _csv(out / "runs.csv", run_head, [
         [r.key, r.scenario, r.algorithm, r.optimizer, r.run, r.seed, r.noise_seed,
          " ".join(str(x) for x in r.spawn_key), r.status, r.error_pct, r.error_pct_raw, r.fitness,
          r.fitness_raw, r.evaluations, r.iterations, r.polish_evaluations, r.elapsed_s, r.simulate_s,
          r.reason, _vec(r.k), _vec(r.k_true), r.version,
-         (r.error_text or "").splitlines()[-1] if r.error_text else ""] for r in results]))
+         (r.error_text or "").splitlines()[-1] if r.error_text else ""] for r in results])
 
-    if figures and ok:
-        from emaphm.plots import save_figure
 
-        md.append("## Figures\n")
-        p = save_figure(bar_figure(spec, cells, "error", "identification error, Eq. 9 [%]",
-                                   "Mean error per scenario and algorithm; whiskers: min to max "
-                                   "over the runs (cf. the paper's Fig. 7)"), out / "fig7_error.png")
+def _figures_section(spec: Any, cells: dict, ok: list[RunResult],
+                     out: Path) -> tuple[list[str], list[Path]]:
+    """The paper's Figures 7 and 8 and the convergence curves."""
+    from emaphm.plots import save_figure
+
+    md = ["## Figures\n"]
+    written = []
+    p = save_figure(bar_figure(spec, cells, "error", "identification error, Eq. 9 [%]",
+                               "Mean error per scenario and algorithm; whiskers: min to max "
+                               "over the runs (cf. the paper's Fig. 7)"), out / "fig7_error.png")
+    written.append(p)
+    md.append(f"![error per scenario]({p.name})\n")
+    p = save_figure(bar_figure(spec, cells, "time", "identification time [s]",
+                               "Mean time per scenario and algorithm; whiskers: min to max "
+                               "over the runs (cf. the paper's Fig. 8)"), out / "fig8_time.png")
+    written.append(p)
+    md.append(f"![time per scenario]({p.name})\n")
+    conv = convergence_figure(spec, ok)
+    if conv is not None:
+        p = save_figure(conv, out / "convergence.png")
         written.append(p)
-        md.append(f"![error per scenario]({p.name})\n")
-        p = save_figure(bar_figure(spec, cells, "time", "identification time [s]",
-                                   "Mean time per scenario and algorithm; whiskers: min to max "
-                                   "over the runs (cf. the paper's Fig. 8)"), out / "fig8_time.png")
-        written.append(p)
-        md.append(f"![time per scenario]({p.name})\n")
-        conv = convergence_figure(spec, ok)
-        if conv is not None:
-            p = save_figure(conv, out / "convergence.png")
-            written.append(p)
-            md.append(f"![convergence]({p.name})\n")
-
-    report = atomic_write_text(out / "report.md", "\n".join(md))
-    written.insert(0, report)
-    return written
+        md.append(f"![convergence]({p.name})\n")
+    return md, written

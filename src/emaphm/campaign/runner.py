@@ -52,10 +52,7 @@ def execute_run(run: Run) -> RunResult:
                          seed=run.noise_seed,
                          fault_model=run.fault_model).with_meta(scenario=run.scenario)
         simulate_s = time.perf_counter() - t0
-        ident = identify(trace, run.optimizer, seed=run.seed, budget=run.budget, params=params,
-                         options=dict(run.options), n_sub=run.n_sub, mode=run.fitness_mode,
-                         polish=run.polish, search=None if run.search == "auto" else run.search,
-                         fault_model=run.fault_model)
+        ident = identify(trace, run.config, seed=run.seed, params=params)
         return RunResult.from_identification(run, ident, simulate_s)
     except Exception as exc:                    # noqa: BLE001 - a failure is a value
         text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__, limit=-6))

@@ -211,7 +211,10 @@ class Run:
 
     ``key`` is ``"<scenario>/<algorithm label>/<run index>"``, unique in a campaign.
     ``seed`` seeds the optimizer, ``noise_seed`` the sensor noise of the measured trace;
-    ``spawn_key`` is the optimizer seed's path in the master SeedSequence.
+    ``spawn_key`` is the optimizer seed's path in the master SeedSequence. ``config`` holds
+    the identification's problem and solver settings
+    (:class:`emaphm.identify.IdentificationConfig`); ``fault_model`` is the scenario's,
+    with which the trace is simulated (and identified).
     """
 
     key: str
@@ -219,9 +222,7 @@ class Run:
     scenario: str
     k_true: tuple[float, ...]
     algorithm: str              # label
-    optimizer: str              # registry name
-    options: dict = field(hash=False)
-    budget: Any
+    config: Any = field(hash=False)     # emaphm.identify.IdentificationConfig
     run: int
     master_seed: int
     spawn_key: tuple[int, ...]
@@ -229,12 +230,13 @@ class Run:
     noise_seed: int
     noise: float
     adc_lsb: float
-    polish: bool
-    search: str
-    n_sub: int
-    fitness_mode: str
     params: dict | None = field(default=None, hash=False)
     fault_model: str = "paper"
+
+    @property
+    def optimizer(self) -> str:
+        """The registry name of the run's algorithm (``config.algorithm``)."""
+        return self.config.algorithm
 
 
 # ----------------------------------------------------------------------------- spec
@@ -528,6 +530,8 @@ class CampaignSpec:
 
     def runs_list(self) -> list[Run]:
         """Every run, in the order (scenario, algorithm, run index), seeds attached."""
+        from emaphm.identify import IdentificationConfig
+
         S, A, R = len(self.scenarios), len(self.algorithms), self.runs
         noise_root, optim_root = np.random.SeedSequence(self.master_seed).spawn(2)
         noise_seqs = [s.spawn(R) for s in noise_root.spawn(S)]
@@ -536,18 +540,20 @@ class CampaignSpec:
         for i, sc in enumerate(self.scenarios):
             for j, al in enumerate(self.algorithms):
                 budget = al.budget if al.budget is not None else self.budget
+                config = IdentificationConfig(
+                    algorithm=al.name, options=dict(al.options),
+                    budget=None if budget == "default" else budget, polish=self.polish,
+                    search=None if self.search == "auto" else self.search, n_sub=self.n_sub,
+                    mode=self.fitness_mode, fault_model=sc.fault_model)
                 for r in range(R):
                     ss = optim_seqs[i][j][r]
                     out.append(Run(
                         key=f"{sc.name}/{al.label}/{r}", index=len(out), scenario=sc.name,
-                        k_true=sc.k, algorithm=al.label, optimizer=al.name,
-                        options=dict(al.options),
-                        budget=None if budget == "default" else budget, run=r,
+                        k_true=sc.k, algorithm=al.label, config=config, run=r,
                         master_seed=self.master_seed, spawn_key=tuple(int(x) for x in ss.spawn_key),
                         seed=_seed_int(ss), noise_seed=_seed_int(noise_seqs[i][r]),
-                        noise=self.noise, adc_lsb=self.adc_lsb, polish=self.polish,
-                        search=self.search, n_sub=self.n_sub, fitness_mode=self.fitness_mode,
-                        params=self.params, fault_model=sc.fault_model))
+                        noise=self.noise, adc_lsb=self.adc_lsb, params=self.params,
+                        fault_model=sc.fault_model))
         return out
 
     def run(self, key: str) -> Run:

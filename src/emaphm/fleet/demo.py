@@ -175,7 +175,9 @@ def _synthetic(unit: DemoUnit) -> np.ndarray:
 def _record(task: _Task) -> dict:
     """Register one demo actuator and record its inspections (in a worker process for the
     real ones); returns its summary."""
-    from ..prognosis.history import HealthHistory, inspect
+    from ..identify import IdentificationConfig
+    from ..prognosis.history import HealthHistory
+    from ..prognosis.workflow import inspect
 
     unit = task.unit
     t0 = time.process_time()
@@ -197,7 +199,8 @@ def _record(task: _Task) -> dict:
                 verdicts.append(diag.verdict)
         else:
             for t, trace in zip(unit.times, _traces(unit)):
-                ins, _ = inspect(h, unit.id, trace, float(t), seed=unit.seed, budget=task.budget,
+                ins, _ = inspect(h, unit.id, trace, float(t), seed=unit.seed,
+                                 config=IdentificationConfig(budget=task.budget),
                                  source=f"fleet demo: reference plant, {unit.fault}")
                 verdicts.append((ins.diagnosis or {}).get("verdict"))
     return {**unit.to_dict(), "verdicts": verdicts, "cpu_s": time.process_time() - t0}

@@ -1,8 +1,9 @@
 """What the monitoring model's kernels share: the physical range a candidate must stay
 in, the status codes a candidate ends with, and the check that the packed parameters
-fit the kernel's step. :mod:`~emaphm.models.monitoring` (the scalar kernel and the
-model), :mod:`~emaphm.models.monitoring_simd` and :mod:`~emaphm.models.monitoring_numpy`
-import them from here, so no kernel module imports another for them."""
+fit the kernel's step. :mod:`~emaphm.models.step`, :mod:`~emaphm.models.monitoring`
+(the scalar kernel and the model), :mod:`~emaphm.models.monitoring_simd` and the NumPy
+oracle of the tests import them from here, so no kernel module imports another for
+them."""
 
 from __future__ import annotations
 

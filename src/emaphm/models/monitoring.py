@@ -17,14 +17,18 @@ k3..k5 mean: ``"paper"`` scales R, L, c0 of uncoupled phases (no loops);
 ``"physical"`` shorts a fraction of the turns across the nominal fault
 resistance, and a fault-loop current flows. Both run the same update.
 
-Two implementations that tests hold equal to round-off:
+The step of one candidate over one control period exists once, in
+:mod:`emaphm.models.step` (:func:`~emaphm.models.step.control`,
+:func:`~emaphm.models.step.substep`); three drivers run it:
 
-* :func:`simulate_reference` -- a plain single-candidate Python loop, written
-  to be read;
+* :func:`simulate_reference` -- a plain single-candidate Python loop over the step as
+  plain Python, written to be read (the test oracle);
 * :func:`_kernel` -- the Numba kernel, time loop outside and population
-  inside, which returns traces or only the fitness (Eq. 4) against a target;
-  :mod:`emaphm.models.monitoring_simd` is the same kernel laid out so that the
-  population runs in SIMD lanes, the default of :class:`MonitoringModel`.
+  inside, the step inlined, which returns traces or only the fitness (Eq. 4)
+  against a target;
+* :mod:`emaphm.models.monitoring_simd` -- the same step laid out so that the
+  population runs in SIMD lanes, the default of :class:`MonitoringModel`; on the
+  same sines it gives the scalar kernel's bits.
 
 A candidate whose state leaves the physical range (``|i| > I_DIVERGED`` A,
 ``|omega| > OMEGA_DIVERGED`` rad/s, or a non-finite value) is frozen, flagged
@@ -45,18 +49,15 @@ from ..faults import as_k, check_fault_model
 from ..params import ActuatorParams, siemens_1fk7060
 from ..profiles import Profile, diagnostic
 from ._jit import jit
+from . import step
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
                                  STATUS_TRIPPED, _check_step)
-from .controller import control_step
-from .inverter import modulate, overcurrent
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
                      C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, C_T0, P_C_L, P_C_M, P_I_MAX,
                      P_D_C, P_J_L, P_J_M, P_K_C, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
                      P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
                      PopulationPacker)
-from .mechanics import transmission_step
-from .pmsm import (back_emf_coeffs, phase_currents, torque_loops, winding_input,
-                   winding_step)
+from .step import control_inline, healthy_inline, sincos_inline, substep_inline
 
 __all__ = ["MonitoringModel", "PopulationResult", "simulate_reference", "I_DIVERGED",
            "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
@@ -70,9 +71,33 @@ SCALAR_TAIL = 1
 
 
 @jit
+def _trig(thm, ecc, ecc_phase, p, fdlibm):
+    """Sines and cosines of ``p theta_m`` and (with eccentricity) of ``theta_m +
+    ecc_phase``: libm's, or :func:`~emaphm.models.step.sincos` (the SIMD kernel's) when
+    ``fdlibm``."""
+    x = p * thm
+    s_g = c_g = 0.0
+    if fdlibm:
+        s_e, c_e = sincos_inline(x)
+        if ecc != 0.0:
+            s_g, c_g = sincos_inline(thm + ecc_phase)
+    else:
+        s_e = math.sin(x)
+        c_e = math.cos(x)
+        if ecc != 0.0:
+            g = thm + ecc_phase
+            c_g = math.cos(g)
+            s_g = math.sin(g)
+    return s_e, c_e, s_g, c_g
+
+
+@jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
-            out_i, out_theta, out_omega, out_torque, fitness, status):
-    """Simulate ``CP.shape[0]`` candidates over ``theta_ref.shape[0]`` control periods.
+            out_i, out_theta, out_omega, out_torque, fitness, status, fdlibm=False):
+    """Simulate ``CP.shape[0]`` candidates over ``theta_ref.shape[0]`` control periods,
+    one candidate after another, each period :func:`~emaphm.models.step.control` and
+    ``n_sub`` times :func:`~emaphm.models.step.substep` (inlined) on libm's sines
+    (``fdlibm``: on the SIMD kernel's, for the test that they agree bit for bit).
 
     Shapes: ``P (N_P,)``, ``CP (n_pop, N_CP)``, ``theta_ref, T_load (n,)``;
     ``i_target, weights (n, 3)`` or ``(0, 3)`` for no fitness; ``out_i
@@ -94,7 +119,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     V_dc = P[P_V_DC]
     Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
     T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
-    I_trip = P[P_I_TRIP]
+    ctl = (Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, P[P_I_TRIP])
     # state: the winding circuit's z = [y_alpha, y_beta, f_a, f_b, f_c] and i_abc = Q y
     th_m = np.full(n_pop, P[P_THETA0])
     w_m = np.zeros(n_pop)
@@ -105,68 +130,53 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     integ = np.zeros((n_pop, 4))
     for j in range(n_pop):
         fitness[j] = 0.0
-        status[j] = 0
+        status[j] = STATUS_OK
+    ta = tb = tc = wa = wb = wc = 0.0
     for k in range(n):
-        ref = theta_ref[k]
-        T_l = T_load[k]
+        if with_fit:
+            ta, tb, tc = i_target[k, 0], i_target[k, 1], i_target[k, 2]
+            wa, wb, wc = weights[k, 0], weights[k, 1], weights[k, 2]
+        period = (ta, tb, tc, wa, wb, wc, theta_ref[k])
+        mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt)
         for j in range(n_pop):
             if status[j] == STATUS_DIVERGED:
                 continue
             thm, wm, thl, wl = th_m[j], w_m[j], th_l[j], w_l[j]
             ia, ib, ic = I[j, 0], I[j, 1], I[j, 2]
             z0, z1, z2, z3, z4 = Z[j, 0], Z[j, 1], Z[j, 2], Z[j, 3], Z[j, 4]
-            mu_a, mu_b, mu_c = CP[j, C_MU_A], CP[j, C_MU_B], CP[j, C_MU_C]
+            c0 = (CP[j, C_C0_A], CP[j, C_C0_B], CP[j, C_C0_C])
+            mu = (CP[j, C_MU_A], CP[j, C_MU_B], CP[j, C_MU_C])
+            ecc, ecc_phase = CP[j, C_ECC], CP[j, C_ECC_PHASE]
             Phi = CP[j, C_PHI:C_GAMMA]
             Gam = CP[j, C_GAMMA:C_GAMMA + 25]
-            if with_fit:
-                da = ia - i_target[k, 0]
-                db = ib - i_target[k, 1]
-                dc = ic - i_target[k, 2]
-                fitness[j] += weights[k, 0] * da * da + weights[k, 1] * db * db + weights[k, 2] * dc * dc
-            s_e = math.sin(p * thm)
-            c_e = math.cos(p * thm)
-            if status[j] == STATUS_OK and overcurrent(ia, ib, ic, I_trip):
-                status[j] = STATUS_TRIPPED
-            if status[j] == STATUS_TRIPPED:          # active short circuit, controller stopped
-                d_a = d_b = d_c = 0.0
-            else:
-                v_a, v_b, v_c, T_ref, e0, e1, e2, e3 = control_step(
-                    ref, thm, wm, ia, ib, ic, s_e, c_e,
-                    integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3],
-                    CP[j, C_KP], Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i,
-                    V_dc, T_s)
-                integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
-                d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
+            s_e, c_e, s_g, c_g = _trig(thm, ecc, ecc_phase, p, fdlibm)
+            fit, trip, e0, e1, e2, e3, u_a, u_b, u_c = control_inline(
+                thm, wm, ia, ib, ic, s_e, c_e, 1.0 if status[j] == STATUS_TRIPPED else 0.0,
+                fitness[j], integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3], CP[j, C_KP],
+                period, ctl)
             for s in range(n_sub):
                 if s > 0:
-                    s_e = math.sin(p * thm)
-                    c_e = math.cos(p * thm)
-                ca, cb, cc = back_emf_coeffs(thm, s_e, c_e, CP[j, C_C0_A], CP[j, C_C0_B],
-                                             CP[j, C_C0_C], CP[j, C_ECC], CP[j, C_ECC_PHASE])
-                tq0 = torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c)
+                    s_e, c_e, s_g, c_g = _trig(thm, ecc, ecc_phase, p, fdlibm)
                 if s == 0 and store:
                     out_i[j, k, 0] = ia
                     out_i[j, k, 1] = ib
                     out_i[j, k, 2] = ic
                     out_theta[j, k] = thm
                     out_omega[j, k] = wm
-                    out_torque[j, k] = tq0
-                w0, w1, w2, w3, w4 = winding_input(d_a * V_dc, d_b * V_dc, d_c * V_dc,
-                                                   ca * wm, cb * wm, cc * wm, mu_a, mu_b, mu_c)
-                z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4, Phi, Gam)
-                ia, ib, ic = phase_currents(z0, z1)
-                # the mechanics see the step's mean torque (trapezoid): second order in
-                # the fast current transients of the coarse step
-                T_m = 0.5 * (tq0 + torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc,
-                                                mu_a, mu_b, mu_c))
-                thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + CP[j, C_T0],
-                                                     J_m, C_m, CP[j, C_FSJ], CP[j, C_FDJ], J_l, C_l,
-                                                     CP[j, C_BACKLASH], K_c, D_c, dt)
-            if not (abs(ia) < I_DIVERGED and abs(ib) < I_DIVERGED and abs(ic) < I_DIVERGED
-                    and abs(wm) < OMEGA_DIVERGED and abs(thm) < 1e9):
+                thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, tq = substep_inline(
+                    thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g,
+                    u_a, u_b, u_c, c0, ecc, mu, Phi, Gam, CP[j, C_FSJ], CP[j, C_FDJ],
+                    CP[j, C_BACKLASH], CP[j, C_T0], mech)
+                if s == 0 and store:
+                    out_torque[j, k] = tq
+            if not healthy_inline(ia, ib, ic, wm, thm):
                 status[j] = STATUS_DIVERGED
                 fitness[j] = np.inf
                 continue
+            fitness[j] = fit
+            if trip != 0.0:
+                status[j] = STATUS_TRIPPED
+            integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
             th_m[j], w_m[j], th_l[j], w_l[j] = thm, wm, thl, wl
             I[j, 0], I[j, 1], I[j, 2] = ia, ib, ic
             Z[j, 0], Z[j, 1], Z[j, 2], Z[j, 3], Z[j, 4] = z0, z1, z2, z3, z4
@@ -174,66 +184,60 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
 
 def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1,
                        theta0: float = 0.0, fault_model: str = "paper") -> dict[str, np.ndarray]:
-    """Readable single-candidate monitoring model in plain Python (slow).
+    """Readable single-candidate monitoring model in plain Python (slow): the test oracle.
 
-    Uses the same physics functions as the kernel (their pure-Python
-    versions) and the winding step of :func:`emaphm.models.layout.pack` for
-    ``apply_faults(params, k, fault_model)``. Returns a dict of arrays ``t,
-    theta_ref, theta_m, omega_m, i_abc (n, 3), f_abc (n, 3)`` (fault-loop
-    currents) ``, torque`` sampled at the control instants.
+    The step of :mod:`emaphm.models.step` as plain Python (:func:`~emaphm.models.step.control`,
+    :func:`~emaphm.models.step.substep`) on libm's sines, with the winding step of
+    :func:`emaphm.models.layout.pack` for ``apply_faults(params, k, fault_model)``.
+    Returns a dict of arrays ``t, theta_ref, theta_m, omega_m, i_abc (n, 3), f_abc (n,
+    3)`` (fault-loop currents) ``, torque`` sampled at the control instants.
     """
     from ..faults import apply_faults  # local: keep module import light
 
     faulty = apply_faults(params, k, fault_model)
     m, inv, ctl, tr, ld = faulty.motor, faulty.inverter, faulty.controller, faulty.transmission, faulty.load
     T_s = inv.T_s
-    dt = T_s / n_sub
     t = profile.grid(T_s)
     ref = profile.theta_ref(t)
     T_load = profile.load_torque(t)
     P, cp = pack(faulty, theta0, fault_model, n_sub=n_sub)
     Phi = tuple(cp[0, C_PHI:C_GAMMA])                 # row by row
     Gam = tuple(cp[0, C_GAMMA:C_GAMMA + 25])
+    shared = (ctl.Ki, ctl.Kd, ctl.omega_max, ctl.Kp_w, ctl.Ki_w, m.T_max, ctl.k_T, m.I_max,
+              inv.Kp_i, inv.Ki_i, inv.V_dc, T_s, inv.I_trip)
     thm = thl = theta0
     wm = wl = 0.0
     z = (0.0,) * 5                                    # [y_alpha, y_beta, f_a, f_b, f_c]
-    ia = ib = ic = 0.0
+    ia = ib = ic = fit = trip = 0.0
     integ = (0.0, 0.0, 0.0, 0.0)
-    tripped = False
     out = {name: np.zeros(t.size) for name in ("theta_m", "omega_m", "torque")}
     out["i_abc"] = np.zeros((t.size, 3))
     out["f_abc"] = np.zeros((t.size, 3))
     for n in range(t.size):
-        s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
         out["theta_m"][n], out["omega_m"][n] = thm, wm
         out["i_abc"][n] = ia, ib, ic
         out["f_abc"][n] = z[2:]
-        ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
-        out["torque"][n] = torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu)
-        tripped = tripped or overcurrent.py_func(ia, ib, ic, inv.I_trip)
-        if tripped:                     # active short circuit, controller stopped
-            duty = (0.0, 0.0, 0.0)
-        else:
-            v_a, v_b, v_c, _, *integ = control_step.py_func(
-                ref[n], thm, wm, ia, ib, ic, s_e, c_e, *integ,
-                ctl.Kp, ctl.Ki, ctl.Kd, ctl.omega_max, ctl.Kp_w, ctl.Ki_w, m.T_max, ctl.k_T,
-                m.I_max, inv.Kp_i, inv.Ki_i, inv.V_dc, T_s)
-            duty = modulate.py_func(v_a, v_b, v_c, inv.V_dc)
-        for _ in range(n_sub):
-            s_e, c_e = math.sin(m.p * thm), math.cos(m.p * thm)
-            ca, cb, cc = back_emf_coeffs.py_func(thm, s_e, c_e, *m.c0, m.ecc, m.ecc_phase)
-            T_0 = torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu)
-            w = winding_input.py_func(*(d * inv.V_dc for d in duty), ca * wm, cb * wm, cc * wm,
-                                      *m.mu)
-            z = winding_step.py_func(*z, *w, Phi, Gam)
-            ia, ib, ic = phase_currents.py_func(z[0], z[1])
-            T_m = 0.5 * (T_0 + torque_loops.py_func(ia, ib, ic, *z[2:], ca, cb, cc, *m.mu))
-            thm, wm, thl, wl = transmission_step.py_func(
-                thm, wm, thl, wl, T_m, T_load[n] + cp[0, C_T0], m.J_m, m.C_m, tr.FSJ, tr.FDJ,
-                ld.J_l, ld.C_l,
-                tr.backlash, P[P_K_C], P[P_D_C], dt)
+        mech = (T_load[n], m.J_m, m.C_m, ld.J_l, ld.C_l, P[P_K_C], P[P_D_C], T_s / n_sub)
+        fit, trip, *integ, u_a, u_b, u_c = step.control(
+            thm, wm, ia, ib, ic, *_libm_trig(m.p * thm, 0.0)[:2], trip, fit, *integ, ctl.Kp,
+            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, ref[n]), shared)
+        for s in range(n_sub):
+            s_e, c_e = _libm_trig(m.p * thm, 0.0)[:2]
+            s_g, c_g = _libm_trig(thm + m.ecc_phase, m.ecc)[2:]
+            thm, wm, thl, wl, *z, ia, ib, ic, tq = step.substep(
+                thm, wm, thl, wl, *z, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c, m.c0, m.ecc,
+                m.mu, Phi, Gam, tr.FSJ, tr.FDJ, tr.backlash, cp[0, C_T0], mech)
+            if s == 0:
+                out["torque"][n] = tq
     out.update(t=t, theta_ref=ref)
     return out
+
+
+def _libm_trig(x: float, ecc: float) -> tuple[float, float, float, float]:
+    """``(sin x, cos x)`` twice over, the second pair zero without eccentricity (it is
+    not read then), as the scalar kernel's :func:`_trig`."""
+    s, c = math.sin(x), math.cos(x)
+    return s, c, (s if ecc != 0.0 else 0.0), (c if ecc != 0.0 else 0.0)
 
 
 @dataclass(frozen=True)

@@ -1,9 +1,12 @@
 """The monitoring model's kernel laid out for SIMD: the population runs in vector lanes.
 
 :func:`_kernel` here has the signature and the semantics of
-:func:`emaphm.models.monitoring._kernel` (same physics, same operations in the
-same order, same divergence rule) but is written so that LLVM's loop
-vectoriser turns the loop over candidates into packed AVX2/AVX-512 code:
+:func:`emaphm.models.monitoring._kernel` and runs the same step
+(:mod:`emaphm.models.step`: :func:`~emaphm.models.step.control` and
+:func:`~emaphm.models.step.substep`, inlined), on :func:`~emaphm.models.step.sincos`;
+the scalar kernel on the same sines gives the same bits (tested). It is laid out so
+that LLVM's loop vectoriser turns the loop over candidates into packed AVX2/AVX-512
+code:
 
 * **one contiguous scratch array** ``B (n_blk, N_ROWS, LANES)`` holds, per
   block of ``LANES`` candidates, every per-candidate parameter and state
@@ -31,11 +34,11 @@ vectoriser turns the loop over candidates into packed AVX2/AVX-512 code:
   an NRT incref/decref pair, two calls, in the loop body); the 5 x 5 matrices
   ``Phi, Gamma`` of the winding step travel as tuples of 25 scalars, loaded
   row by row at constant offsets;
-* **sine and cosine without libm**: :func:`sincos` is fdlibm's (Cody-Waite
-  reduction by pi/2 in three rounds, ``__kernel_sin``/``__kernel_cos``
+* **sine and cosine without libm**: :func:`~emaphm.models.step.sincos` is fdlibm's
+  (Cody-Waite reduction by pi/2 in three rounds, ``__kernel_sin``/``__kernel_cos``
   polynomials, quadrant by selects): within 1 ulp of the correctly rounded
   result like libm's, so the two differ by an ulp now and then, which is the
-  only difference from the scalar kernel. Past ``|x| > TRIG_LIMIT`` (where the
+  only difference from the scalar kernel on libm. Past ``|x| > TRIG_LIMIT`` (where the
   three-part reduction loses accuracy; only a runaway candidate gets there) a
   scalar fix-up loop recomputes the value with ``math.sin``/``math.cos``.
 
@@ -53,30 +56,17 @@ afresh (Numba's own cache would not see it).
 from __future__ import annotations
 
 import math
-import types
 
 import numpy as np
 
-from numba import njit, types as nbtypes
-from numba.extending import intrinsic
-
-from . import controller as _controller
 from ._jit import cached_njit
-from . import inverter as _inverter
-from . import mechanics as _mechanics
-from . import pmsm as _pmsm
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
                      C_GAMMA, C_KP, C_MU_A, C_PHI, C_T0, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_D_C, P_J_L, P_J_M, P_K_C,
                      P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
                      P_T_MAX, P_T_S, P_THETA0, P_V_DC)
-from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
-                                 STATUS_TRIPPED, _check_step)
-from .pmsm import COS_2PI_3, SIN_2PI_3
-
-#: Compile a function into its caller at Numba IR level. LLVM's inliner leaves the larger
-#: physics functions as calls, and every call returns Numba's status code, whose check is
-#: an early exit from the lane loop; the vectoriser gives up on both.
-inline = njit(nogil=True, inline="always", error_model="numpy")
+from ._monitoring_common import STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, _check_step
+from .step import (TRIG_LIMIT, control_inline, healthy_inline, inline, llvm_select as select,
+                   sincos_inline as sincos, substep_inline)
 
 #: The kernel: IEEE division (``error_model="numpy"``), as a ZeroDivisionError check on
 #: every ``/`` is an early exit from the lane loop that the vectoriser cannot handle. For a
@@ -85,122 +75,10 @@ inline = njit(nogil=True, inline="always", error_model="numpy")
 #: raises ZeroDivisionError.
 kernel_jit = cached_njit(nogil=True, error_model="numpy")
 
-
-@intrinsic
-def select(typingctx, cond, a, b):
-    """``a if cond else b`` as one LLVM ``select`` (both sides evaluated, no branch).
-
-    Numba compiles a conditional expression to a branch; InstCombine then sinks the
-    computation of the taken side into it, and the vectoriser may fail to flatten it.
-    """
-    if not (isinstance(cond, nbtypes.Boolean) and isinstance(a, nbtypes.Float)
-            and a == b):
-        return None
-    sig = a(cond, a, b)
-
-    def codegen(context, builder, signature, args):
-        return builder.select(args[0], args[1], args[2])
-
-    return sig, codegen
-
-
-def _inlined(func, **callees):
-    """``func``'s own code (the scalar physics function, unchanged) compiled for inlining,
-    with the named global callees replaced by their inlined versions."""
-    py = func.py_func
-    g = dict(py.__globals__)
-    g.update(callees)
-    return inline(types.FunctionType(py.__code__, g, py.__name__, py.__defaults__,
-                                     py.__closure__))
-
-
-_sat = _inlined(_controller._sat)
-clarke = _inlined(_inverter.clarke)
-park = _inlined(_inverter.park)
-inv_park = _inlined(_inverter.inv_park)
-inv_clarke = _inlined(_inverter.inv_clarke)
-pi_step = _inlined(_controller.pi_step, _sat=_sat)
-control_step = _inlined(_controller.control_step, _sat=_sat, pi_step=pi_step, clarke=clarke,
-                        park=park, inv_park=inv_park, inv_clarke=inv_clarke)
-modulate = _inlined(_inverter.modulate)
-winding_input = _inlined(_pmsm.winding_input)
-winding_step = _inlined(_pmsm.winding_step)
-phase_currents = _inlined(_pmsm.phase_currents)
-torque_loops = _inlined(_pmsm.torque_loops)
-friction_step = _inlined(_mechanics.friction_step)
-contact_torque = _inlined(_mechanics.contact_torque)
-transmission_step = _inlined(_mechanics.transmission_step, friction_step=friction_step,
-                             contact_torque=contact_torque)
-
-__all__ = ["_kernel", "sincos", "LANES", "TRIG_LIMIT"]
+__all__ = ["_kernel", "LANES", "TRIG_LIMIT"]
 
 #: Candidates per block: one AVX-512 register of doubles (two AVX2 ones).
 LANES = 8
-
-#: |angle| [rad] up to which :func:`sincos` is within 1 ulp (fdlibm's medium range).
-TRIG_LIMIT = 1.0e6
-
-# ---- sine and cosine (fdlibm, branch-free) ----------------------------------------------
-
-_ROUND = 6755399441055744.0          # 1.5 * 2**52: (x + _ROUND) - _ROUND rounds to an integer
-_INVPIO2 = 6.36619772367581382433e-01
-_PIO2_1 = 1.57079632673412561417e+00     # first 33 bits of pi/2
-_PIO2_1T = 6.07710050650619224932e-11
-_PIO2_2 = 6.07710050630396597660e-11     # second 33 bits
-_PIO2_2T = 2.02226624879595063154e-21
-_PIO2_3 = 2.02226624871116645580e-21     # third 33 bits
-_PIO2_3T = 8.47842766036889956997e-32
-_S1 = -1.66666666666666324348e-01
-_S2 = 8.33333333332248946124e-03
-_S3 = -1.98412698298579493134e-04
-_S4 = 2.75573137070700676789e-06
-_S5 = -2.50507602534068634195e-08
-_S6 = 1.58969099521155010221e-10
-_C1 = 4.16666666666666019037e-02
-_C2 = -1.38888888888741095749e-03
-_C3 = 2.48015872894767294178e-05
-_C4 = -2.75573143513906633035e-07
-_C5 = 2.08757232129817482790e-09
-_C6 = -1.13596475577881948265e-11
-
-
-@inline
-def sincos(x):
-    """``(sin x, cos x)`` within 1 ulp for ``|x| <= TRIG_LIMIT``, NaN for non-finite x.
-
-    fdlibm's algorithm without branches: ``x = n pi/2 + (y0 + y1)`` by a
-    three-round Cody-Waite reduction, the kernel polynomials on
-    ``[-pi/4, pi/4]``, and the quadrant ``n mod 4`` picked by selects.
-    """
-    fn = (x * _INVPIO2 + _ROUND) - _ROUND
-    r = x - fn * _PIO2_1
-    t = r
-    w = fn * _PIO2_2
-    r = t - w
-    w = fn * _PIO2_2T - ((t - r) - w)
-    t = r
-    w = fn * _PIO2_3
-    r = t - w
-    w = fn * _PIO2_3T - ((t - r) - w)
-    y0 = r - w
-    y1 = (r - y0) - w
-    z = y0 * y0
-    v = z * y0
-    rs = _S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))
-    ks = y0 - ((z * (0.5 * y1 - v * rs) - y1) - v * _S1)
-    zz = z * z
-    rc = z * (_C1 + z * (_C2 + z * _C3)) + zz * zz * (_C4 + z * (_C5 + z * _C6))
-    hz = 0.5 * z
-    w1 = 1.0 - hz
-    kc = w1 + (((1.0 - w1) - hz) + (z * rc - y0 * y1))
-    # n mod 4 as a float: floor(n/4) = round(n/4 - 3/8) for integer n
-    q = fn - 4.0 * (((fn * 0.25 - 0.375) + _ROUND) - _ROUND)
-    odd = (q == 1.0) | (q == 3.0)
-    a = select(odd, kc, ks)
-    b = select(odd, ks, kc)
-    s = select(q >= 2.0, -a, a)
-    c = select((q == 1.0) | (q == 2.0), -b, b)
-    return s, c
 
 
 # ---- rows of the scratch array B[block, row, lane] -------------------------------------
@@ -226,31 +104,6 @@ N_STATE = 18      # rows R_THM..R_FIT and W_THM..W_FIT
 
 
 @inline
-def _back_emf(s_e, c_e, sg, cg, c0_a, c0_b, c0_c, ecc):
-    """pmsm.back_emf_coeffs with the eccentricity's ``sin/cos(theta_m + ecc_phase)`` given.
-
-    Same operations; the ``ecc == 0`` branch becomes a select.
-    """
-    s_a = s_e
-    s_b = s_e * COS_2PI_3 - c_e * SIN_2PI_3
-    s_c = s_e * COS_2PI_3 + c_e * SIN_2PI_3
-    m_a = 1.0 + ecc * cg
-    m_b = 1.0 + ecc * (cg * COS_2PI_3 - sg * SIN_2PI_3)
-    m_c = 1.0 + ecc * (cg * COS_2PI_3 + sg * SIN_2PI_3)
-    no = ecc == 0.0
-    return (select(no, c0_a * s_a, c0_a * s_a * m_a),
-            select(no, c0_b * s_b, c0_b * s_b * m_b),
-            select(no, c0_c * s_c, c0_c * s_c * m_c))
-
-
-@inline
-def _overcurrent(i_a, i_b, i_c, I_trip):
-    """inverter.overcurrent without the short-circuit ``or`` (a branch the vectoriser's
-    if-conversion did not take once jump threading had duplicated the trip flag's store)."""
-    return (abs(i_a) > I_trip) | (abs(i_b) > I_trip) | (abs(i_c) > I_trip)
-
-
-@inline
 def _trig(thm, ecc_phase, p):
     """Sines and cosines of ``p theta_m`` and ``theta_m + ecc_phase``; True if out of range."""
     x = p * thm
@@ -258,62 +111,6 @@ def _trig(thm, ecc_phase, p):
     s_e, c_e = sincos(x)
     s_g, c_g = sincos(g)
     return s_e, c_e, s_g, c_g, (abs(x) > TRIG_LIMIT) | (abs(g) > TRIG_LIMIT)
-
-
-@inline
-def _control(thm, wm, ia, ib, ic, s_e, c_e, trip, fit, i0, i1, i2, i3, Kp, period, ctl):
-    """Fitness term, overcurrent trip, controller and modulation of one candidate.
-
-    ``period = (ta, tb, tc, wa, wb, wc, ref)``: target currents, weights and position
-    command of this control period; ``ctl``: the shared controller parameters.
-    Returns ``(fit, trip, e0, e1, e2, e3, u_a, u_b, u_c)`` (leg voltages ``u = d V_dc``).
-    """
-    ta, tb, tc, wa, wb, wc, ref = period
-    Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, I_trip = ctl
-    # unconditional (a conditional store stops the vectoriser): without a target the
-    # weights are 0 and so is the term, but for a non-finite current, which diverges
-    da = ia - ta
-    db = ib - tb
-    dc = ic - tc
-    fit = fit + (wa * da * da + wb * db * db + wc * dc * dc)
-    # overcurrent trip: from then on active short circuit (legs at 0 V), controller stopped
-    tripped = (trip != 0.0) | _overcurrent(ia, ib, ic, I_trip)
-    v_a, v_b, v_c, _, e0, e1, e2, e3 = control_step(
-        ref, thm, wm, ia, ib, ic, s_e, c_e, i0, i1, i2, i3,
-        Kp, Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s)
-    d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
-    return (fit, select(tripped, 1.0, 0.0),
-            select(tripped, i0, e0), select(tripped, i1, e1),
-            select(tripped, i2, e2), select(tripped, i3, e3),
-            select(tripped, 0.0, d_a) * V_dc, select(tripped, 0.0, d_b) * V_dc,
-            select(tripped, 0.0, d_c) * V_dc)
-
-
-@inline
-def _plant(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c,
-           c0, ecc, mu, Phi, Gam, FSJ, FDJ, backlash, T_0, mech):
-    """One sub-step of the plant of one candidate: back-EMF, winding circuit, transmission.
-
-    ``c0, mu``: per-phase tuples; ``Phi, Gam``: tuples of the 25 entries of the winding
-    step; ``T_0`` the candidate's load torque beside the profile's ``T_l`` in
-    ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``. Returns ``(theta_m, omega_m, theta_l,
-    omega_l, z0..z4, i_a, i_b, i_c, torque at the start)``. (At most 30 arguments: past
-    that CPython passes them as ``*args``, which Numba's inliner refuses.)
-    """
-    T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt = mech
-    c0_a, c0_b, c0_c = c0
-    mu_a, mu_b, mu_c = mu
-    ca, cb, cc = _back_emf(s_e, c_e, s_g, c_g, c0_a, c0_b, c0_c, ecc)
-    tq = torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c)
-    w0, w1, w2, w3, w4 = winding_input(u_a, u_b, u_c, ca * wm, cb * wm, cc * wm,
-                                       mu_a, mu_b, mu_c)
-    z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4, Phi, Gam)
-    ja, jb, jc = phase_currents(z0, z1)
-    # the mechanics see the step's mean torque (trapezoid), as in the scalar kernel
-    T_m = 0.5 * (tq + torque_loops(ja, jb, jc, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c))
-    thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + T_0, J_m, C_m, FSJ, FDJ,
-                                         J_l, C_l, backlash, K_c, D_c, dt)
-    return thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc, tq
 
 
 # The stages loop over blocks and lanes; the lane loop is the one that vectorises. Its body
@@ -367,7 +164,7 @@ def _plant_stage(B, first, mech):
                    B[b, R_GAM + 17, l], B[b, R_GAM + 18, l], B[b, R_GAM + 19, l],
                    B[b, R_GAM + 20, l], B[b, R_GAM + 21, l], B[b, R_GAM + 22, l],
                    B[b, R_GAM + 23, l], B[b, R_GAM + 24, l])
-            thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, tq = _plant(
+            thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, tq = substep_inline(
                 B[b, W_THM, l], B[b, W_WM, l], B[b, W_THL, l], B[b, W_WL, l],
                 B[b, W_Z0, l], B[b, W_Z1, l], B[b, W_Z2, l], B[b, W_Z3, l], B[b, W_Z4, l],
                 B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
@@ -397,7 +194,7 @@ def _control_stage(B, period, ctl):
     """Fitness term, trip, controller and modulation of every lane (vector)."""
     for b in range(B.shape[0]):
         for l in range(LANES):
-            fit, trip, e0, e1, e2, e3, u_a, u_b, u_c = _control(
+            fit, trip, e0, e1, e2, e3, u_a, u_b, u_c = control_inline(
                 B[b, W_THM, l], B[b, W_WM, l], B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
                 B[b, R_SE, l], B[b, R_CE, l], B[b, W_TRIP, l], B[b, W_FIT, l],
                 B[b, W_E0, l], B[b, W_E1, l], B[b, W_E2, l], B[b, W_E3, l], B[b, R_KP, l],
@@ -419,10 +216,8 @@ def _commit_stage(B):
     good state with infinite fitness (the scalar kernel's ``status``/``continue``)."""
     for b in range(B.shape[0]):
         for l in range(LANES):
-            ok = ((B[b, R_ALIVE, l] != 0.0)
-                  & (abs(B[b, W_IA, l]) < I_DIVERGED) & (abs(B[b, W_IB, l]) < I_DIVERGED)
-                  & (abs(B[b, W_IC, l]) < I_DIVERGED) & (abs(B[b, W_WM, l]) < OMEGA_DIVERGED)
-                  & (abs(B[b, W_THM, l]) < 1e9))
+            ok = (B[b, R_ALIVE, l] != 0.0) & healthy_inline(
+                B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l], B[b, W_WM, l], B[b, W_THM, l])
             for r in range(N_STATE - 1):
                 x = select(ok, B[b, W_THM + r, l], B[b, R_THM + r, l])
                 B[b, R_THM + r, l] = x

@@ -12,7 +12,7 @@ over a box ``(lo, hi)``.
 >>> res.fun < 1e-6, res.nit, res.reason
 (True, 100, 'max_iterations')
 
-See :mod:`emaphm.optim.base` for the conventions (unit-box coordinates, clipping,
+See :mod:`emaphm.optim.base` for the conventions (normalised coordinates, clipping,
 iteration counting) and each algorithm's class docstring for its defaults and sources.
 """
 

@@ -17,7 +17,7 @@ Every optimizer is a frozen configuration object with three pure methods
 
 The first ``ask`` returns the initial population, so the initial evaluation is an
 ordinary ask/tell pair and counts as iteration 1 (``nit`` counts ``tell`` calls).
-``tell`` takes the points it is given as the truth (mapped back to the unit box), so a
+``tell`` takes the points it is given as the truth (mapped back to the normalised box), so a
 caller that evaluates a modified copy of the asked points (rounded, repaired) stays
 consistent as long as it passes what it evaluated. All randomness is drawn in ``init``
 and ``tell`` from the state's own Generator, forked first, so ``ask`` is pure and
@@ -28,7 +28,7 @@ one unpickled from a checkpoint, and reproduces the uninterrupted run exactly.
 
 Coordinates
 -----------
-Populations are held normalised to the unit box ``[0, 1]^n_var`` (as in
+Populations are held normalised to the normalised box ``[0, 1]^n_var`` (as in
 :func:`scipy.optimize.differential_evolution`) and scaled at the boundary by
 :class:`Bounds`. Points that an update moves outside the box are **clipped** (projected
 onto the nearest face), never reflected or re-sampled. Projection is chosen on purpose:
@@ -47,6 +47,8 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..seeds import as_generator
+
 __all__ = [
     "AnyOf",
     "Bounds",
@@ -60,6 +62,7 @@ __all__ = [
     "WallClock",
     "as_bounds",
     "minimize",
+    "remaining",
     "resume",
 ]
 
@@ -71,7 +74,7 @@ Objective = Callable[[np.ndarray], Any]
 
 @dataclass(frozen=True, eq=False)
 class Bounds:
-    """A validated axis-aligned box ``lo <= x <= hi`` and the map to the unit box.
+    """A validated axis-aligned box ``lo <= x <= hi`` and the map to the normalised box.
 
     Build it with :func:`as_bounds`, which accepts a ``(lo, hi)`` pair.
 
@@ -96,8 +99,8 @@ class Bounds:
         """``hi - lo``, shape (n_var,)."""
         return self.hi - self.lo
 
-    def from_unit(self, U: np.ndarray) -> np.ndarray:
-        """Map unit-box points ``U`` (..., n_var) to problem units, clipped into the box.
+    def from_normalized(self, U: np.ndarray) -> np.ndarray:
+        """Map normalised points ``U`` (..., n_var) to problem units, clipped into the box.
 
         The final clip only removes floating-point round-off (``lo + 1.0 * (hi - lo)``
         can exceed ``hi`` by one ulp), so every returned point satisfies ``lo <= x <= hi``.
@@ -105,13 +108,31 @@ class Bounds:
         X = self.lo + np.asarray(U, dtype=np.float64) * (self.hi - self.lo)
         return np.clip(X, self.lo, self.hi, out=X)
 
-    def to_unit(self, X: np.ndarray) -> np.ndarray:
-        """Map problem-unit points ``X`` (..., n_var) to the unit box, clipped to [0, 1]."""
+    def to_normalized(self, X: np.ndarray) -> np.ndarray:
+        """Map problem-unit points ``X`` (..., n_var) to the normalised box, clipped to [0, 1]."""
         U = (np.asarray(X, dtype=np.float64) - self.lo) / (self.hi - self.lo)
         return np.clip(U, 0.0, 1.0, out=U)
 
+    def from_unit(self, U: np.ndarray) -> np.ndarray:
+        """The 0.3 name of :meth:`from_normalized` ("unit" means a production unit in
+        emaphm), kept for one release with a warning."""
+        _renamed("Bounds.from_unit", "Bounds.from_normalized")
+        return self.from_normalized(U)
+
+    def to_unit(self, X: np.ndarray) -> np.ndarray:
+        """The 0.3 name of :meth:`to_normalized`, kept for one release with a warning."""
+        _renamed("Bounds.to_unit", "Bounds.to_normalized")
+        return self.to_normalized(X)
+
     def __repr__(self) -> str:
         return f"Bounds(lo={self.lo.tolist()}, hi={self.hi.tolist()})"
+
+
+def _renamed(old: str, new: str) -> None:
+    import warnings
+
+    warnings.warn(f"{old} is renamed {new}; the old name goes in the next release",
+                  DeprecationWarning, stacklevel=3)
 
 
 def as_bounds(bounds: Any) -> Bounds:
@@ -234,7 +255,7 @@ def check_told(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Validate what is passed to ``tell``; return ``(X, U, y)``.
 
-    ``X`` is a float64 array, ``U`` is ``X`` mapped to the unit box; ``y`` is float64
+    ``X`` is a float64 array, ``U`` is ``X`` mapped to the normalised box; ``y`` is float64
     with every non-finite value (NaN, +inf, -inf) replaced by ``+inf``.
     """
     X = np.asarray(X, dtype=np.float64)
@@ -246,7 +267,7 @@ def check_told(
     if not np.isfinite(X).all():
         raise ValueError("tell: X contains NaN or inf; pass the array returned by ask")
     y = sanitize_fitness(y, n_pop)
-    return X, state.bounds.to_unit(X), y
+    return X, state.bounds.to_normalized(X), y
 
 
 def sanitize_fitness(y: Any, n_pop: int) -> np.ndarray:
@@ -285,7 +306,7 @@ def start(bounds: Bounds) -> dict[str, Any]:
     :func:`advance`.
     """
     return {
-        "best_x": frozen(bounds.from_unit(np.full(bounds.n_var, 0.5))),
+        "best_x": frozen(bounds.from_normalized(np.full(bounds.n_var, 0.5))),
         "best_f": np.inf,
         "nfev": 0,
         "nit": 0,
@@ -360,6 +381,21 @@ class Termination(Protocol):
     def check(self, state: State, elapsed_s: float) -> str | None: ...
 
 
+#: What a termination leaves of its budget when it has none of that kind: no limit.
+UNLIMITED = (math.inf, math.inf)
+
+
+def remaining(termination: Any, nfev: int, elapsed_s: float) -> tuple[float, float]:
+    """``(evaluations, seconds)`` that ``termination`` leaves after ``nfev`` evaluations and
+    ``elapsed_s`` seconds: what a solver that works in larger steps than one iteration (a
+    least-squares pass, a polish) may spend inside one of them. ``inf`` where it sets no
+    such limit, and for ``None`` or a termination without a ``remaining`` method (an
+    iteration count or a stall rule cannot say in advance)."""
+    if termination is None or not hasattr(termination, "remaining"):
+        return UNLIMITED
+    return termination.remaining(nfev, elapsed_s)
+
+
 class _Combinable:
     """Adds ``a | b`` -> :class:`AnyOf` to the termination dataclasses."""
 
@@ -396,6 +432,9 @@ class MaxIterations(_Combinable):
     def check(self, state: State, elapsed_s: float) -> str | None:
         return "max_iterations" if state.nit >= self.n else None
 
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return UNLIMITED
+
 
 @dataclass(frozen=True)
 class MaxEvaluations(_Combinable):
@@ -418,6 +457,9 @@ class MaxEvaluations(_Combinable):
 
     def check(self, state: State, elapsed_s: float) -> str | None:
         return "max_evaluations" if state.nfev >= self.n else None
+
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return self.n - nfev, math.inf
 
 
 @dataclass(frozen=True)
@@ -474,6 +516,9 @@ class StallTolerance(_Combinable):
             return None
         return "stall" if old - new < self.tol else None
 
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return UNLIMITED
+
 
 @dataclass(frozen=True)
 class WallClock(_Combinable):
@@ -500,6 +545,9 @@ class WallClock(_Combinable):
 
     def check(self, state: State, elapsed_s: float) -> str | None:
         return "wall_clock" if elapsed_s >= self.seconds else None
+
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        return math.inf, self.seconds - elapsed_s
 
 
 @dataclass(frozen=True, init=False)
@@ -533,6 +581,10 @@ class AnyOf(_Combinable):
             if reason is not None:
                 return reason
         return None
+
+    def remaining(self, nfev: int, elapsed_s: float) -> tuple[float, float]:
+        left = [remaining(t, nfev, elapsed_s) for t in self.terms]
+        return min(e for e, _ in left), min(s for _, s in left)
 
     def __repr__(self) -> str:
         return " | ".join(repr(t) for t in self.terms)
@@ -600,14 +652,7 @@ class OptimizeResult:
 
 
 def _as_generator(seed: Any) -> np.random.Generator:
-    if isinstance(seed, np.random.Generator):
-        return seed
-    if isinstance(seed, numbers.Integral) and not isinstance(seed, bool) and seed >= 0:
-        return np.random.default_rng(int(seed))
-    raise ValueError(
-        "seed must be given explicitly as a non-negative int or a numpy.random.Generator, "
-        f"got {seed!r}"
-    )
+    return as_generator(seed)
 
 
 def _check_optimizer(optimizer: Any) -> None:

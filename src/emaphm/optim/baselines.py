@@ -11,7 +11,7 @@ name        what runs
 scipy-de    :class:`ScipyDE`: ``scipy.optimize.differential_evolution`` with
             ``vectorized=True, updating='deferred', polish=False`` (one batch per
             generation), driven one generation at a time
-cmaes       :class:`CMAES`: ``cma.CMAEvolutionStrategy`` (Hansen) in the unit box with
+cmaes       :class:`CMAES`: ``cma.CMAEvolutionStrategy`` (Hansen) in the normalised box with
             ``bounds=[0, 1]``, its own ask/tell
 ==========  ================================================================================
 
@@ -46,8 +46,9 @@ true value is the bound (``k_i = 0``) is approached, not hit (the polish of
 Dependencies
 ------------
 The module imports neither scipy's solver nor cma at import time; ``init`` does. It
-touches two private details of scipy (written against scipy 1.17; the ``seed=`` keyword
-of scipy < 1.15 is handled): the solver class
+touches two private details of scipy (checked from scipy 1.13 to 1.17, :data:`SCIPY_CHECKED`,
+with a warning outside them and a clear error where they are gone,
+:func:`scipy_private`; the ``seed=`` keyword of scipy < 1.15 is handled): the solver class
 ``scipy.optimize._differentialevolution.DifferentialEvolutionSolver``, whose
 ``next(solver)`` runs one generation, and its ``_mapwrapper`` attribute, replaced by a
 picklable equivalent so that states pickle. Should a scipy release change them, the
@@ -208,6 +209,36 @@ def _feed_objective(x: np.ndarray) -> np.ndarray:
 def _vectorized_map(func: Any, x: np.ndarray) -> np.ndarray:
     """scipy's own map for ``vectorized=True`` (a module-level function, so picklable)."""
     return np.atleast_1d(func(x.T))
+
+
+#: SciPy releases whose private DE solver class the ScipyDE adapter was checked against
+#: (the floor in pyproject.toml to the version of the replay tests; outside them it warns).
+SCIPY_CHECKED = ((1, 13), (1, 17))
+
+
+def scipy_private() -> tuple[Any, Any]:
+    """SciPy's ``DifferentialEvolutionSolver`` and ``MapWrapper``, two private names the
+    adapter drives, or a RuntimeError that says what to do when a SciPy release moved them;
+    a RuntimeWarning (once) for a SciPy outside :data:`SCIPY_CHECKED`."""
+    import warnings
+
+    import scipy
+
+    version = tuple(int(x) for x in scipy.__version__.split(".")[:2] if x.isdigit())
+    if not SCIPY_CHECKED[0] <= version <= SCIPY_CHECKED[1]:
+        warnings.warn(f"the scipy-de baseline drives SciPy's private DifferentialEvolutionSolver, "
+                      f"checked on SciPy {'.'.join(map(str, SCIPY_CHECKED[0]))} to "
+                      f"{'.'.join(map(str, SCIPY_CHECKED[1]))}; this is SciPy {scipy.__version__} "
+                      "(a change of its behaviour stops the run with an error rather than running "
+                      "another algorithm)", RuntimeWarning, stacklevel=3)
+    try:
+        from scipy._lib._util import MapWrapper
+        from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
+    except ImportError as exc:
+        raise RuntimeError(f"the scipy-de baseline needs SciPy's DifferentialEvolutionSolver, "
+                           f"which SciPy {scipy.__version__} no longer has where it looks ({exc}); "
+                           "use emaphm's own 'de', or a SciPy from 1.13 to 1.17") from None
+    return DifferentialEvolutionSolver, MapWrapper
 
 
 def _rng_keyword(cls: Any, rng: np.random.Generator) -> dict[str, Any]:
@@ -378,8 +409,7 @@ class ScipyDE:
                            check_real("ScipyDE", "recombination", self.recombination, 0.0, 1.0))
         object.__setattr__(self, "max_iter", check_int("ScipyDE", "max_iter", self.max_iter, 1))
         object.__setattr__(self, "patience", check_int("ScipyDE", "patience", self.patience, 1))
-        from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
-
+        DifferentialEvolutionSolver, _ = scipy_private()
         known = {*getattr(DifferentialEvolutionSolver, "_binomial", ()),
                  *getattr(DifferentialEvolutionSolver, "_exponential", ())}
         if known and self.strategy not in known:
@@ -395,13 +425,11 @@ class ScipyDE:
         from scipy.stats import qmc
 
         U = qmc.LatinHypercube(d=bounds.n_var, **_rng_keyword(qmc.LatinHypercube, rng)).random(self.pop_size)
-        return bounds.from_unit(U)
+        return bounds.from_normalized(U)
 
     def solver(self, bounds: Bounds, init: np.ndarray, rng: np.random.Generator) -> Any:
         """The scipy solver this configuration drives (no objective calls yet)."""
-        from scipy._lib._util import MapWrapper
-        from scipy.optimize._differentialevolution import DifferentialEvolutionSolver
-
+        DifferentialEvolutionSolver, MapWrapper = scipy_private()
         solver = DifferentialEvolutionSolver(
             _feed_objective, list(zip(bounds.lo.tolist(), bounds.hi.tolist())),
             strategy=self.strategy, maxiter=1_000_000, mutation=self.mutation,
@@ -507,7 +535,7 @@ class CMAESState:
 
 @dataclass(frozen=True)
 class CMAES:
-    """CMA-ES (Hansen), ``cma.CMAEvolutionStrategy``, searching the unit box ``[0, 1]^n_var``.
+    """CMA-ES (Hansen), ``cma.CMAEvolutionStrategy``, searching the normalised box ``[0, 1]^n_var``.
 
     ===========  ==============  =======  ===================================================
     Parameter    Type            Default  Meaning
@@ -574,7 +602,7 @@ class CMAES:
 
     def ask(self, state: CMAESState) -> np.ndarray:
         """cma's pending solutions in problem units, shape (lambda, n_var)."""
-        return state.bounds.from_unit(np.clip(np.array(state.pending), 0.0, 1.0))
+        return state.bounds.from_normalized(np.clip(np.array(state.pending), 0.0, 1.0))
 
     def tell(self, state: CMAESState, X: np.ndarray, y: np.ndarray) -> CMAESState:
         """Tell cma the fitness of the pending solutions and ask for the next ones."""

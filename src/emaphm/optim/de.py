@@ -9,7 +9,7 @@ One generation, for every target vector ``x_i`` of the population::
 
 The update is generational ("deferred", as ``updating='deferred'`` in scipy): every
 trial of a generation is built from the same parent population, so the whole trial
-population is one batch for the objective. All work happens in the unit box;
+population is one batch for the objective. All work happens in the normalised box;
 components of the mutant that leave it are clipped to the nearest face.
 
 The update equations are pure module-level functions (random numbers are passed in);
@@ -100,7 +100,7 @@ def rand1_mutation(population: np.ndarray, idx: np.ndarray, F: float) -> np.ndar
     population   (n_pop, n_var)     parent vectors (unit box)
     idx          (n_pop, 3) int     ``r1, r2, r3`` per target
     F            scalar             mutation (differential weight) factor
-    returns      (n_pop, n_var)     mutants (may leave the unit box)
+    returns      (n_pop, n_var)     mutants (may leave the normalised box)
     ===========  =================  =========================================
     """
     return population[idx[:, 0]] + F * (population[idx[:, 1]] - population[idx[:, 2]])
@@ -259,7 +259,7 @@ class DE:
 
     def ask(self, state: DEState) -> np.ndarray:
         """The trial population in problem units, shape (pop_size, n_var)."""
-        return state.bounds.from_unit(state.trial)
+        return state.bounds.from_normalized(state.trial)
 
     def tell(self, state: DEState, X: np.ndarray, y: np.ndarray) -> DEState:
         """Greedy selection of the evaluated trials, then breed the next trials.

@@ -35,7 +35,7 @@ Known property, kept on purpose: the move ``|C L - x|`` is not translation invar
 near the origin of the coordinates, and GWO is far more precise there than elsewhere
 (Niu et al. 2019, "The defect of the grey wolf optimization algorithm and its
 verification method"; Camacho-Villalon, Dorigo & Stutzle 2023). Our coordinates are
-the unit box, so that point is ``lo``: for the fault vector, the healthy ``k = 0``,
+the normalised box, so that point is ``lo``: for the fault vector, the healthy ``k = 0``,
 exactly as in the paper where GWO searched ``k`` directly. On an 8-D sphere centred
 mid-box, 150 iterations reach only ~5e-4 (tests/test_optim_conformance.py).
 
@@ -148,7 +148,7 @@ def gwo_position_update(
     leaders  (3, n_var)          alpha, beta, delta positions
     a        scalar              control parameter in [0, 2]
     r1, r2   (3, n_pop, n_var)   uniform [0, 1) draws, one set per leader
-    returns  (n_pop, n_var)      new positions clipped to the unit box
+    returns  (n_pop, n_var)      new positions clipped to the normalised box
     =======  ==================  ================================================
     """
     L = leaders[:, None, :]  # (3, 1, n_var)
@@ -258,7 +258,7 @@ class GWO:
 
     def ask(self, state: GWOState) -> np.ndarray:
         """Current wolf positions in problem units, shape (pop_size, n_var)."""
-        return state.bounds.from_unit(state.position)
+        return state.bounds.from_normalized(state.position)
 
     def tell(self, state: GWOState, X: np.ndarray, y: np.ndarray) -> GWOState:
         """Update the hierarchy from the evaluated pack, then move every wolf."""

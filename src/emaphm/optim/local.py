@@ -9,7 +9,7 @@ piecewise-smooth fitness that dry friction and backlash produce.
 Compass (coordinate pattern) search (Kolda, Lewis & Torczon, SIAM Review 45,
 2003): poll the ``2 n`` points ``x +- step e_i`` (clipped into the box) in ONE
 batch call, move to the best poll point if it improves, otherwise halve the
-step; stop when the step falls below ``tol`` (in unit-box coordinates) or the
+step; stop when the step falls below ``tol`` (in normalised coordinates) or the
 evaluation budget is spent. Deterministic: no random numbers.
 """
 
@@ -53,11 +53,11 @@ def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bound
         raise ValueError(f"compass_search: max_evals must be a positive integer, got {max_evals!r}")
     t0 = time.perf_counter()
     b = as_bounds(bounds)
-    u = np.clip(b.to_unit(np.asarray(x0, dtype=float)[None, :])[0], 0.0, 1.0)
+    u = np.clip(b.to_normalized(np.asarray(x0, dtype=float)[None, :])[0], 0.0, 1.0)
     n = u.size
     nfev = 0
     if f0 is None:
-        fu = float(sanitize_fitness(objective(b.from_unit(u[None, :])), 1)[0])
+        fu = float(sanitize_fitness(objective(b.from_normalized(u[None, :])), 1)[0])
         nfev += 1
     else:
         fu = float(f0)
@@ -72,7 +72,7 @@ def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bound
             reason = "wall_clock"
             break
         U = np.clip(u + step * directions, 0.0, 1.0)
-        f = sanitize_fitness(objective(b.from_unit(U)), U.shape[0])
+        f = sanitize_fitness(objective(b.from_normalized(U)), U.shape[0])
         nfev += U.shape[0]
         i = int(np.argmin(f))
         if f[i] < fu:
@@ -80,6 +80,6 @@ def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bound
         else:
             step *= 0.5
         history.append(fu)
-    return OptimizeResult(x=b.from_unit(u[None, :])[0], fun=fu, nfev=nfev, nit=len(history) - 1,
+    return OptimizeResult(x=b.from_normalized(u[None, :])[0], fun=fu, nfev=nfev, nit=len(history) - 1,
                           history=np.asarray(history), reason=reason,
                           elapsed_s=time.perf_counter() - t0, algorithm="compass")

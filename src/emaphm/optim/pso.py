@@ -8,7 +8,7 @@ best point of the whole swarm::
     v_i <- clip(v_i, -v_max, v_max)                          velocity clamping
     x_i <- x_i + v_i                                         then clipped to the box
 
-Positions live in the unit box, so ``v_max`` is a fraction of each variable's range.
+Positions live in the normalised box, so ``v_max`` is a fraction of each variable's range.
 A component that would leave the box is clipped to the face and its velocity set to
 zero ("absorbing walls", Robinson & Rahmat-Samii 2004), so the particle does not keep
 pushing against the wall; the optimum may then sit exactly on a bound.
@@ -102,7 +102,7 @@ def pso_velocity_update(
 
 
 def pso_position_update(x: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Move ``x`` by ``v`` inside the unit box with absorbing walls.
+    """Move ``x`` by ``v`` inside the normalised box with absorbing walls.
 
     Returns ``(x', v')``: ``x' = clip(x + v, 0, 1)`` and ``v'`` equal to ``v`` except
     zero in the components that were clipped.
@@ -229,7 +229,7 @@ class PSO:
 
     def ask(self, state: PSOState) -> np.ndarray:
         """Current particle positions in problem units, shape (pop_size, n_var)."""
-        return state.bounds.from_unit(state.position)
+        return state.bounds.from_normalized(state.position)
 
     def tell(self, state: PSOState, X: np.ndarray, y: np.ndarray) -> PSOState:
         """Update personal and swarm bests from the evaluated positions, then move."""

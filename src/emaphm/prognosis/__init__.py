@@ -5,8 +5,8 @@ prognostics; this layer follows a fault over repeated inspections (at the gate,
 during maintenance, at intervals in flight) and predicts when it will reach its
 failure threshold:
 
-* :mod:`.history`: the SQLite store of inspections (:class:`HealthHistory`,
-  :func:`inspect` = diagnose a trace and record it);
+* :mod:`.history`: the SQLite store of inspections (:class:`HealthHistory`);
+* :mod:`.workflow`: :func:`inspect`, diagnose a trace and record it;
 * :mod:`.uncertainty`: the interval of each identified component
   (:func:`identify_with_spread`);
 * :mod:`.thresholds`: health indicators and failure thresholds per fault mode;
@@ -33,7 +33,7 @@ _EXPORTS = {
     "Inspection": "history",
     "TimeOrderError": "history",
     "UnknownActuatorError": "history",
-    "inspect": "history",
+    "inspect": "workflow",
     "trace_fingerprint": "history",
     "alpha_lambda": "metrics",
     "coverage": "metrics",

@@ -82,7 +82,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             if not Path(name).exists():
                 raise _usage(f"trace file {name} does not exist")
             traces.append(read_trace(name))
-        progress = CountProgress("calibrating:", enabled=not args.quiet, unit=" model runs")
+        progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs")
         if not args.quiet:
             warn_if_long("emaphm history calibrate",
                          calibration_seconds([t.duration for t in traces], base),
@@ -124,7 +124,9 @@ def cmd_list(args: argparse.Namespace) -> int:
 def cmd_add(args: argparse.Namespace) -> int:
     from ..progress import SearchProgress, compile_notice
     from ..traces import TraceError, read_trace
-    from .history import HealthHistory, inspect
+    from ..identify import IdentificationConfig
+    from .history import HealthHistory
+    from .workflow import inspect
 
     budget = budget_option(args.budget)
     params = None
@@ -158,10 +160,11 @@ def cmd_add(args: argparse.Namespace) -> int:
                          "cap each identification with --budget (e.g. --budget 60s)")
         try:
             with compile_notice(progress, enabled=not args.quiet):
-                ins, a = inspect(h, args.actuator, trace, args.at, seed=args.seed,
+                config = IdentificationConfig(algorithm=args.algorithm, budget=budget,
+                                              fault_model=args.fault_model)
+                ins, a = inspect(h, args.actuator, trace, args.at, seed=args.seed, config=config,
                                  method=args.spread, source=str(trace_path), params=params,
-                                 algorithm=args.algorithm, fault_model=args.fault_model,
-                                 budget=budget, n_runs=args.runs, callback=progress)
+                                 n_runs=args.runs, callback=progress)
         except TraceError as exc:        # found in the trace's content: name the file
             raise _usage(f"{trace_path}: {exc}") from None
         finally:
@@ -313,6 +316,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             raise _usage(f"--plot-dir {plot_dir} cannot be created ({exc.strerror}); give a "
                          "folder you can write to") from None
     from ..progress import SearchProgress, compile_notice
+    from .workflow import run_demo
 
     results = []
     progress = SearchProgress(enabled=not (args.quiet or args.json))
@@ -326,104 +330,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(results))
     return 0
-
-
-def run_demo(name: str, *, db: Path, n_inspections: int = 8, seed: int = 0,
-             synthetic: bool = False, budget: Any = None, plot_dir: Path | None = None,
-             quiet: bool = False, progress: Any = None) -> dict:
-    """The whole loop on one degradation scenario: simulate, diagnose, record, predict.
-
-    Returns a JSON-able summary (per inspection: time, true and identified
-    indicator, RUL median and interval, true RUL; and the metrics). ``progress``: a
-    :class:`emaphm.progress.SearchProgress` to show the simulations and identifications on.
-    """
-    from . import metrics
-    from .history import HealthHistory, inspect
-    from .plots import plot_alpha_lambda, plot_prognosis
-    from .simulator import (degradation_scenario, inspection_times, simulate_degradation,
-                            synthetic_k_history)
-    from .trends import MIN_INSPECTIONS, RULTrack, indicator_series, prognose
-
-    sc = degradation_scenario(name)
-    times = inspection_times(sc.eol, n_inspections)
-    out = print if not quiet else (lambda *a, **k: None)
-    out(f"\n== {name}: {sc.indicator} grows along a {sc.law.kind} law to {sc.threshold:g} at "
-        f"{sc.eol:g} h; {n_inspections} inspections, "
-        f"{'synthetic k (true + noise)' if synthetic else 'reference-model traces, identified'}")
-    actuator = f"demo-{name}-{seed}"
-    rows, preds = [], []
-    with HealthHistory(db) as h:
-        h.register(actuator, description=f"degradation demo {name}", time_unit="h")
-        if synthetic:
-            K = synthetic_k_history(sc, times, seed=seed)
-            for t, k in zip(times, K):
-                h.add(actuator, float(t), k, spread_method="synthetic")
-        else:
-            def simulated(i: int, n: int) -> None:
-                if progress is not None:
-                    progress.show(f"{name}: simulated inspection {i}/{n}", force=i == n)
-
-            run = simulate_degradation(sc, times, seed=seed, progress=simulated)
-            for j, (t, tr) in enumerate(zip(times, run.traces)):
-                if progress is not None:
-                    progress.restart(f"{name}: inspection {j + 1}/{len(times)}: ")
-                inspect(h, actuator, tr, float(t), seed=seed, budget=budget, callback=progress)
-            if progress is not None:
-                progress.close()
-        data = h.data(actuator)
-    y = indicator_series(data.K)[sc.indicator]
-    k_true = sc.k_at(times)
-    y_true = indicator_series(k_true)[sc.indicator]
-    out(f"{'time h':>8s} {'true':>7s} {'ident':>7s} {'RUL median':>10s} {'90% interval':>16s} "
-        f"{'true RUL':>9s}")
-    last = None
-    for i in range(1, data.n + 1):
-        row = {"time": float(times[i - 1]), "true": float(y_true[i - 1]), "identified": float(y[i - 1]),
-               "rul_true": float(sc.eol - times[i - 1])}
-        if i >= MIN_INSPECTIONS:
-            prog = prognose(data.times[:i], data.K[:i], seed=seed, indicators=(sc.indicator,),
-                            actuator=actuator)
-            p = prog.predictions[sc.indicator]
-            preds.append(p)
-            last = prog
-            row.update(rul_median=p.median if math.isfinite(p.median) else None,
-                       rul_lo=p.lo if math.isfinite(p.lo) else None,
-                       rul_hi=p.hi if math.isfinite(p.hi) else None)
-            iv = f"[{p.lo:.0f}, {p.hi:.0f}]"
-            out(f"{row['time']:8.0f} {row['true']:7.4f} {row['identified']:7.4f} {p.median:10.0f} "
-                f"{iv:>16s} {row['rul_true']:9.0f}")
-        else:
-            out(f"{row['time']:8.0f} {row['true']:7.4f} {row['identified']:7.4f}")
-        rows.append(row)
-    track = RULTrack(indicator=sc.indicator, threshold=sc.threshold, level=preds[0].level,
-                     times=times[MIN_INSPECTIONS - 1:], n_used=np.arange(MIN_INSPECTIONS, data.n + 1),
-                     median=np.array([p.median for p in preds]), lo=np.array([p.lo for p in preds]),
-                     hi=np.array([p.hi for p in preds]),
-                     samples=np.stack([p.samples for p in preds]),
-                     models=tuple(p.model for p in preds))
-    rul_true = sc.eol - track.times
-    late = track.times >= 0.5 * sc.eol
-    al = metrics.alpha_lambda(track.times, track.samples, sc.eol, alpha=0.2)
-    summary = {
-        "scenario": sc.to_dict(), "synthetic": synthetic, "seed": seed, "rows": rows,
-        "coverage_from_midlife": metrics.coverage(rul_true[late], track.lo[late], track.hi[late])
-        if late.any() else None,
-        "relative_accuracy_last": float(metrics.relative_accuracy(rul_true[-1], track.median[-1])),
-        "alpha_lambda": al.to_dict(),
-        "prognostic_horizon": metrics.prognostic_horizon(track.times, track.samples, sc.eol,
-                                                         alpha=0.1),
-    }
-    out(f"coverage of the true RUL from mid-life: {summary['coverage_from_midlife']}, "
-        f"alpha-lambda (alpha 0.2, beta 0.5) passed at lambda "
-        f"{[float(x) for x in al.lambdas[al.passed]]}, prognostic horizon (alpha 0.1) "
-        f"{summary['prognostic_horizon']:.0f} h")
-    if plot_dir is not None and last is not None:
-        p1 = plot_dir / f"{name}-prognosis.png"
-        plot_prognosis(last, indicators=(sc.indicator,), eol_true={sc.indicator: sc.eol}, path=p1)
-        p2 = plot_dir / f"{name}-alpha-lambda.png"
-        plot_alpha_lambda([track], sc.eol, title=f"{name}: alpha-lambda", path=p2)
-        out(f"wrote {p1} and {p2}")
-    return summary
 
 
 # ----------------------------------------------------------------------------- wiring

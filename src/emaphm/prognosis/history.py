@@ -58,7 +58,7 @@ from ..faults import as_k
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError",
            "TimeOrderError", "DuplicateInspectionError", "Actuator", "Inspection", "HistoryData",
-           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "inspect", "DEFAULT_DB"]
+           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB"]
 
 SCHEMA_VERSION = 2
 TIME_UNITS = ("h", "cycles")
@@ -610,57 +610,16 @@ class HealthHistory:
                            K=K, K_lo=lo, K_hi=hi, inspections=tuple(ins))
 
 
-def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, seed: int,
-            method: str = "population", source: str | None = None, params: Any = None,
-            thresholds: Any = None, **kwargs: Any) -> tuple[Inspection, Any]:
-    """Diagnose ``trace`` and record it as the inspection of ``actuator_id`` at time ``at``.
+def __getattr__(name: str):
+    """``emaphm.prognosis.history.inspect`` of version 0.3, kept for one release with a
+    warning: the workflow lives in :mod:`emaphm.prognosis.workflow` (the store only stores)."""
+    if name == "inspect":
+        import warnings
 
-    The cheap checks (registered actuator, time after the last, trace not
-    recorded yet, trace valid) run before the identification, so a refused
-    inspection costs nothing and records nothing. Returns ``(inspection,
-    assessment)`` (:class:`emaphm.prognosis.uncertainty.Assessment`). Other
-    keyword arguments (``algorithm``, ``budget``, ``options``, ``n_runs``,
-    ``level``) go to :func:`emaphm.prognosis.uncertainty.identify_with_spread`. With the
-    default pipeline (``algorithm="lsq"``) the search starts first from the k of the
-    actuator's last inspection under the same fault model (a warm start: faults grow
-    slowly between inspections).
-    """
-    from ..fitness import trace_fault_model
-    from ..identify import DEFAULT_ALGORITHM
-    from ..mismatch import diagnose_identification
-    from ..traces import validate
-    from .uncertainty import identify_with_spread
+        from .workflow import inspect
 
-    fp = trace_fingerprint(trace)
-    history.check_next(actuator_id, at, fp)
-    validate(trace)
-    calibrated_at = None
-    if params is None:                 # the actuator's own calibration, where it has one
-        cal = history.calibration(actuator_id, at)
-        if cal is not None:
-            calibrated_at, params = cal
-    if kwargs.setdefault("algorithm", DEFAULT_ALGORITHM) == DEFAULT_ALGORITHM \
-            and kwargs.get("start") is None:
-        previous = history.inspections(actuator_id)
-        fault_model = kwargs.get("fault_model") or trace_fault_model(trace)
-        if previous and (previous[-1].extra or {}).get("fault_model", "paper") == fault_model:
-            kwargs["start"] = previous[-1].k
-    a = identify_with_spread(trace, seed=seed, method=method, params=params, **kwargs)
-    ident = a.identification
-    diag = diagnose_identification(trace, ident, params=params, thresholds=thresholds, k=a.k)
-    extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
-             "fault_model": ident.fault_model,
-             "calibrated_at": calibrated_at,
-             "nuisance": dict(ident.nuisance),
-             "parameters": None if params is None else params.to_dict(),
-             "k_true": None if ident.k_true is None else ident.k_true.tolist(),
-             "interval_details": {k: v for k, v in a.interval.details.items()
-                                  if isinstance(v, (int, float, str))},
-             "budget": ident.options.get("budget"),
-             "seed_used": ident.seed}          # the run kept; ``seed`` replays the inspection
-    ins = history.add(actuator_id, at, a.k, k_lo=a.interval.lo, k_hi=a.interval.hi,
-                      spread_method=a.interval.method, level=a.interval.level,
-                      diagnosis=diag.to_dict(), fingerprint=fp, algorithm=ident.algorithm,
-                      seed=int(seed), fitness=ident.fitness, evaluations=a.evaluations,
-                      source=source, extra=extra)
-    return ins, a
+        warnings.warn("emaphm.prognosis.history.inspect moved to emaphm.prognosis.workflow.inspect "
+                      "(also emaphm.prognosis.inspect); the old name goes in the next release",
+                      DeprecationWarning, stacklevel=2)
+        return inspect
+    raise AttributeError(f"module 'emaphm.prognosis.history' has no attribute {name!r}")

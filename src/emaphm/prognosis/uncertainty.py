@@ -61,7 +61,8 @@ import numpy as np
 from scipy import stats
 
 from ..faults import K_NAMES
-from ..fitness import Eq4Objective, eq4_weights, effective_samples
+from ..seeds import check_seed
+from ..fitness import eq4_weights, effective_samples
 
 __all__ = ["SPREAD_METHODS", "KInterval", "Assessment", "identify_with_spread",
            "population_interval", "effective_samples",
@@ -203,68 +204,66 @@ def _check(method: str, level: float, n_runs: int, seed: Any) -> None:
         raise ValueError(f"level must be in (0, 1), e.g. 0.9, got {level!r}")
     if isinstance(n_runs, bool) or not isinstance(n_runs, (int, np.integer)) or n_runs < 2:
         raise ValueError(f"n_runs must be an integer >= 2, got {n_runs!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer (randomness always flows from an "
-                         f"explicit seed), got {seed!r}")
+    check_seed(seed)
 
 
-def identify_with_spread(trace: Any, *, seed: int, method: str = "population", level: float = 0.9,
-                         n_runs: int = 5, algorithm: str = "lsq", budget: Any = None,
-                         options: dict | None = None, params: Any = None,
-                         objective: Eq4Objective | None = None, error_floor: Any = None,
-                         suspect_ratio: float | None = None, retries: int = 2,
-                         **kwargs: Any) -> Assessment:
+def identify_with_spread(trace: Any, config: Any = None, *, seed: int,
+                         method: str = "population", level: float = 0.9, n_runs: int = 5,
+                         params: Any = None, start: Any = None, error_floor: Any = None,
+                         retries: int = 2, callback: Any = None, **deprecated: Any) -> Assessment:
     """Identify ``k`` of ``trace`` and the interval of each component.
 
-    ``method`` is one of :data:`SPREAD_METHODS` (module docstring); ``n_runs``
-    the identifications of ``"seeds"`` and ``"bootstrap"``; ``level`` the
-    nominal probability of the interval; ``error_floor`` (scalar or 8 values,
-    default :data:`IDENTIFICATION_ERROR_P90`) the least half-width of each
-    component's interval. An identification whose fitness exceeds
-    ``suspect_ratio`` times the trace's noise floor
+    ``config`` (an :class:`emaphm.identify.IdentificationConfig`, default the
+    least-squares pipeline's) holds the problem and solver settings, ``params`` the
+    healthy actuator and ``start`` a warm start of the least-squares solver; ``trace`` may
+    also be an :class:`emaphm.problem.IdentificationProblem` (its settings are then the
+    problem's). ``method`` is one of :data:`SPREAD_METHODS` (module docstring); ``n_runs``
+    the identifications of ``"seeds"`` and ``"bootstrap"``; ``level`` the nominal
+    probability of the interval; ``error_floor`` (scalar or 8 values, default
+    :data:`IDENTIFICATION_ERROR_P90`) the least half-width of each component's interval.
+    An identification whose fitness exceeds the config's ``suspect_ratio`` (default the
+    misfit test's limit) times the trace's noise floor
     (:meth:`emaphm.fitness.Eq4Objective.noise_floor`) is *suspect* (the optimizer
     ended in a wrong basin: before the restarts, PSO with its default budget did so
     on 2 of 90 benchmark inspections, at Eq. 9 errors above 70 %, fitness 700 times
-    the noise level); :func:`emaphm.identify.identify` runs it again with up to
-    ``retries`` more seeds (spawned from ``seed``) and keeps the best run. ``details`` records
-    ``fitness_ratio``, ``retries`` and ``suspect`` (still suspect after the
-    retries). ``algorithm``, ``budget``,
-    ``options``, ``params`` and other keyword arguments go to
-    :func:`emaphm.identify.identify`; ``objective`` a prebuilt Eq. 4 objective.
+    the noise level); the first identification runs again with up to ``retries`` more
+    seeds or starts (spawned from ``seed``) and keeps the best run. ``details`` records
+    ``fitness_ratio``, ``retries`` and ``suspect`` (still suspect after the retries).
+    The keywords of version 0.3 (``algorithm``, ``budget``, ``options``, ``polish``,
+    ``suspect_ratio``, ``objective``, ``fault_model``, ``n_sub``, ``mode``, ``nuisance``)
+    still work for one release, with a DeprecationWarning.
     """
     from ..fitness import misfit_limit
-    from ..identify import default_nuisance, identify
+    from ..identify import IdentificationConfig, minimize
+    from ..problem import IdentificationProblem
 
-    if suspect_ratio is None:
-        suspect_ratio = misfit_limit()
-
+    if deprecated:
+        config, trace = _old_keywords(config, trace, params, deprecated)
+    config = IdentificationConfig() if config is None else config
+    suspect_ratio = misfit_limit() if config.suspect_ratio is None else config.suspect_ratio
     _check(method, level, n_runs, seed)
-    floor = np.broadcast_to(np.asarray(IDENTIFICATION_ERROR_P90 if error_floor is None
-                                       else error_floor, dtype=float), (8,))
-    if np.any(~np.isfinite(floor)) or np.any(floor < 0):
-        raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
+    floor = _error_floor(error_floor)
     t0 = time.perf_counter()
-    nu = kwargs.pop("nuisance", None)
-    nu = default_nuisance(params) if nu is None else tuple(nu)
-    base = objective if objective is not None else Eq4Objective.from_trace(
-        trace, params, n_sub=kwargs.get("n_sub", 1), mode=kwargs.get("mode", "phases"),
-        fault_model=kwargs.get("fault_model"),
-        nuisance=nu)
+    problem = trace if isinstance(trace, IdentificationProblem) else config.problem(trace, params,
+                                                                                    start=start)
+    trace = problem.trace
+    base = problem.objective
     rec = _Recorder(base)
+    recording = replace(problem, objective=rec)
     run_seeds = [int(s.generate_state(1)[0] % (2 ** 31))
                  for s in np.random.SeedSequence(int(seed)).spawn(n_runs + 1)]
 
-    def run(s: int, obj: Any, restarts: int = 0) -> Any:
-        return identify(trace, algorithm, seed=s, budget=budget, params=params, options=options,
-                        objective=obj, restarts=restarts, suspect_ratio=suspect_ratio, **kwargs)
+    def run(s: int, prob: Any, restarts: int = 0) -> Any:
+        return minimize(prob, replace(config, restarts=restarts).solver(), config.budget, seed=s,
+                        callback=callback)
 
-    first = run(int(seed), rec, retries)          # identify retries a wrong basin itself
+    first = run(int(seed), recording, retries)    # identify retries a wrong basin itself
     f_noise = first.noise_floor
     limit = suspect_ratio * f_noise if f_noise > 0 else math.inf
     n_retries = first.restarts
     runs = [first]
     if method == "seeds":
-        runs += [run(s, rec) for s in run_seeds[1:n_runs]]
+        runs += [run(s, recording) for s in run_seeds[1:n_runs]]
     spent = int(sum(r.evaluations for r in runs))     # every run, kept or not
     if method == "seeds":
         runs = [r for r in runs if r.fitness <= limit] or runs
@@ -291,7 +290,7 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
         interval = KInterval(k_med, lo, hi, method, float(level), len(runs), details)
         ident = best
     else:
-        ks = _bootstrap(trace, first, base, run, run_seeds[1:n_runs + 1], tau)
+        ks = _bootstrap(problem, first, run, run_seeds[1:n_runs + 1], tau)
         runs += ks[1]
         kb = np.stack([r.k for r in ks[1]])
         q_lo, q_hi = np.quantile(kb, [(1 - level) / 2, (1 + level) / 2], axis=0)
@@ -299,20 +298,33 @@ def identify_with_spread(trace: Any, *, seed: int, method: str = "population", l
         details.update(k_runs=kb.tolist(), block=ks[0])
         interval = KInterval(first.k.copy(), lo, hi, method, float(level), kb.shape[0], details)
         ident = first
-    if np.any(floor > 0):
-        lo = np.clip(np.minimum(interval.lo, interval.k - floor), 0.0, 1.0)
-        hi = np.clip(np.maximum(interval.hi, interval.k + floor), 0.0, 1.0)
-        interval = replace(interval, lo=lo, hi=hi,
-                           details={**interval.details, "error_floor": floor.tolist()})
-    return Assessment(identification=ident, interval=interval, runs=tuple(runs),
+    return Assessment(identification=ident, interval=_with_floor(interval, floor), runs=tuple(runs),
                       evaluations=spent + (0 if method != "bootstrap" else
                                            int(sum(r.evaluations for r in runs[1:]))),
                       elapsed_s=time.perf_counter() - t0)
 
 
-def _bootstrap(trace: Any, first: Any, base: Eq4Objective, run: Any, seeds: list[int],
-               tau: float) -> tuple[int, list]:
+def _error_floor(error_floor: Any) -> np.ndarray:
+    """The least half-width of each component's interval (8,), checked."""
+    floor = np.broadcast_to(np.asarray(IDENTIFICATION_ERROR_P90 if error_floor is None
+                                       else error_floor, dtype=float), (8,))
+    if np.any(~np.isfinite(floor)) or np.any(floor < 0):
+        raise ValueError(f"error_floor must be finite and >= 0 (a scalar or 8 values), got {error_floor!r}")
+    return floor
+
+
+def _with_floor(interval: KInterval, floor: np.ndarray) -> KInterval:
+    """``interval`` joined with ``k +- floor`` (clipped to [0, 1])."""
+    if not np.any(floor > 0):
+        return interval
+    lo = np.clip(np.minimum(interval.lo, interval.k - floor), 0.0, 1.0)
+    hi = np.clip(np.maximum(interval.hi, interval.k + floor), 0.0, 1.0)
+    return replace(interval, lo=lo, hi=hi, details={**interval.details, "error_floor": floor.tolist()})
+
+
+def _bootstrap(problem: Any, first: Any, run: Any, seeds: list[int], tau: float) -> tuple[int, list]:
     """Moving-block bootstrap of the residual currents; one identification per resample."""
+    base = problem.objective
     pop = base.model.simulate(first.k)
     model_i = np.asarray(pop.i_abc[0], dtype=float)
     target = np.asarray(base.target)
@@ -329,7 +341,35 @@ def _bootstrap(trace: Any, first: Any, base: Eq4Objective, run: Any, seeds: list
         starts = rng.integers(0, n - block + 1, size=int(math.ceil(n / block)))
         idx = (starts[:, None] + np.arange(block)[None, :]).ravel()[:n]
         new_target = np.ascontiguousarray(model_i + e[idx])
-        obj = replace(base, target=new_target, weights=np.ascontiguousarray(eq4_weights(new_target, T_s)),
-                      stats=type(base.stats)())
-        out.append(run(s, obj))
+        obj = replace(base, target=new_target, weights=np.ascontiguousarray(eq4_weights(new_target, T_s)))
+        out.append(run(s, replace(problem, objective=obj)))
     return block, out
+
+
+#: identify_with_spread()'s keywords of version 0.3 and where each goes now.
+_OLD_CONFIG = ("algorithm", "budget", "options", "polish", "suspect_ratio", "fault_model",
+               "n_sub", "mode", "nuisance")
+
+
+def _old_keywords(config: Any, trace: Any, params: Any, kw: dict[str, Any]) -> tuple[Any, Any]:
+    """The 0.3 keywords as a config (and a problem for a prebuilt objective), with a warning."""
+    import warnings
+
+    from ..identify import IdentificationConfig
+    from ..problem import IdentificationProblem
+
+    unknown = sorted(set(kw) - set(_OLD_CONFIG) - {"objective"})
+    if unknown:
+        raise TypeError(f"identify_with_spread() got unexpected keyword argument(s) "
+                        f"{', '.join(unknown)}")
+    warnings.warn(f"identify_with_spread({', '.join(f'{k}=' for k in kw)}) is the 0.3 spelling, "
+                  "kept for one release: give the settings as an IdentificationConfig (and a "
+                  "prebuilt objective in an IdentificationProblem)", DeprecationWarning,
+                  stacklevel=3)
+    if config is not None:
+        raise ValueError("give an IdentificationConfig or the old keywords, not both")
+    config = IdentificationConfig(**{k: kw[k] for k in _OLD_CONFIG if k in kw})
+    if kw.get("objective") is not None:
+        trace = IdentificationProblem(trace, params=params, objective=kw["objective"],
+                                      n_sub=config.n_sub, mode=config.mode)
+    return config, trace
