@@ -14,7 +14,7 @@ import pytest
 from benchfiles import PROBE_V_PER_A, WRITERS, german_csv
 from emaphm.cli import main
 from emaphm.simulate import DEFAULT_SENSORS, simulate
-from emaphm.traces import TraceError, read_trace, write_trace
+from emaphm.traces import TraceError, TraceWarning, read_trace, write_trace
 from emaphm.traces.importers import (ChannelMap, MapError, Window, describe, import_trace,
                                      inspect_source, starter_map)
 
@@ -114,7 +114,9 @@ def test_starter_map_marks_what_it_could_not_find(tmp_path):
 def test_window_keeps_the_part_asked_for(reference, tmp_path):
     trace, _ = reference
     source, text = german_csv(trace, tmp_path / "bench.csv")
-    part = import_trace(source, _map(text), window=Window(0.1, 0.3))
+    with pytest.warns(TraceWarning, match=r"the trace lasts 0.2 s, shorter than its test profile "
+                                          r"\(diagnostic, 0.5 s\)"):
+        part = import_trace(source, _map(text), window=Window(0.1, 0.3))
     assert part.t[0] == 0.0
     assert part.meta["source"]["t_start"] == pytest.approx(0.1, abs=trace.dt)
     assert part.duration == pytest.approx(0.2, abs=1.5 * trace.dt)
