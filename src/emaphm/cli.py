@@ -4,7 +4,8 @@
     emaphm scenarios  list the named fault scenarios
     emaphm diagnose   identify the faults of a trace (or of a simulated scenario)
     emaphm calibrate  estimate a healthy unit's parameters from its traces
-    emaphm params     write the default parameters as a TOML file to edit
+    emaphm params     write the default parameters (or a motor's, from its data sheet) as TOML
+    emaphm import     read a bench export into a trace    (emaphm.traces.importers.cli)
     emaphm campaign, report                   (emaphm.campaign.cli)
     emaphm history, prognose, demo-degradation (emaphm.prognosis.cli)
     emaphm fleet report, fleet demo           (emaphm.fleet.cli)
@@ -15,11 +16,13 @@ Bad input exits with status 2 and a message that says what to fix.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import json
 import os
 import sys
 import time
+import warnings
 from typing import Any, Sequence
 
 import numpy as np
@@ -341,9 +344,21 @@ def cmd_params(args: argparse.Namespace) -> int:
     from .params import save_params, siemens_1fk7060
 
     out = out_path(args.out, (".toml",), "--out")
-    save_params(siemens_1fk7060(), out)
-    print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it and "
-          "pass it with --params", file=sys.stderr)
+    if args.datasheet is None:
+        save_params(siemens_1fk7060(), out)
+        print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it "
+              "and pass it with --params", file=sys.stderr)
+        return 0
+    from .datasheet import convert, load_nameplate
+
+    sheet = convert(load_nameplate(args.datasheet))
+    save_params(sheet.params, out)
+    if not args.quiet:
+        print(sheet.summary())
+    for text in sheet.warnings:
+        print(f"emaphm params: warning: {text}", file=sys.stderr)
+    print(f"wrote {out}: {sheet.params.name} in emaphm's per-phase SI parameters; pass it with "
+          "--params", file=sys.stderr)
     return 0
 
 
@@ -428,12 +443,18 @@ def build_parser() -> argparse.ArgumentParser:
     cal.add_argument("--quiet", action="store_true")
     cal.set_defaults(func=cmd_calibrate)
 
-    p = sub.add_parser("params", help="write the default actuator parameters to a TOML file")
+    p = sub.add_parser("params", help="write the default actuator parameters (or a motor's, from "
+                                      "its data sheet) to a TOML file")
     p.add_argument("--out", required=True)
+    p.add_argument("--datasheet", help="a [datasheet] TOML in catalogue units (poles, ke in V/krpm "
+                                       "line to line, r_ll, l_ll, j_rotor, t_max, i_max...; see "
+                                       "docs/bench-import.md): convert it instead")
+    p.add_argument("--quiet", action="store_true", help="do not print the converted values")
     p.set_defaults(func=cmd_params)
 
     # subcommands of the campaign, prognosis and fleet layers live beside their code
-    for module in ("emaphm.campaign.cli", "emaphm.prognosis.cli", "emaphm.fleet.cli"):
+    for module in ("emaphm.traces.importers.cli", "emaphm.campaign.cli", "emaphm.prognosis.cli",
+                   "emaphm.fleet.cli"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as exc:
@@ -442,6 +463,27 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         register(sub)
     return ap
+
+
+@contextlib.contextmanager
+def trace_warnings_as_lines(cmd: str):
+    """Inside: a :class:`~emaphm.traces.TraceWarning` (a trace read, but not quite as
+    written) is printed as one line on stderr, ``CMD: warning: ...``; other warnings as
+    Python prints them."""
+    from .traces import TraceWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", TraceWarning)
+        original = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):
+            if issubclass(category, TraceWarning):
+                print(f"{cmd}: warning: {one_line(str(message))}", file=sys.stderr)
+            else:
+                original(message, category, filename, lineno, file, line)
+
+        warnings.showwarning = show
+        yield
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -457,7 +499,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     # the one error boundary: an expected failure is one line and exit 2, anything else is a
     # bug, shown with its traceback
     try:
-        return args.func(args)
+        with trace_warnings_as_lines(cmd):
+            return args.func(args)
     except UsageError as exc:
         return error(str(exc))
     except (ValueError, FileNotFoundError) as exc:   # TraceError, ParameterError, FaultVectorError...

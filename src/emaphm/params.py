@@ -90,6 +90,9 @@ __all__ = [
     "Calibration",
     "ActuatorParams",
     "siemens_1fk7060",
+    "back_emf_coefficient",
+    "Tuning",
+    "derive_tuning",
     "load_params",
     "save_params",
     "check_plausible",
@@ -102,9 +105,17 @@ class ParameterError(ValueError):
 
 Phase3 = tuple[float, float, float]
 
+def back_emf_coefficient(k_E: float) -> float:
+    """The back-EMF coefficient ``c0`` [V s/rad, peak per phase per mechanical rad/s] of a
+    voltage constant ``k_E`` [V per 1000 rpm, line-to-line RMS, as catalogues give it]:
+    ``sqrt(2) k_E / sqrt(3) / (1000 * 2 pi / 60)`` (RMS to peak, line to phase of a star,
+    krpm to rad/s)."""
+    return math.sqrt(2.0) * k_E / math.sqrt(3.0) / (1000.0 * 2.0 * math.pi / 60.0)
+
+
 #: Back-EMF coefficient of the reconstructed 1FK7060-2AC71: k_E = 135 V per 1000 rpm
 #: (line-to-line RMS) -> peak per phase per mechanical rad/s [V s/rad].
-C0_1FK7060 = math.sqrt(2.0) * 135.0 / math.sqrt(3.0) / (1000.0 * 2.0 * math.pi / 60.0)
+C0_1FK7060 = back_emf_coefficient(135.0)
 
 # unit of every field, used in error messages and in the TOML comments
 _UNITS: dict[str, str] = {
@@ -608,6 +619,64 @@ def siemens_1fk7060() -> ActuatorParams:
     backlash 2e-4 rad, DC link 600 V, PWM and control at 8 kHz.
     """
     return ActuatorParams(name="siemens-1fk7060-2ac71")
+
+
+@dataclass(frozen=True)
+class Tuning:
+    """The drive's settings :func:`derive_tuning` gives an actuator: the dq current loop
+    (``Kp_i`` V/A, ``Ki_i`` V/(A s)), the overcurrent trip ``I_trip`` [A peak], the
+    position gain ``Kp`` [1/s], the speed loop (``Kp_w`` N m s/rad, ``Ki_w`` N m/rad) and
+    the torque constant setting ``k_T`` [N m/A peak]."""
+
+    Kp_i: float
+    Ki_i: float
+    I_trip: float
+    Kp: float
+    Kp_w: float
+    Ki_w: float
+    k_T: float
+
+
+def derive_tuning(motor: Motor, f_pwm: float, J_load: float,
+                  template: "ActuatorParams | None" = None) -> Tuning:
+    """The preset's tuning carried over to another actuator, loop by loop.
+
+    The preset's loops (:func:`siemens_1fk7060`, our design) are read as bandwidths
+    relative to the control rate and gains proportional to the plant they control, so
+    that another motor's loops respond as the preset's do:
+
+    ==========  ====================================================================
+    setting     rule (``0``: the template's value, ``r = f_pwm / f_pwm0``)
+    ==========  ====================================================================
+    ``Kp_i``    ``Kp_i0 (L / L0) r``: the current loop crosses over at the same fraction
+                of the control rate (0.2375 rad per period: 1900 rad/s at 8 kHz)
+    ``Ki_i``    ``Ki_i0 (R / R0) r``: its zero stays on the winding's pole R/L
+    ``Kp``      ``Kp0 r``: the position loop as fast relative to the current loop
+    ``Kp_w``    ``Kp_w0 (J / J0) r``: the speed loop's bandwidth ``Kp_w / J`` scales as
+                the current loop's, ``J = J_m + J_load`` at the motor shaft
+    ``Ki_w``    ``Ki_w0 (J / J0) r^2``: its integral corner in the same ratio
+    ``I_trip``  ``I_trip0 (T_max / k_T) / (T_max0 / k_T0)``: the same margin over the
+                current of the peak torque
+    ``k_T``     ``1.5 c0``, the healthy motor's torque per peak ampere
+    ==========  ====================================================================
+
+    With the template's own motor, rate and load every ratio is 1: the preset's values.
+    """
+    t = template if template is not None else siemens_1fk7060()
+    tm, ti, tc = t.motor, t.inverter, t.controller
+    r = f_pwm / ti.f_pwm
+    L, R = sum(motor.L) / 3.0, sum(motor.R) / 3.0
+    J = motor.J_m + J_load
+    k_T = 1.5 * sum(motor.c0) / 3.0
+    return Tuning(
+        Kp_i=ti.Kp_i * (L / (sum(tm.L) / 3.0)) * r,
+        Ki_i=ti.Ki_i * (R / (sum(tm.R) / 3.0)) * r,
+        I_trip=ti.I_trip * (motor.T_max / k_T) / (tm.T_max / tc.k_T),
+        Kp=tc.Kp * r,
+        Kp_w=tc.Kp_w * (J / (tm.J_m + t.load.J_l)) * r,
+        Ki_w=tc.Ki_w * (J / (tm.J_m + t.load.J_l)) * r * r,
+        k_T=k_T,
+    )
 
 
 def read_toml(path: str | os.PathLike[str], what: str,

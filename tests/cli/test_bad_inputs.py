@@ -451,6 +451,140 @@ def _(d, b):
     return ["history"]
 
 
+# issue 22 and 25 (items 1, 5, 6, 9): bench imports and trace limits -----------------------
+def _bench_csv(b: Base, path: Path, *, t_offset: float = 0.0, degrees: bool = False,
+               rows: slice = slice(None)) -> Path:
+    """A bench export of the base trace: t, ref, pos, a, b (two currents)."""
+    tr = b.trace
+    f = 180 / np.pi if degrees else 1.0
+    data = np.column_stack([tr.t + t_offset, tr.theta_ref * f, tr.theta_m * f, tr.i_a, tr.i_b])
+    lines = ["t,ref,pos,a,b"] + [",".join(repr(float(x)) for x in row) for row in data[rows]]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+_MAP = ('[channels]\nt = {name = "t", unit = "s"}\ntheta_ref = {name = "ref", unit = "rad"}\n'
+        'theta_m = {name = "pos", unit = "rad"}\ni_a = {name = "a", unit = "A"}\n'
+        'i_b = {name = "b", unit = "A"}\n')
+
+
+def _import(d: Path, source: Path, map_text: str = _MAP) -> list[str]:
+    _toml(d / "map.toml", map_text)
+    return ["import", str(source), "--map", str(d / "map.toml"), "--out", str(d / "out.parquet")]
+
+
+@case("import-unknown-channel", "no channel 'Pos' in bench.csv (did you mean 'pos'?)",
+      "the file has 't', 'ref', 'pos', 'a', 'b'")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"), _MAP.replace('"pos"', '"Pos"'))
+
+
+@case("import-unit-that-does-not-convert", "[channels] theta_m: unit 'ms' is a unit of time, "
+                                           "which does not convert to the angle")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   _MAP.replace('name = "pos", unit = "rad"', 'name = "pos", unit = "ms"'))
+
+
+@case("import-channels-of-different-length", "the channels have different lengths",
+      "and no common time base")
+def _(d, b):
+    from scipy.io import savemat
+
+    tr = b.trace
+    savemat(d / "bench.mat", {"ref": tr.theta_ref, "pos": tr.theta_m, "a": tr.i_a,
+                              "b": tr.i_b[:-10]})
+    return _import(d, d / "bench.mat", "[time]\nrate = 8000\n" + _MAP.split("\n", 2)[0] + "\n"
+                   + _MAP.split("\n", 2)[2])
+
+
+@case("import-time-going-back", "the time base is not increasing: row 2,000 is at t = 0 s")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    lines[2001] = "0.0" + lines[2001][lines[2001].index(","):]
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src)
+
+
+@case("import-nan-run", "channel 'a' (i_a) has a run of 50 NaN sample(s) from t = 0.125 s")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    for k in range(1001, 1051):
+        cells = lines[k].split(",")
+        cells[3] = "nan"
+        lines[k] = ",".join(cells)
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src)
+
+
+@case("import-window-outside-the-recording", "no samples in the window 10.0:11.0 s; the "
+                                             "recording spans 0 to 0.499875 s")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv")) + ["--window", "10:11"]
+
+
+@case("import-window-malformed", "--window '10-11': expected START:END in seconds")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv")) + ["--window", "10-11"]
+
+
+@case("import-without-a-map", "give --map MAP.toml and --out", "or --inspect")
+def _(d, b):
+    return ["import", str(_bench_csv(b, d / "bench.csv")), "--out", str(d / "o.csv")]
+
+
+@case("csv-of-5-million-rows", "more than 2,", "rows, above the 2,000,000 samples a trace may have",
+      "--window START:END")
+def _(d, b):
+    (d / "big.csv").write_bytes(b"t,theta_ref,theta_m,omega_m,i_a,i_b,i_c\n"
+                                + b"0,0,0,0,0,0,0\n" * 5_000_000)
+    return ["diagnose", str(d / "big.csv")]
+
+
+@case("trace-file-above-the-size-limit", "the file is 600 MB, above the 537 MB a trace file may be")
+def _(d, b):
+    with open(d / "sparse.csv", "wb") as fh:                 # a sparse file: no disk used
+        fh.write(b"t,theta_ref,theta_m,omega_m,i_a,i_b,i_c\n")
+        fh.truncate(600_000_000)
+    return ["diagnose", str(d / "sparse.csv")]
+
+
+@case("decimal-comma-csv", "the numbers are written with a decimal comma (e.g. '0,0')",
+      "emaphm import t.csv --inspect")
+def _(d, b):
+    tr = b.trace
+    data = np.column_stack([tr.t, tr.theta_ref, tr.theta_m, tr.omega_m, tr.i_abc])
+    lines = ["t;theta_ref;theta_m;omega_m;i_a;i_b;i_c"] + [
+        ";".join(repr(float(x)).replace(".", ",") for x in row) for row in data]
+    (d / "t.csv").write_text("\n".join(lines) + "\n")
+    return ["diagnose", str(d / "t.csv")]
+
+
+@case("an-hour-of-trace", "in seconds the trace lasts 1 h", "--window START:END",
+      "in milliseconds it lasts 3.6 s")
+def _(d, b):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    n = 1_800_001                                              # an hour at 500 Hz
+    z = np.zeros(n)
+    t = np.arange(n) * 2e-3
+    pq.write_table(pa.table({"t": t, "theta_ref": z, "theta_m": z, "omega_m": z, "i_a": z,
+                             "i_b": z, "i_c": z}), d / "hour.parquet")
+    return ["diagnose", str(d / "hour.parquet")]
+
+
+@case("positions-in-degrees-with-speed-in-deg-per-s", "positions look like degrees and the "
+                                                       "speed like deg/s")
+def _(d, b):
+    tr = b.trace
+    write_trace(_with(tr, theta_ref=np.degrees(tr.theta_ref), theta_m=np.degrees(tr.theta_m),
+                      omega_m=np.degrees(tr.omega_m), meta={}), d / "deg.csv")
+    return ["diagnose", str(d / "deg.csv")]
+
+
 # ----------------------------------------------------------------------------- the test
 def _snapshot(folder: Path) -> dict[str, str]:
     """Every path under ``folder`` with the hash of its bytes (folders: "dir")."""
@@ -487,6 +621,46 @@ def test_bad_input_is_one_line_exit_2_and_changes_nothing(name, base, tmp_path, 
     for p in folder.rglob("*"):              # give read-only folders back to the cleanup
         if p.is_dir():
             p.chmod(stat.S_IRWXU)
+
+
+def _warned(argv, capsys) -> str:
+    """Run ``argv`` that succeeds with warnings; its stderr, which must be warning lines only."""
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    lines = err.splitlines()
+    assert lines and all(": warning: " in line for line in lines if "warning" in line)
+    assert "Traceback" not in err
+    return err
+
+
+def test_clock_times_are_shifted_to_zero_with_one_warning_line(base, tmp_path, capsys):
+    src = _bench_csv(base, tmp_path / "epoch.csv", t_offset=1.7e9)
+    argv = _import(tmp_path, src) + ["--quiet"]
+    # the import starts the trace at 0 itself, and keeps the clock time in its metadata
+    assert main(argv) == 0
+    from emaphm.traces import read_trace
+    assert read_trace(tmp_path / "out.parquet").meta["source"]["t_start"] == 1.7e9
+    trace = read_trace(tmp_path / "out.parquet")
+    write_trace(_with(base.trace, t=base.trace.t + 1.7e9), tmp_path / "epoch_trace.csv")
+    capsys.readouterr()
+    err = _warned(["diagnose", str(tmp_path / "epoch_trace.csv"), "--budget", "40", "--quiet",
+                   "--json"], capsys)
+    assert err.count("\n") == 1 and err.startswith("emaphm diagnose: warning: ")
+    assert "holds clock times (starts at 1700000000 s, a Unix time: 2023-11-14 22:13:20 UTC); " \
+           "shifted to start at 0" in err
+    assert "put on their uniform grid" in err
+    assert trace.t[0] == 0.0
+
+
+def test_an_export_shorter_than_its_profile_warns_with_both_durations(base, tmp_path, capsys):
+    short = Trace(t=base.trace.t[:2400], theta_ref=base.trace.theta_ref[:2400],
+                  theta_m=base.trace.theta_m[:2400], omega_m=base.trace.omega_m[:2400],
+                  i_abc=base.trace.i_abc[:2400], meta=base.trace.meta)
+    write_trace(short, tmp_path / "short.csv")
+    err = _warned(["diagnose", str(tmp_path / "short.csv"), "--budget", "40", "--quiet",
+                   "--json"], capsys)
+    assert err.count("\n") == 1
+    assert "the trace lasts 0.2999 s, shorter than its test profile (diagnostic, 0.5 s)" in err
 
 
 def test_the_corpus_covers_every_class_of_issue_10():

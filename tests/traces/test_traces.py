@@ -585,10 +585,24 @@ def test_time_in_milliseconds(trace):
         validate(replace(trace, t=trace.t * 1e3))
 
 
-def test_duration_above_1000_s_suggests_milliseconds():
+def test_duration_above_1000_s_says_both_readings():
     long = synthetic(duration=1080.0, dt=0.009, turns=50.0)
-    with pytest.raises(TraceError, match=r"'t' looks like milliseconds.*duration 10\d\d"):
+    with pytest.raises(TraceError, match=r"'t' spans 10\d\d.* with a mean step of 0.009: in "
+                                         r"seconds the trace lasts 18 min.*in milliseconds it "
+                                         r"lasts 1.08 s"):
         validate(long)
+
+
+def test_an_hour_at_20_khz_is_long_not_milliseconds():
+    from emaphm.traces.validation import _check_time_scale
+
+    with pytest.raises(TraceError, match=r"^the trace lasts 1 h \(3600 s at 20000 Hz\), longer "
+                                         r"than the 1000 s .*--window START:END") as info:
+        _check_time_scale(5e-5, 3600.0)
+    assert "millisecond" not in str(info.value)
+    with pytest.raises(TraceError, match=r"looks like milliseconds"):
+        _check_time_scale(0.125, 500.0)
+    _check_time_scale(1.25e-4, 0.5)
 
 
 def test_currents_in_milliamperes(trace):

@@ -410,6 +410,25 @@ class CampaignStore:
         rows = self._conn.execute(q, () if status is None else (status,)).fetchall()
         return [_from_row(r) for r in rows]
 
+    def frame(self, status: str | None = "ok"):
+        """The stored runs (``status`` ``"ok"``, ``"failed"`` or None for all) as a pandas
+        DataFrame, one row per run indexed by its key: every field of :class:`RunResult`,
+        the vectors ``k``, ``k_raw`` and ``k_true`` spread into ``k_<name>``... columns
+        (:data:`emaphm.faults.K_NAMES`), ``history`` kept as a tuple. Needs pandas."""
+        from ..faults import K_NAMES
+        from ..frames import require_pandas, vector_columns
+
+        pd = require_pandas("CampaignStore.frame()")
+        rows = []
+        for r in self.results(status):
+            row = asdict(r)
+            for name in ("k", "k_raw", "k_true"):
+                vector_columns(row, name, row.pop(name), K_NAMES)
+            row["spawn_key"] = tuple(row["spawn_key"])
+            rows.append(row)
+        df = pd.DataFrame(rows)
+        return df.set_index("key") if rows else df
+
     def result(self, key: str) -> RunResult | None:
         row = self._conn.execute("SELECT * FROM runs WHERE run_key = ?", (key,)).fetchone()
         return None if row is None else _from_row(row)

@@ -565,6 +565,37 @@ class HealthHistory:
             f"SELECT {self._COLS} FROM inspections WHERE actuator = ? ORDER BY time",
             (actuator_id,)).fetchall())
 
+    def frame(self, actuator_id: str):
+        """The actuator's inspections as a pandas DataFrame, one row per inspection in time
+        order: ``time`` (in the actuator's time unit), ``k_<name>``, ``k_lo_<name>`` and
+        ``k_hi_<name>`` per component (:data:`emaphm.faults.K_NAMES`), ``verdict``,
+        ``healthy``, ``fault_model``, ``algorithm``, ``seed``, ``fitness``,
+        ``evaluations``, ``spread_method``, ``level``, ``fingerprint``, ``source``,
+        ``recorded_utc``; indexed by the inspection id. Needs pandas."""
+        from ..faults import K_NAMES
+        from ..frames import require_pandas, vector_columns
+
+        pd = require_pandas("HealthHistory.frame()")
+        rows = []
+        for ins in self.inspections(actuator_id):
+            row: dict[str, Any] = {"id": ins.id, "time": ins.time}
+            vector_columns(row, "k", ins.k, K_NAMES)
+            vector_columns(row, "k_lo", ins.k_lo, K_NAMES)
+            vector_columns(row, "k_hi", ins.k_hi, K_NAMES)
+            verdict = (ins.diagnosis or {}).get("verdict") if isinstance(ins.diagnosis, dict) else None
+            row.update(verdict=verdict, healthy=ins.healthy, fault_model=ins.fault_model,
+                       algorithm=ins.algorithm, seed=ins.seed, fitness=ins.fitness,
+                       evaluations=ins.evaluations, spread_method=ins.spread_method,
+                       level=ins.level, fingerprint=ins.fingerprint, source=ins.source,
+                       recorded_utc=ins.recorded_utc)
+            rows.append(row)
+        columns = ["id", "time"] + [f"{p}_{n}" for p in ("k", "k_lo", "k_hi") for n in K_NAMES] + [
+            "verdict", "healthy", "fault_model", "algorithm", "seed", "fitness", "evaluations",
+            "spread_method", "level", "fingerprint", "source", "recorded_utc"]
+        df = pd.DataFrame(rows, columns=columns).set_index("id")
+        df.attrs["actuator"] = self.actuator(actuator_id).to_dict()
+        return df
+
     def data(self, actuator_id: str) -> HistoryData:
         """The k history of ``actuator_id`` as arrays (:class:`HistoryData`)."""
         act = self.actuator(actuator_id)

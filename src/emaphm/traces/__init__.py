@@ -24,19 +24,25 @@ torque      N m      motor torque T_m (optional, simulations only)
 File formats (chosen by suffix, see :func:`write_trace` / :func:`read_trace`):
 
 * ``.csv``: first line ``# emaphm-trace 1 {json metadata}``, then a header row with the
-  column names, then one comma-separated row per sample written with ``repr`` of each
-  float (shortest exact round trip). The reader also accepts bench exports without the
+  column names, then one comma-separated row per sample, each float written as the
+  shortest text that reads back to the same double. The reader also accepts bench exports without the
   metadata line: columns in any order, extra columns ignored, ``;`` or tab delimiters,
   names written as ``name [unit]`` and an optional units row such as ``[s],[rad],...``.
 * ``.parquet``: one float64 column per quantity; the metadata JSON is stored in the schema
   metadata under the key ``b"emaphm"``.
 
+A trace holds at most :data:`MAX_SAMPLES` samples and a trace file at most
+:data:`MAX_FILE_BYTES` bytes; both are checked before a file is read whole. Exports in
+other layouts (decimal commas, ms, degrees, MATLAB, TDMS, MDF 4) are read by
+:mod:`emaphm.traces.importers` (``emaphm import``).
+
 Writes are atomic: the file is written to a temporary sibling and moved over the target
 with :func:`os.replace`, so a failure never leaves a half-written file.
 """
 
-from .container import COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, resample
+from .container import COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, TraceWarning, resample
 from .files import SUFFIXES, read_trace, write_trace
+from .limits import MAX_FILE_BYTES, MAX_SAMPLES
 from .metadata import FORMAT_VERSION
 from .validation import MIN_SAMPLES, validate
 
@@ -45,9 +51,12 @@ __all__ = [
     "OPTIONAL_COLUMNS",
     "UNITS",
     "MIN_SAMPLES",
+    "MAX_SAMPLES",
+    "MAX_FILE_BYTES",
     "SUFFIXES",
     "FORMAT_VERSION",
     "TraceError",
+    "TraceWarning",
     "Trace",
     "validate",
     "write_trace",

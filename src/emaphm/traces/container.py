@@ -42,6 +42,12 @@ class TraceError(ValueError):
     """
 
 
+class TraceWarning(UserWarning):
+    """A trace that was read, but not quite as written (its time shifted to start at 0),
+    or that may not hold the whole test (shorter than its profile). The command line
+    prints it as one line on stderr."""
+
+
 def _expected_columns() -> str:
     req = ", ".join(f"{c} [{UNITS[c]}]" for c in COLUMNS)
     opt = ", ".join(f"{c} [{UNITS[c]}]" for c in OPTIONAL_COLUMNS)
@@ -283,6 +289,40 @@ class Trace:
             torque=columns.get("torque"),
             meta=dict(meta) if meta is not None else {},
         )
+
+    def to_pandas(self):
+        """The signals as a pandas DataFrame, one column per quantity (``t``, ``theta_ref``,
+        ``theta_m``, ``omega_m``, ``i_a``, ``i_b``, ``i_c``, and ``torque`` if set, SI
+        units), the metadata in ``df.attrs["emaphm"]``. Needs pandas
+        (``pip install 'emaphm[pandas]'``)."""
+        from ..frames import require_pandas
+
+        pd = require_pandas("Trace.to_pandas()")
+        cols = {name: getattr(self, name) for name in ("t", "theta_ref", "theta_m", "omega_m")}
+        cols.update(i_a=self.i_a, i_b=self.i_b, i_c=self.i_c)
+        if self.torque is not None:
+            cols["torque"] = self.torque
+        df = pd.DataFrame({k: np.array(v) for k, v in cols.items()})
+        df.attrs["emaphm"] = json.loads(json.dumps(self.meta))
+        return df
+
+    @classmethod
+    def from_pandas(cls, df: Any, meta: Mapping | None = None) -> Trace:
+        """A trace from a DataFrame with the columns of :data:`COLUMNS` (SI units; others are
+        ignored), its metadata ``meta`` or else ``df.attrs["emaphm"]``."""
+        if not hasattr(df, "columns") or not hasattr(df, "to_numpy"):
+            raise TraceError(f"Trace.from_pandas() needs a pandas DataFrame, got {type(df).__name__}")
+        names = [str(c) for c in df.columns]
+        _require_columns(names, "DataFrame")
+        if meta is None:
+            meta = getattr(df, "attrs", {}).get("emaphm", {})
+        try:
+            cols = {c: df[c].to_numpy(dtype=np.float64) for c in COLUMNS + OPTIONAL_COLUMNS
+                    if c in names}
+        except (TypeError, ValueError) as exc:
+            raise TraceError(f"DataFrame columns cannot be read as float64 ({exc}); give "
+                             "numbers in SI units") from None
+        return cls.from_columns(cols, meta=meta)
 
     def with_meta(self, **updates: Any) -> Trace:
         """A copy with ``meta`` updated by ``updates`` (arrays are shared, not copied)."""

@@ -16,6 +16,7 @@ from .._files import atomic_write
 from .container import Trace, TraceError
 from .csv_format import _read_csv, _write_csv
 from .parquet_format import _read_parquet, _write_parquet
+from .timebase import from_epoch, warn_if_shorter_than_profile
 from .validation import validate as _validate
 
 __all__ = ["SUFFIXES", "write_trace", "read_trace"]
@@ -66,6 +67,12 @@ def read_trace(
     ``min_rotation``, rad) and every problem is raised as :class:`TraceError` prefixed
     with the path. Units given in a CSV header (``name [unit]`` or a units row) are
     stored in ``meta["units"]`` and checked by :func:`validate`.
+
+    Files above :data:`~emaphm.traces.limits.MAX_FILE_BYTES` or with more than
+    :data:`~emaphm.traces.limits.MAX_SAMPLES` rows are refused before they are read
+    whole. With ``validate``, clock times (a Unix time in ``t``) are shifted to start at 0, and a trace
+    shorter than the test profile its metadata names is read; both with a
+    :class:`~emaphm.traces.container.TraceWarning`.
     """
     path = Path(path)
     suffix = _suffix(path)
@@ -86,10 +93,16 @@ def read_trace(
         # reports a corrupt file as an OSError)
         raise TraceError(f"{path}: cannot be read as a {suffix[1:]} trace ({type(exc).__name__}: "
                          f"{str(exc)[:200]}); check that it is an emaphm or bench export") from None
+    t = columns.get("t")
+    if validate and t is not None:
+        columns["t"], t_start = from_epoch(np.asarray(t, dtype=np.float64), str(path))
+        if t_start is not None:
+            meta = {**meta, "t_start": t_start}
     try:
         trace = Trace.from_columns(columns, meta=meta)
     except TraceError as exc:
         raise TraceError(f"{path}: {exc}") from None
+    warn_if_shorter_than_profile(trace, str(path))
     if validate:
         try:
             _validate(trace, min_rotation=min_rotation)

@@ -10,6 +10,7 @@ from typing import IO
 import numpy as np
 
 from .container import COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, _require_columns
+from .limits import check_file_size, check_samples
 from .metadata import FORMAT_VERSION, _dumps, _loads
 
 _PARQUET_META_KEY = b"emaphm"
@@ -38,12 +39,15 @@ def _read_parquet(path: Path) -> tuple[dict[str, np.ndarray], dict]:
     import pyarrow.parquet as pq
 
     source = str(path)
+    check_file_size(path)
     try:
         schema = pq.read_schema(path)
+        rows = pq.ParquetFile(path).metadata.num_rows
     except (pa.ArrowInvalid, OSError) as exc:
         if isinstance(exc, FileNotFoundError):
             raise
         raise TraceError(f"{source}: not a readable Parquet file ({exc})") from None
+    check_samples(rows, source)
     raw = (schema.metadata or {})
     version = raw.get(_PARQUET_VERSION_KEY)
     if version is not None and version.isdigit() and int(version) > FORMAT_VERSION:

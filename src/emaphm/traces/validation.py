@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..quantities import QuantityError, measure
 from .container import UNITS, Trace, TraceError, _expected_columns
 
 __all__ = ["MIN_SAMPLES", "validate"]
@@ -21,6 +22,8 @@ MIN_SAMPLES = 100
 _MAX_TIME_STEP = 0.01  # s; a larger step suggests milliseconds
 _MAX_DURATION = 1e3  # s; a longer trace suggests milliseconds
 _MAX_CURRENT = 1e3  # A; a larger current suggests milliamperes
+_MIN_TIME_STEP_IF_MS = 1e-3  # s; read as ms, a smaller step would be under 1 us
+_MAX_SPEED = 2000.0  # rad/s (19,100 rpm); no servo motor turns faster
 _MIN_SPEED_CORRELATION = 0.9  # omega_m vs d(theta_m)/dt must be this collinear to judge units
 _RATIO_TOLERANCE = 0.10  # relative distance of a speed ratio to a known factor
 _RATIO_BAND = (0.5, 2.0)  # ratios outside this band (and not a known factor) are an error
@@ -33,51 +36,10 @@ _STAR_AC_LIMIT = 0.25  # RMS of the noise-free part of the sum / that of the pha
 # Units
 # --------------------------------------------------------------------------------------
 
-_SI_SPELLINGS: dict[str, set[str]] = {
-    "s": {"s", "sec", "second", "seconds"},
-    "rad": {"rad", "radian", "radians"},
-    "rad/s": {"rad/s", "rad/sec", "rad s^-1", "rad*s^-1", "rad s-1", "rad.s-1", "rad s⁻¹"},
-    "A": {"a", "amp", "amps", "ampere", "amperes"},
-    "N m": {"n m", "nm", "n*m", "n.m", "n·m", "n-m", "newton metre", "newton meter"},
-}
-# unit (lower case) -> (SI unit, factor to SI, how to write the factor)
-_NON_SI: dict[str, tuple[str, float, str]] = {
-    "ms": ("s", 1e-3, "0.001 (divide by 1000)"),
-    "us": ("s", 1e-6, "1e-6"),
-    "µs": ("s", 1e-6, "1e-6"),
-    "μs": ("s", 1e-6, "1e-6"),
-    "min": ("s", 60.0, "60"),
-    "h": ("s", 3600.0, "3600"),
-    "deg": ("rad", math.pi / 180, "pi/180"),
-    "degree": ("rad", math.pi / 180, "pi/180"),
-    "degrees": ("rad", math.pi / 180, "pi/180"),
-    "°": ("rad", math.pi / 180, "pi/180"),
-    "rev": ("rad", 2 * math.pi, "2*pi"),
-    "revs": ("rad", 2 * math.pi, "2*pi"),
-    "revolutions": ("rad", 2 * math.pi, "2*pi"),
-    "turn": ("rad", 2 * math.pi, "2*pi"),
-    "turns": ("rad", 2 * math.pi, "2*pi"),
-    "rpm": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
-    "r/min": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
-    "rev/min": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
-    "1/min": ("rad/s", 2 * math.pi / 60, "2*pi/60"),
-    "rps": ("rad/s", 2 * math.pi, "2*pi"),
-    "rev/s": ("rad/s", 2 * math.pi, "2*pi"),
-    "deg/s": ("rad/s", math.pi / 180, "pi/180"),
-    "°/s": ("rad/s", math.pi / 180, "pi/180"),
-    "degree/s": ("rad/s", math.pi / 180, "pi/180"),
-    "degrees/s": ("rad/s", math.pi / 180, "pi/180"),
-    "ma": ("A", 1e-3, "0.001 (divide by 1000)"),
-    "ka": ("A", 1e3, "1000"),
-    "mn m": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "mnm": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "mn*m": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "mn.m": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "mn·m": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "n mm": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "n*mm": ("N m", 1e-3, "0.001 (divide by 1000)"),
-    "nmm": ("N m", 1e-3, "0.001 (divide by 1000)"),
-}
+#: The quantity (:mod:`emaphm.quantities`) each column measures.
+_KINDS: dict[str, str] = {"t": "time", "theta_ref": "angle", "theta_m": "angle",
+                          "omega_m": "angular speed", "i_a": "current", "i_b": "current",
+                          "i_c": "current", "torque": "torque"}
 
 
 def _unbracket(unit: str) -> str:
@@ -99,29 +61,28 @@ def _check_unit(column: str, unit: Any, source: str) -> None:
             f"{source}: the unit of column '{column}' is {unit!r}, expected the string "
             f"'{expected}'"
         )
-    u = _normalise_unit(unit)
-    if u in ("", "-"):
+    if _normalise_unit(unit) in ("", "-"):
         return
-    if u in _SI_SPELLINGS[expected]:
-        return
-    if u in _NON_SI:
-        si, _factor, how = _NON_SI[u]
-        if si == expected:
-            raise TraceError(
-                f"{source}: column '{column}' is in '{_unbracket(unit)}', emaphm needs SI "
-                f"units ({expected}); multiply the column by {how} to convert it to "
-                f"{expected} and change its unit to '{expected}'"
-            )
-    for si, spellings in _SI_SPELLINGS.items():
-        if u in spellings or (u in _NON_SI and _NON_SI[u][0] == si):
-            raise TraceError(
-                f"{source}: column '{column}' has the unit '{_unbracket(unit)}' (a unit of "
-                f"{si}), but '{column}' must be in {expected}; check the column "
-                f"assignment ({_expected_columns()})"
-            )
+    try:
+        found = measure(unit)
+    except QuantityError:
+        raise TraceError(
+            f"{source}: column '{column}' has the unrecognised unit '{_unbracket(unit)}'; "
+            f"convert the column to {expected} and write its unit as '{expected}'"
+        ) from None
+    if found.kind == _KINDS[column]:
+        if found.is_si:
+            return
+        raise TraceError(
+            f"{source}: column '{column}' is in '{_unbracket(unit)}', emaphm needs SI "
+            f"units ({expected}); multiply the column by {found.how} to convert it to "
+            f"{expected} and change its unit to '{expected}', or import the export as it is "
+            "with `emaphm import FILE --inspect`"
+        )
     raise TraceError(
-        f"{source}: column '{column}' has the unrecognised unit '{_unbracket(unit)}'; "
-        f"convert the column to {expected} and write its unit as '{expected}'"
+        f"{source}: column '{column}' has the unit '{_unbracket(unit)}' (a unit of "
+        f"{found.si}), but '{column}' must be in {expected}; check the column "
+        f"assignment ({_expected_columns()})"
     )
 
 
@@ -213,6 +174,58 @@ def _check_speed_units(trace: Trace) -> None:
         )
 
 
+def _clock(seconds: float) -> str:
+    return (f"{seconds / 3600:.3g} h" if seconds >= 3600 else f"{seconds / 60:.3g} min"
+            if seconds >= 60 else f"{seconds:.3g} s")
+
+
+def _check_time_scale(dt: float, duration: float) -> None:
+    """Time in s: a step above 0.01 s is milliseconds. A trace longer than 1000 s is a
+    long recording in seconds where its step read as ms would be under 1 us; with a step
+    of 1-10 ms it may be either, and both readings are said. ``dt`` is the mean step and
+    ``duration`` the span of the time column, in its own unit."""
+    if dt > _MAX_TIME_STEP:
+        raise TraceError(
+            f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, duration "
+            f"{duration:.6g} (a trace in seconds has a step <= {_MAX_TIME_STEP} s and lasts <= "
+            f"{_MAX_DURATION:g} s); divide t by 1000, or import the export with its time unit: "
+            "`emaphm import FILE --inspect`")
+    if duration <= _MAX_DURATION:
+        return
+    cut = ("cut the test out of the recording with `emaphm import FILE --map MAP.toml --window "
+           "START:END --out TRACE.parquet`")
+    if dt < _MIN_TIME_STEP_IF_MS:
+        raise TraceError(
+            f"the trace lasts {_clock(duration)} ({duration:.6g} s at {1 / dt:.6g} Hz), longer "
+            f"than the {_MAX_DURATION:g} s a trace to diagnose may last; a diagnosis needs one "
+            f"test profile (0.5 s): {cut}")
+    raise TraceError(
+        f"column 't' spans {duration:.6g} with a mean step of {dt:.6g}: in seconds the trace "
+        f"lasts {_clock(duration)}, longer than the {_MAX_DURATION:g} s a trace to diagnose may "
+        f"last ({cut}); in milliseconds it lasts {duration / 1000:.4g} s (divide t by 1000)")
+
+
+def _check_speed_plausible(trace: Trace) -> None:
+    """A motor speed no servo motor reaches, where the same numbers read as deg/s would be
+    plausible: positions and speed recorded in degrees and deg/s (consistent with each
+    other, so :func:`_check_speed_units` cannot see it)."""
+    peak = float(np.max(np.abs(trace.omega_m))) if trace.n else 0.0
+    if peak <= _MAX_SPEED:
+        return
+    as_degrees = peak * math.pi / 180.0
+    if as_degrees <= _MAX_SPEED:
+        raise TraceError(
+            f"column 'omega_m' reaches {peak:.6g} rad/s ({peak * 60 / (2 * math.pi):.3g} rpm), "
+            f"beyond any servo motor (at most {_MAX_SPEED:g} rad/s): positions look like "
+            "degrees and the speed like deg/s; multiply theta_m and theta_ref by pi/180 and "
+            "omega_m by pi/180, or import the export with its units: `emaphm import FILE "
+            "--inspect`")
+    raise TraceError(
+        f"column 'omega_m' reaches {peak:.6g} rad/s ({peak * 60 / (2 * math.pi):.3g} rpm), "
+        f"beyond any servo motor (at most {_MAX_SPEED:g} rad/s); check the unit of omega_m "
+        "and theta_m (rad/s and rad, motor side)")
+
+
 def _lag1_power(x: np.ndarray) -> float:
     """mean(x[k] x[k+1]): the power of the smooth part of ``x``; white noise averages out."""
     return float(np.mean(x[:-1] * x[1:]))
@@ -270,7 +283,7 @@ def validate(
     seconds (step <= 0.01 s and duration <= 1000 s) and uniform (relative spread of the
     steps <= ``rtol_dt``); currents in A (|i| <= 1000 A); ``omega_m`` consistent with
     the derivative of ``theta_m`` (catches rpm, deg/s, degrees, revolutions and sign
-    errors when there is clear motion); rotation range ``max(theta_m) - min(theta_m) >=
+    errors when there is clear motion) and below 2000 rad/s (degrees and deg/s together); rotation range ``max(theta_m) - min(theta_m) >=
     min_rotation`` (rad, 0 disables); phase currents summing to about zero (star
     connection).
 
@@ -320,14 +333,8 @@ def validate(
             "samples by time and drop duplicated time stamps"
         )
 
-    dt, duration = trace.dt, trace.duration
-    if dt > _MAX_TIME_STEP or duration > _MAX_DURATION:
-        raise TraceError(
-            f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, "
-            f"duration {duration:.6g} (a trace in seconds has a step <= {_MAX_TIME_STEP} s "
-            f"and lasts <= {_MAX_DURATION:g} s); divide t by 1000. If it really is in "
-            "seconds, resample it finer or split it into shorter windows"
-        )
+    _check_time_scale(trace.dt, trace.duration)
+    dt = trace.dt
 
     spread = float((steps.max() - steps.min()) / dt)
     if spread > rtol_dt:
@@ -352,6 +359,7 @@ def validate(
             )
 
     _check_speed_units(trace)
+    _check_speed_plausible(trace)
 
     if min_rotation > 0:
         rotation = float(np.ptp(trace.theta_m))

@@ -1,0 +1,325 @@
+"""From a bench export and its channel map to an emaphm :class:`~emaphm.traces.Trace`:
+pick the channels, convert them to SI, find the time base, keep the window, derive what
+is missing (``omega_m`` from ``theta_m``, ``i_c`` from the other two), check what a
+recorder gets wrong (channels of different length, a time base that goes back, NaN runs),
+and say in the metadata where it all came from.
+
+The export is read in blocks: memory holds the window kept (at most
+:data:`~emaphm.traces.limits.MAX_SAMPLES` samples) and one block, however long the
+recording."""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..container import Trace, TraceError, TraceWarning
+from ..limits import MAX_SAMPLES, too_many_samples
+from ..timebase import warn_if_shorter_than_profile
+from ..validation import validate
+from .base import ChannelInfo, SourceInfo
+from .channel_map import ChannelMap, Conversion
+from .registry import open_source
+
+__all__ = ["import_trace", "Window", "file_digest"]
+
+#: Order the channels are asked for: the first one's time base is an MDF file's master.
+_ORDER = ("i_a", "i_b", "i_c", "theta_ref", "theta_m", "omega_m", "torque", "t")
+#: Relative spread of the time steps above which an import puts the samples on a uniform
+#: grid (validation's own tolerance), and above which it refuses to.
+_UNIFORM_RTOL = 1e-3
+_RESAMPLE_LIMIT = 0.5
+
+
+@dataclass(frozen=True)
+class Window:
+    """The part of a recording to import, ``start`` to ``end`` [s] of its own time (None:
+    from its beginning, to its end)."""
+
+    start: float | None = None
+    end: float | None = None
+
+    def __post_init__(self) -> None:
+        for v in (self.start, self.end):
+            if v is not None and not math.isfinite(v):
+                raise TraceError(f"--window: times must be finite seconds, got {v!r}")
+        if self.start is not None and self.end is not None and self.end <= self.start:
+            raise TraceError(f"--window {self.start:g}:{self.end:g}: the end must come after the "
+                             "start")
+
+    @classmethod
+    def parse(cls, text: str | None) -> "Window":
+        """``"START:END"`` (seconds; either may be left out), as ``--window`` takes it."""
+        if text is None:
+            return cls()
+        parts = text.split(":")
+        try:
+            if len(parts) != 2:
+                raise ValueError
+            lo, hi = (float(p) if p.strip() else None for p in parts)
+        except ValueError:
+            raise TraceError(f"--window {text[:40]!r}: expected START:END in seconds of the "
+                             "recording, e.g. 12.5:13.0 (either may be left out)") from None
+        return cls(lo, hi)
+
+    def to_list(self) -> list[float | None]:
+        return [self.start, self.end]
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 of the file's bytes, read in chunks."""
+    with open(path, "rb") as fh:
+        return hashlib.file_digest(fh, "sha256").hexdigest()
+
+
+@dataclass(frozen=True)
+class _TimeBase:
+    mode: str                     # "channel", "rate" or "own"
+    rate: float | None = None
+    start: float = 0.0
+
+
+def _time_base(cmap: ChannelMap, info: SourceInfo, chans: dict[str, ChannelInfo],
+               where: str) -> _TimeBase:
+    if "t" in chans:
+        return _TimeBase("channel")
+    if cmap.time.rate is not None:
+        return _TimeBase("rate", cmap.time.rate, cmap.time.start)
+    if info.own_time:
+        ref = chans[_first(chans)]
+        return _TimeBase("own", ref.rate, ref.start or 0.0)
+    rates = {(c.rate, c.start) for c in chans.values()}
+    if len(rates) == 1 and None not in next(iter(rates)):
+        rate, start = next(iter(rates))
+        return _TimeBase("rate", rate, start)
+    raise TraceError(f"{where}: no time base: the file has no time for these channels; map a t "
+                     "channel in [channels] or give the sample rate in [time] rate = ... (Hz)")
+
+
+def _first(chans: dict[str, ChannelInfo]) -> str:
+    return next(t for t in _ORDER if t in chans)
+
+
+def _check_lengths(chans: dict[str, ChannelInfo], base: _TimeBase, where: str) -> int | None:
+    """The common number of samples (None where unknown before reading)."""
+    known = {t: c.samples for t, c in chans.items() if c.samples is not None}
+    if not known:
+        return None
+    if len(set(known.values())) > 1 and base.mode != "own":
+        same_base = {(c.rate, c.start) for c in chans.values()}
+        if base.mode == "rate" and len(same_base) == 1 and None not in next(iter(same_base)):
+            return min(known.values())          # waveforms on one time base: the common part
+        sizes = ", ".join(f"{chans[t].label} ({t}) {n:,}" for t, n in known.items())
+        raise TraceError(f"{where}: the channels have different lengths ({sizes} samples) and "
+                         "no common time base; map channels recorded together (one group, one "
+                         "rate), or resample them onto one time base in the recorder")
+    return min(known.values())
+
+
+def _rows(base: _TimeBase, window: Window, n: int | None) -> tuple[int, int | None]:
+    """Rows to read where the time is a known rate (else all of them)."""
+    if base.mode not in ("rate", "own") or not base.rate:
+        return 0, n
+    first = 0 if window.start is None else max(0, math.ceil((window.start - base.start)
+                                                            * base.rate - 1e-6) - 1)
+    stop = n if window.end is None else int(math.floor((window.end - base.start) * base.rate
+                                                       + 1e-6)) + 2
+    if n is not None and stop is not None:
+        stop = min(stop, n)
+    return first, stop
+
+
+def _nan_runs(name: str, target: str, x: np.ndarray, t: np.ndarray, where: str) -> None:
+    bad = np.isnan(x)
+    if not bad.any():
+        return
+    first = int(np.argmax(bad))
+    run = int(np.argmax(~bad[first:])) if (~bad[first:]).any() else int(bad.size - first)
+    raise TraceError(f"{where}: channel {name!r} ({target}) has a run of {run:,} NaN sample(s) "
+                     f"from t = {t[first]:.9g} s (row {first:,} of the window), {int(bad.sum()):,} "
+                     "in all; import a window without them (--window START:END), or fill the "
+                     "gap in the recorder")
+
+
+class _Collector:
+    """The window's rows, block by block, with the checks that need the whole stream."""
+
+    def __init__(self, targets: Sequence[str], window: Window, limit: int, where: str) -> None:
+        self.targets, self.window, self.limit, self.where = list(targets), window, limit, where
+        self.parts: dict[str, list[np.ndarray]] = {t: [] for t in targets}
+        self.times: list[np.ndarray] = []
+        self.kept = 0
+        self.last_t = -math.inf
+        self.span = [math.inf, -math.inf]
+        self.done = False
+
+    def add(self, t: np.ndarray, cols: dict[str, np.ndarray], first_row: int) -> None:
+        if t.size == 0:
+            return
+        steps = np.diff(t)
+        if not (t[0] > self.last_t) or (steps.size and not np.all(steps > 0)):
+            k = 0 if not (t[0] > self.last_t) else int(np.argmax(~(steps > 0))) + 1
+            before = self.last_t if k == 0 else t[k - 1]
+            raise TraceError(f"{self.where}: the time base is not increasing: row {first_row + k:,} "
+                             f"is at t = {t[k]:.9g} s, after {before:.9g} s (a recorder restart, "
+                             "a wrapped counter or appended runs?); import a window before or "
+                             "after it (--window START:END)")
+        self.last_t = float(t[-1])
+        self.span = [min(self.span[0], float(t[0])), float(t[-1])]
+        lo, hi = self.window.start, self.window.end
+        keep = np.ones(t.size, dtype=bool)
+        if lo is not None:
+            keep &= t >= lo
+        if hi is not None:
+            keep &= t <= hi
+            self.done = bool(t[-1] > hi)
+        n = int(keep.sum())
+        if not n:
+            return
+        self.kept += n
+        if self.kept > self.limit:
+            raise too_many_samples(self.where, f"the import would hold more than {self.limit:,} "
+                                   "samples", self.limit)
+        self.times.append(t[keep])
+        for target in self.targets:
+            self.parts[target].append(cols[target][keep])
+
+    def arrays(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        if not self.kept:
+            lo, hi = self.span
+            raise TraceError(f"{self.where}: no samples in the window {self.window.start}:"
+                             f"{self.window.end} s; the recording spans {lo:.9g} to {hi:.9g} s")
+        t = np.concatenate(self.times)
+        self.times = []
+        out = {}
+        for target in self.targets:
+            out[target] = np.concatenate(self.parts[target])
+            self.parts[target] = []
+        return t, out
+
+
+def _read(source, cmap: ChannelMap, chans: dict[str, ChannelInfo], conv: dict[str, Conversion],
+          base: _TimeBase, window: Window, limit: int, where: str):
+    order = [t for t in _ORDER if t in chans]
+    n = _check_lengths(chans, base, where)
+    first, stop = _rows(base, window, n)
+    if n is not None and (stop if stop is not None else n) - first > limit:
+        what = (f"{n:,} samples" if window == Window()
+                else f"{(stop or n) - first:,} samples in the window")
+        raise too_many_samples(where, f"the recording holds {what}", limit)
+    signals = [t for t in order if t != "t"]
+    collect = _Collector(signals, window, limit, where)
+    for block in source.blocks([chans[t] for t in order], first, stop):
+        cols = {t: conv[t].apply(x) for t, x in zip(order, block.columns)}
+        if base.mode == "channel":
+            t = cols.pop("t")
+        elif base.mode == "own" and block.t is not None:
+            t = block.t
+        else:
+            t = base.start + (block.start + np.arange(block.n)) / base.rate
+        collect.add(t, cols, block.start)
+        if collect.done:
+            break
+    return collect.arrays()
+
+
+def import_trace(path: str | Path, cmap: ChannelMap, *, window: Window = Window(),
+                 max_samples: int = MAX_SAMPLES, map_name: str = "map") -> Trace:
+    """Read the bench export ``path`` through the channel map ``cmap`` into a validated
+    trace (SI units, time from 0, the source and the map in its metadata); a
+    :class:`~emaphm.traces.TraceError` says what stops it."""
+    path = Path(path)
+    with open_source(path, cmap.source) as source:
+        info = source.info
+        chans = {spec.target: info.find(spec.name, spec.group, f"{map_name}: [channels] "
+                                        f"{spec.target}") for spec in cmap.channels}
+        conv = {spec.target: spec.conversion(chans[spec.target].unit,
+                                             f"{map_name}: [channels] {spec.target}")
+                for spec in cmap.channels}
+        base = _time_base(cmap, info, chans, str(path))
+        t, cols = _read(source, cmap, chans, conv, base, window, max_samples, str(path))
+    return _trace(path, info, cmap, chans, t, cols, window, base)
+
+
+def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, ChannelInfo],
+           t: np.ndarray, cols: dict[str, np.ndarray], window: Window, base: _TimeBase) -> Trace:
+    where = str(path)
+    for target, x in cols.items():
+        _nan_runs(chans[target].label, target, x, t, where)
+    if not np.all(np.isfinite(t)):
+        _nan_runs(chans["t"].label if "t" in chans else "t", "t", t, t, where)
+    notes = {}
+    if "omega_m" not in cols:
+        cols["omega_m"] = np.gradient(cols["theta_m"], t) if t.size > 1 else np.zeros_like(t)
+        notes["omega_m"] = "derived from theta_m (central differences)"
+    measured = 3
+    if "i_c" not in cols:
+        cols["i_c"] = -(cols["i_a"] + cols["i_b"])
+        measured = 2
+    t0 = float(t[0])
+    t = t - t0
+    resampled = _uniform(t, where)
+    meta = {
+        "source": {"file": path.name, "format": info.format, "sha256": file_digest(path),
+                   "window": window.to_list(), "t_start": t0,
+                   "time": _time_text(base, cmap, chans),
+                   "channels": {k: v.label for k, v in chans.items()},
+                   "map": cmap.to_dict()},
+        "currents_measured": measured,
+    }
+    if notes:
+        meta["derived"] = notes
+    if measured == 2:
+        meta["derived"] = {**meta.get("derived", {}),
+                           "i_c": "-(i_a + i_b): current sensor faults are not observable"}
+    if cmap.profile:
+        from ...profiles import diagnostic
+
+        meta["profile"] = diagnostic().to_dict()
+    if resampled is not None:
+        t_new = np.linspace(0.0, float(t[-1]), t.size)
+        cols = {k: np.interp(t_new, t, v) for k, v in cols.items()}
+        t = t_new
+        meta["source"]["resampled"] = resampled
+    trace = Trace(t=t, theta_ref=cols["theta_ref"], theta_m=cols["theta_m"],
+                  omega_m=cols["omega_m"],
+                  i_abc=np.column_stack([cols["i_a"], cols["i_b"], cols["i_c"]]),
+                  torque=cols.get("torque"), meta=meta)
+    warn_if_shorter_than_profile(trace, where)
+    try:
+        validate(trace)
+    except TraceError as exc:
+        raise TraceError(f"{where}: imported, but {exc}") from None
+    return trace
+
+
+def _time_text(base: _TimeBase, cmap: ChannelMap, chans: dict[str, ChannelInfo]) -> str:
+    if base.mode == "channel":
+        return f"channel {chans['t'].label}"
+    if base.mode == "own":
+        return f"master time base of the channel group of {chans[_first(chans)].label}"
+    origin = "[time] rate of the map" if cmap.time.rate else "waveform rate of the channels"
+    return f"{base.rate:g} Hz from {base.start:g} s ({origin})"
+
+
+def _uniform(t: np.ndarray, where: str) -> str | None:
+    """None for a uniform time base; a note when the steps scatter within
+    :data:`_RESAMPLE_LIMIT` of their mean (the samples are then interpolated onto the
+    uniform grid, with a warning)."""
+    if t.size < 3:
+        return None
+    steps = np.diff(t)
+    dt = float(t[-1] - t[0]) / (t.size - 1)
+    spread = float((steps.max() - steps.min()) / dt)
+    if spread <= _UNIFORM_RTOL or spread > _RESAMPLE_LIMIT:
+        return None
+    note = (f"time steps scattered by {spread:.3g} of the mean step {dt:.6g} s: interpolated "
+            "onto the uniform grid")
+    warnings.warn(TraceWarning(f"{where}: the {note}"), stacklevel=3)
+    return note

@@ -1,0 +1,142 @@
+"""What every format reader of :mod:`emaphm.traces.importers` gives: a :class:`SourceInfo`
+(the channels found, with their units, lengths and rates) and blocks of rows of the
+channels asked for (:class:`Block`). A reader is a class with ``open(path, options)``
+that returns a :class:`Source`; the registry (:mod:`.registry`) picks it by suffix."""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+from typing import Protocol
+
+import numpy as np
+
+from ..container import TraceError
+
+__all__ = ["ChannelInfo", "SourceInfo", "Block", "Source", "MissingReaderError", "need",
+           "BLOCK_ROWS"]
+
+#: Rows per block a reader yields where it chooses (binary formats).
+BLOCK_ROWS = 1 << 20
+
+
+class MissingReaderError(TraceError):
+    """The library that reads a format is not installed (the ``bench`` extra)."""
+
+
+def need(module: str, what: str) -> ModuleType:
+    """Import ``module`` (the reader of ``what``), or a :class:`MissingReaderError` saying
+    which extra to install."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        package = module.split(".")[0]
+        raise MissingReaderError(
+            f"reading {what} needs the Python package {package!r}, which is not installed: "
+            "pip install 'emaphm[bench]'") from None
+
+
+@dataclass(frozen=True)
+class ChannelInfo:
+    """A channel of a file: its ``name`` (and ``group`` where the format has groups: a TDMS
+    group, an MDF channel group, a MATLAB struct), the unit the file declares (or None),
+    its number of samples (None where unknown before reading, e.g. CSV), and its sample
+    ``rate`` [Hz] and ``start`` [s] where the file gives the channel a time base."""
+
+    name: str
+    group: str | None = None
+    unit: str | None = None
+    samples: int | None = None
+    rate: float | None = None
+    start: float | None = None
+
+    @property
+    def label(self) -> str:
+        return f"{self.group}/{self.name}" if self.group else self.name
+
+
+@dataclass(frozen=True)
+class SourceInfo:
+    """What :meth:`Source.info` found in a file: its ``format`` (``csv``, ``mat``...), its
+    channels, and ``notes`` on how it is written (delimiter, decimal comma, a preamble)."""
+
+    path: Path
+    format: str
+    channels: tuple[ChannelInfo, ...]
+    notes: tuple[str, ...] = ()
+    #: the file's own time base (an MDF master channel) is given with each block
+    own_time: bool = False
+
+    def find(self, name: str, group: str | None, where: str) -> ChannelInfo:
+        """The channel called ``name`` (in ``group``, where given), or a TraceError naming
+        the channels that exist."""
+        hits = [c for c in self.channels if c.name == name and (group is None or c.group == group)]
+        if len(hits) == 1:
+            return hits[0]
+        if len(hits) > 1:
+            groups = sorted({str(c.group) for c in hits})
+            raise TraceError(f"{where}: channel {name!r} is in several groups ({', '.join(groups)}); "
+                             "say which with group = \"...\"")
+        names = [c.label for c in self.channels]
+        shown = ", ".join(repr(n) for n in names[:40]) + (f" and {len(names) - 40} more"
+                                                          if len(names) > 40 else "")
+        folded = [c.label for c in self.channels if c.name.lower() == name.lower()]
+        hint = f" (did you mean {folded[0]!r}?)" if folded else ""
+        in_group = f" in group {group!r}" if group is not None else ""
+        raise TraceError(f"{where}: no channel {name!r}{in_group} in {self.path.name}{hint}; "
+                         f"the file has {shown} (`emaphm import {self.path.name} --inspect` "
+                         "lists them)")
+
+
+@dataclass(frozen=True)
+class Block:
+    """Rows ``start`` to ``start + n`` of the channels asked for, one float64 array each;
+    ``t`` [s] where the file gives the time base itself (else None)."""
+
+    start: int
+    columns: tuple[np.ndarray, ...]
+    t: np.ndarray | None = None
+
+    @property
+    def n(self) -> int:
+        return int(self.columns[0].shape[0]) if self.columns else 0
+
+
+class Source(Protocol):
+    """An open file of one format."""
+
+    info: SourceInfo
+
+    def blocks(self, channels: Sequence[ChannelInfo], first: int = 0,
+               stop: int | None = None) -> Iterator[Block]:
+        """The rows ``first`` to ``stop`` (None: to the end; a reader that cannot seek may
+        start earlier, the blocks say where) of ``channels``, in order."""
+        ...
+
+    def close(self) -> None:
+        ...
+
+
+def as_float(x, where: str) -> np.ndarray:
+    """A channel's samples as a 1-D float64 array (a TraceError for text or nested data)."""
+    arr = np.asarray(x)
+    if arr.ndim == 2 and 1 in arr.shape:
+        arr = arr.reshape(-1)
+    if arr.ndim != 1:
+        raise TraceError(f"{where}: has shape {arr.shape}, expected one row or column of samples")
+    if arr.dtype.kind not in "biuf":
+        raise TraceError(f"{where}: holds {arr.dtype} values, not numbers")
+    return arr.astype(np.float64, copy=False)
+
+
+def read_path(path: str | Path) -> Path:
+    """``path`` as a Path that is a readable regular file (a TraceError otherwise)."""
+    p = Path(path)
+    if not p.exists():
+        raise FileNotFoundError(2, "No such file", str(p))
+    if p.is_dir():
+        raise TraceError(f"{p} is a folder; give the exported file")
+    return p

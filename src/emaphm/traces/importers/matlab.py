@@ -1,0 +1,154 @@
+"""MATLAB ``.mat`` exports: version 5 (read by ``scipy.io``) and version 7.3 (HDF5, read by
+``h5py``, from the ``bench`` extra). A channel is a numeric vector at the top level, or a
+field of a struct (its ``group``); scalars (a sample rate such as ``fs``) are listed by
+``--inspect``. A version 7.3 file is read in slices; a version 5 file is read whole, one
+variable at a time."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from ..container import TraceError
+from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, as_float, need, read_path
+from .channel_map import SourceOptions
+
+__all__ = ["MatSource"]
+
+
+_HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def _is_hdf5(path: Path) -> bool:
+    """MATLAB 7.3 writes an HDF5 file behind a 512-byte header (or at offset 0)."""
+    with open(path, "rb") as fh:
+        head = fh.read(2048)
+    return any(head[k:k + 8] == _HDF5_SIGNATURE for k in (0, 512, 1024))
+
+
+def _vector_length(shape: tuple[int, ...]) -> int | None:
+    if len(shape) == 1:
+        return shape[0]
+    if len(shape) == 2 and 1 in shape:
+        return max(shape)
+    return None
+
+
+class MatSource:
+    """A ``.mat`` file of either version."""
+
+    def __init__(self, path: str | Path, options: SourceOptions = SourceOptions()) -> None:
+        self.path = read_path(path)
+        self.v73 = _is_hdf5(self.path)
+        self.scalars: dict[str, float] = {}
+        self.info = self._inspect_v73() if self.v73 else self._inspect_v5()
+
+    # ------------------------------------------------------------------ version 5
+    def _inspect_v5(self) -> SourceInfo:
+        from scipy import io as sio
+
+        try:
+            listing = sio.whosmat(self.path)
+            data = sio.loadmat(self.path, squeeze_me=True, struct_as_record=False,
+                               variable_names=[n for n, shape, cls in listing
+                                               if cls == "struct" or np.prod(shape) == 1])
+        except (ValueError, TypeError, OSError, NotImplementedError) as exc:
+            raise TraceError(f"{self.path}: not a readable MATLAB file ({str(exc)[:200]})") from None
+        chans = []
+        for name, shape, cls in listing:
+            n = _vector_length(tuple(shape))
+            if cls == "struct":
+                chans += self._struct_fields(name, data.get(name))
+            elif n is not None and n > 1 and cls not in ("char", "cell", "sparse"):
+                chans.append(ChannelInfo(name=name, samples=n))
+            elif int(np.prod(shape)) == 1 and np.ndim(data.get(name)) == 0:
+                try:
+                    self.scalars[name] = float(data[name])
+                except (TypeError, ValueError):
+                    pass
+        return SourceInfo(path=self.path, format="mat", channels=tuple(chans),
+                          notes=("MATLAB version 5",) + self._scalar_note())
+
+    def _struct_fields(self, name: str, value) -> list[ChannelInfo]:
+        out = []
+        for field in getattr(value, "_fieldnames", None) or []:
+            x = np.asarray(getattr(value, field))
+            n = _vector_length(x.shape)
+            if n and n > 1 and x.dtype.kind in "biuf":
+                out.append(ChannelInfo(name=field, group=name, samples=n))
+            elif x.size == 1 and x.dtype.kind in "biuf":
+                self.scalars[f"{name}.{field}"] = float(x.reshape(()))
+        return out
+
+    def _scalar_note(self) -> tuple[str, ...]:
+        if not self.scalars:
+            return ()
+        shown = ", ".join(f"{k} = {v:g}" for k, v in list(self.scalars.items())[:10])
+        return (f"scalars: {shown}",)
+
+    # ------------------------------------------------------------------ version 7.3
+    def _inspect_v73(self) -> SourceInfo:
+        h5py = need("h5py", "MATLAB 7.3 files")
+        try:
+            self.h5 = h5py.File(self.path, "r")
+        except OSError as exc:
+            raise TraceError(f"{self.path}: not a readable MATLAB 7.3 (HDF5) file "
+                             f"({str(exc)[:200]})") from None
+        chans = []
+
+        def visit(name: str, obj) -> None:
+            if not isinstance(obj, h5py.Dataset) or name.startswith("#"):
+                return
+            if obj.dtype.kind not in "biuf":
+                return
+            group, _, leaf = name.rpartition("/")
+            n = _vector_length(obj.shape)
+            if n is not None and n > 1:
+                chans.append(ChannelInfo(name=leaf, group=group or None, samples=n))
+            elif obj.size == 1:
+                self.scalars[name.replace("/", ".")] = float(np.asarray(obj[()]).reshape(()))
+
+        self.h5.visititems(visit)
+        return SourceInfo(path=self.path, format="mat", channels=tuple(chans),
+                          notes=("MATLAB version 7.3 (HDF5)",) + self._scalar_note())
+
+    # ------------------------------------------------------------------ reading
+    def blocks(self, channels: Sequence[ChannelInfo], first: int = 0,
+               stop: int | None = None) -> Iterator[Block]:
+        n = min(c.samples or 0 for c in channels)
+        stop = n if stop is None else min(stop, n)
+        if self.v73:
+            sets = [self.h5[f"{c.group}/{c.name}" if c.group else c.name] for c in channels]
+            for a in range(first, stop, BLOCK_ROWS):
+                b = min(a + BLOCK_ROWS, stop)
+                yield Block(start=a, columns=tuple(_slice(ds, a, b) for ds in sets))
+            return
+        from scipy import io as sio
+
+        cols = []
+        for c in channels:
+            top = c.group or c.name
+            value = sio.loadmat(self.path, squeeze_me=True, struct_as_record=False,
+                                variable_names=[top])[top]
+            if c.group:
+                value = getattr(value, c.name)
+            cols.append(as_float(value, f"{self.path}: {c.label}")[first:stop])
+        yield Block(start=first, columns=tuple(cols))
+
+    def close(self) -> None:
+        if self.v73:
+            self.h5.close()
+
+
+def _slice(ds, a: int, b: int) -> np.ndarray:
+    """Samples ``a:b`` of a vector dataset stored as (n,), (1, n) or (n, 1)."""
+    shape = ds.shape
+    if len(shape) == 1:
+        x = ds[a:b]
+    elif shape[0] == 1:
+        x = ds[0, a:b]
+    else:
+        x = ds[a:b, 0]
+    return np.asarray(x, dtype=np.float64)

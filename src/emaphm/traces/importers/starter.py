@@ -1,0 +1,121 @@
+"""What ``emaphm import SOURCE --inspect`` prints: the channels found (name, group, unit,
+samples, rate) and a starter channel map, its guesses made from the channel names and
+units, to check and edit."""
+
+from __future__ import annotations
+
+import re
+
+from ...quantities import QuantityError, measure
+from .base import ChannelInfo, SourceInfo
+from .channel_map import TARGETS
+
+__all__ = ["describe", "starter_map"]
+
+#: Name patterns (lower case, after removing spaces, dashes and underscores) of each column.
+_GUESSES: dict[str, tuple[str, ...]] = {
+    "t": (r"^(t|time|zeit|timestamp|times|sec|seconds)$", r"^time", r"zeit"),
+    "theta_ref": (r"(ref|soll|cmd|command|setpoint|demand|target)",),
+    "theta_m": (r"^(thetam|theta|pos|position|angle|winkel|ist|posm|motorpos)",
+                r"(position|angle|winkel|pos)"),
+    "omega_m": (r"(omega|speed|velocity|drehzahl|rpm|vel)",),
+    "i_a": (r"^(ia|iu|ic?h?1|phasea|currenta|strom(u|a)|ilu|ilu1|ia\d?)$", r"(^|[^a-z])(ia|iu)$",
+            r"(phase|strom|current|cur|i)(a|u|1)$"),
+    "i_b": (r"^(ib|iv|phaseb|currentb|strom(v|b))$", r"(phase|strom|current|cur|i)(b|v|2)$"),
+    "i_c": (r"^(ic|iw|phasec|currentc|strom(w|c))$", r"(phase|strom|current|cur|i)(c|w|3)$"),
+    "torque": (r"(torque|moment|drehmoment)",),
+}
+
+
+def _key(name: str) -> str:
+    return re.sub(r"[\s_\-.\[\]()]", "", name.lower())
+
+
+def _kind(unit: str | None) -> str | None:
+    try:
+        return measure(unit).kind if unit else None
+    except QuantityError:
+        return None
+
+
+def _guess(info: SourceInfo) -> dict[str, ChannelInfo]:
+    found: dict[str, ChannelInfo] = {}
+    used: set[str] = set()
+    for target in ("t", "theta_ref", "omega_m", "i_a", "i_b", "i_c", "torque", "theta_m"):
+        kind = TARGETS[target]
+        for pattern in _GUESSES[target]:
+            for c in info.channels:
+                if c.label in used:
+                    continue
+                unit_kind = _kind(c.unit)
+                if unit_kind not in (None, kind) and not (kind == "current"
+                                                          and unit_kind == "voltage"):
+                    continue
+                if re.search(pattern, _key(c.name)):
+                    found[target] = c
+                    used.add(c.label)
+                    break
+            if target in found:
+                break
+    return found
+
+
+def describe(info: SourceInfo) -> str:
+    """The channels of ``info`` as a table, under a line on the file's layout."""
+    lines = [f"{info.path.name}: {info.format}" + (f" ({'; '.join(info.notes)})" if info.notes
+                                                    else "")]
+    rows = [("channel", "group", "unit", "samples", "rate")]
+    for c in info.channels:
+        rows.append((c.name, c.group or "", c.unit or "-",
+                     f"{c.samples:,}" if c.samples is not None else "?",
+                     f"{c.rate:g} Hz" if c.rate else ""))
+    widths = [min(max(len(r[k]) for r in rows), 40) for k in range(5)]
+    for r in rows:
+        lines.append("  ".join(x[:40].ljust(w) for x, w in zip(r, widths)).rstrip())
+    if not info.channels:
+        lines.append("(no numeric channels found)")
+    return "\n".join(lines)
+
+
+def _toml_string(text: str) -> str:
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def starter_map(info: SourceInfo) -> str:
+    """A channel map to edit: the columns guessed from the channel names (each with the
+    unit the file declares, or a placeholder that the map refuses until it is set)."""
+    found = _guess(info)
+    rates = {c.rate for c in info.channels if c.rate}
+    lines = [f"# channel map for {info.path.name}: check every line, then run",
+             f"#   emaphm import {info.path.name} --map THIS.toml --out trace.parquet",
+             "# value in SI = (scale * recorded + offset) converted from unit; a current",
+             "# recorded in V (a probe) takes scale = \"10 A/V\" or its sensitivity \"100 mV/A\".",
+             ""]
+    if "t" not in found and not info.own_time and len(rates) != 1:
+        lines += ["[time]", "rate = 0  # sample rate in Hz (the file has no time channel): SET IT",
+                  ""]
+    lines.append("[channels]")
+    for target in TARGETS:
+        c = found.get(target)
+        if c is None:
+            optional = {"t": "from [time] rate or the file's time base",
+                        "omega_m": "derived from theta_m", "i_c": "-(i_a + i_b)",
+                        "torque": "optional"}
+            if target in optional:
+                lines.append(f"# {target} = {{ name = \"...\", unit = \"...\" }}  "
+                             f"# left out: {optional[target]}")
+            else:
+                lines.append(f"{target} = {{ name = \"?\", unit = \"?\" }}  # not found: SET IT")
+            continue
+        fields = [f"name = {_toml_string(c.name)}"]
+        if c.group:
+            fields.append(f"group = {_toml_string(c.group)}")
+        unit = c.unit or "?"
+        fields.append(f"unit = {_toml_string(unit)}")
+        if _kind(c.unit) == "voltage" and TARGETS[target] == "current":
+            fields.append('scale = "? A/V"')
+        note = "" if c.unit else "  # the file declares no unit: SET IT"
+        lines.append(f"{target} = {{ {', '.join(fields)} }}{note}")
+    lines += ["", "# every channel of the file:"]
+    lines += [f"#   {c.label!r} [{c.unit or '-'}]" for c in info.channels[:200]]
+    return "\n".join(lines) + "\n"
