@@ -48,3 +48,10 @@ def test_extras_share_one_floor():
     for dep in project["dependencies"] + sum(project["optional-dependencies"].values(), []):
         r = Requirement(dep)
         assert seen.setdefault(r.name, str(r.specifier)) == str(r.specifier), dep
+
+
+def test_the_lower_bounds_smoke_set_names_test_files_that_exist():
+    smoke = script_array("SMOKE")
+    assert len(smoke) >= 8
+    missing = [p for p in smoke if not (ROOT / p).is_file()]
+    assert missing == [], f".ci/lower-bounds SMOKE names files that do not exist: {missing}"
