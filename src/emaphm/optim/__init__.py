@@ -1,7 +1,7 @@
 """Box-constrained metaheuristics with an ask/tell interface: DE, PSO and GWO.
 
 The optimizers know nothing about actuators: they minimise a batch objective
-``f(X) -> y`` (X: (n_pop, n_var) in problem units, y: (n_pop,); NaN/inf count as worst)
+``f(X) -> y`` (X: (n_pop, n_var) in problem coordinates, y: (n_pop,); NaN/inf count as worst)
 over a box ``(lo, hi)``.
 
 >>> import numpy as np

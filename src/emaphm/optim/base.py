@@ -5,14 +5,14 @@ The optimizers in :mod:`emaphm.optim` know nothing about actuators. They see a b
 
 .. code-block:: text
 
-    f(X) -> y        X: (n_pop, n_var) float64, problem units, every row inside the box
+    f(X) -> y        X: (n_pop, n_var) float64, problem coordinates, every row inside the box
                      y: (n_pop,)       float64; NaN, +inf and -inf all read as +inf (worst)
 
 Every optimizer is a frozen configuration object with three pure methods
 (evosax / pymoo style)::
 
     state = opt.init(bounds, rng)       # draws the initial population
-    X = opt.ask(state)                  # points to evaluate, problem units
+    X = opt.ask(state)                  # points to evaluate, problem coordinates
     state = opt.tell(state, X, f(X))    # a NEW state; the input state is never modified
 
 The first ``ask`` returns the initial population, so the initial evaluation is an
@@ -81,8 +81,8 @@ class Bounds:
     ========  =================  ======================================================
     Field     Shape              Meaning
     ========  =================  ======================================================
-    lo        (n_var,) float64   lower bounds, problem units (read-only array)
-    hi        (n_var,) float64   upper bounds, problem units, ``hi > lo`` (read-only)
+    lo        (n_var,) float64   lower bounds, problem coordinates (read-only array)
+    hi        (n_var,) float64   upper bounds, problem coordinates, ``hi > lo`` (read-only)
     ========  =================  ======================================================
     """
 
@@ -100,7 +100,7 @@ class Bounds:
         return self.hi - self.lo
 
     def from_normalized(self, U: np.ndarray) -> np.ndarray:
-        """Map normalised points ``U`` (..., n_var) to problem units, clipped into the box.
+        """Map normalised points ``U`` (..., n_var) to problem coordinates, clipped into the box.
 
         The final clip only removes floating-point round-off (``lo + 1.0 * (hi - lo)``
         can exceed ``hi`` by one ulp), so every returned point satisfies ``lo <= x <= hi``.
@@ -109,7 +109,7 @@ class Bounds:
         return np.clip(X, self.lo, self.hi, out=X)
 
     def to_normalized(self, X: np.ndarray) -> np.ndarray:
-        """Map problem-unit points ``X`` (..., n_var) to the normalised box, clipped to [0, 1]."""
+        """Map points in problem coordinates ``X`` (..., n_var) to the normalised box, clipped to [0, 1]."""
         U = (np.asarray(X, dtype=np.float64) - self.lo) / (self.hi - self.lo)
         return np.clip(U, 0.0, 1.0, out=U)
 
@@ -204,7 +204,7 @@ class State(Protocol):
     ===========  =================  ====================================================
     bounds       Bounds             the search box
     rng          numpy Generator    the run's private random stream
-    best_x       (n_var,) float64   best point evaluated so far, problem units
+    best_x       (n_var,) float64   best point evaluated so far, problem coordinates
     best_f       float              its fitness (``inf`` until a finite value is seen)
     nfev         int                objective evaluations so far (points, not calls)
     nit          int                completed iterations (``tell`` calls)
@@ -469,7 +469,7 @@ class StallTolerance(_Combinable):
 
     Formally, with ``h = state.history`` (best fitness after each iteration), stop when
     ``len(h) > patience`` and ``h[-1 - patience] - h[-1] < tol``. The tolerance is
-    *absolute*, in fitness units, as the paper's "error between two successive runs is
+    *absolute*, in the fitness's own unit, as the paper's "error between two successive runs is
     less than 1e-9" (Baldo et al. 2023, sec. 3.1.2). While the best fitness is still
     ``inf`` (no finite value seen yet) the rule never fires.
 
@@ -489,7 +489,7 @@ class StallTolerance(_Combinable):
     ========  ======  =============================================================
     Name      Type    Meaning
     ========  ======  =============================================================
-    tol       float   minimal improvement that counts, fitness units, ``>= 0``
+    tol       float   minimal improvement that counts, the fitness's own unit, ``>= 0``
                       (default 1e-9, the paper's tolerance; 0 never stops)
     patience  int     iterations over which the improvement is measured, ``>= 1``
                       (default 20, PSO's)
@@ -602,7 +602,7 @@ class Optimizer(Protocol):
     ===========================================  =========================================
     ``name: str``                                short registry name ("de", "pso", "gwo")
     ``init(bounds, rng) -> State``               draw the initial population
-    ``ask(state) -> X``                          (n_pop, n_var) points, problem units
+    ``ask(state) -> X``                          (n_pop, n_var) points, problem coordinates
     ``tell(state, X, y) -> State``               new state; input state left untouched
     ``default_termination() -> Termination``     the documented default stopping rule
     ===========================================  =========================================
@@ -626,7 +626,7 @@ class OptimizeResult:
     ==========  =================  ======================================================
     Field       Type               Meaning
     ==========  =================  ======================================================
-    x           (n_var,) float64   best point found, problem units (inside the box)
+    x           (n_var,) float64   best point found, problem coordinates (inside the box)
     fun         float              its fitness; ``inf`` if every evaluation failed
     nfev        int                objective evaluations (points)
     nit         int                iterations (the initial evaluation is iteration 1)
@@ -677,7 +677,7 @@ def minimize(
     Parameters
     ----------
     objective : callable
-        ``objective(X) -> y`` with ``X`` of shape (n_pop, n_var) in problem units and
+        ``objective(X) -> y`` with ``X`` of shape (n_pop, n_var) in problem coordinates and
         ``y`` of shape (n_pop,). NaN and +/-inf values count as ``+inf``. ``X`` is a
         private copy, the objective may modify it.
     bounds : pair of array-like or Bounds

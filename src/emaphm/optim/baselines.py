@@ -316,9 +316,9 @@ class ScipyDEState:
                                    from its own fork of it, inside the solver)
     engine      private            owner of scipy's solver (see ``solver``)
     told        tuple              ``(X, y)`` batches told in the current generation
-    pending     (pop_size, n_var)  the points scipy asks for next, problem units, as
+    pending     (pop_size, n_var)  the points scipy asks for next, problem coordinates, as
                                    scipy made them (``ask`` clips off round-off)
-    best_x      (n_var,)           best point so far, problem units
+    best_x      (n_var,)           best point so far, problem coordinates
     best_f      float              its fitness
     nfev        int                evaluations so far
     nit         int                iterations (``tell`` calls) so far
@@ -421,7 +421,7 @@ class ScipyDE:
         return MaxIterations(self.max_iter) | StallTolerance(1e-9, self.patience)
 
     def initial_population(self, bounds: Bounds, rng: np.random.Generator) -> np.ndarray:
-        """The Latin hypercube initial population, problem units, (pop_size, n_var)."""
+        """The Latin hypercube initial population, problem coordinates, (pop_size, n_var)."""
         from scipy.stats import qmc
 
         U = qmc.LatinHypercube(d=bounds.n_var, **_rng_keyword(qmc.LatinHypercube, rng)).random(self.pop_size)
@@ -453,7 +453,7 @@ class ScipyDE:
             pending=frozen(pending), **start(bounds))
 
     def ask(self, state: ScipyDEState) -> np.ndarray:
-        """The points scipy asks for next (problem units; clipping only removes the
+        """The points scipy asks for next (problem coordinates; clipping only removes the
         round-off of scipy's scaling, at most one ulp)."""
         return np.clip(state.pending, state.bounds.lo, state.bounds.hi)
 
@@ -505,8 +505,8 @@ class CMAESState:
     rng         Generator          the stream the run was seeded from (cma draws from
                                    its own fork of it, inside the strategy)
     engine      private            owner of cma's strategy (see ``es``)
-    pending     list of arrays     cma's solutions (unit box) awaiting their fitness
-    best_x      (n_var,)           best point so far, problem units
+    pending     list of arrays     cma's solutions (normalised box) awaiting their fitness
+    best_x      (n_var,)           best point so far, problem coordinates
     best_f      float              its fitness
     nfev, nit, history             as for every optimizer
     ==========  =================  ===================================================
@@ -601,7 +601,7 @@ class CMAES:
                           **start(bounds))
 
     def ask(self, state: CMAESState) -> np.ndarray:
-        """cma's pending solutions in problem units, shape (lambda, n_var)."""
+        """cma's pending solutions in problem coordinates, shape (lambda, n_var)."""
         return state.bounds.from_normalized(np.clip(np.array(state.pending), 0.0, 1.0))
 
     def tell(self, state: CMAESState, X: np.ndarray, y: np.ndarray) -> CMAESState:

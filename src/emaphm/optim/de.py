@@ -97,7 +97,7 @@ def rand1_mutation(population: np.ndarray, idx: np.ndarray, F: float) -> np.ndar
     ===========  =================  =========================================
     Name         Shape              Meaning
     ===========  =================  =========================================
-    population   (n_pop, n_var)     parent vectors (unit box)
+    population   (n_pop, n_var)     parent vectors (normalised box)
     idx          (n_pop, 3) int     ``r1, r2, r3`` per target
     F            scalar             mutation (differential weight) factor
     returns      (n_pop, n_var)     mutants (may leave the normalised box)
@@ -157,10 +157,10 @@ class DEState:
     ==========  =================  ==================================================
     bounds      Bounds             search box
     rng         Generator          private random stream
-    population  (n_pop, n_var)     parent vectors, unit box
+    population  (n_pop, n_var)     parent vectors, normalised box
     fitness     (n_pop,)           their fitness (``inf`` before the first ``tell``)
-    trial       (n_pop, n_var)     vectors the next ``ask`` returns, unit box
-    best_x      (n_var,)           best point so far, problem units
+    trial       (n_pop, n_var)     vectors the next ``ask`` returns, normalised box
+    best_x      (n_var,)           best point so far, problem coordinates
     best_f      float              its fitness
     nfev        int                evaluations so far
     nit         int                iterations so far (initial evaluation included)
@@ -258,7 +258,7 @@ class DE:
         )
 
     def ask(self, state: DEState) -> np.ndarray:
-        """The trial population in problem units, shape (pop_size, n_var)."""
+        """The trial population in problem coordinates, shape (pop_size, n_var)."""
         return state.bounds.from_normalized(state.trial)
 
     def tell(self, state: DEState, X: np.ndarray, y: np.ndarray) -> DEState:

@@ -98,7 +98,7 @@ def update_leaders(
     =========  ===============  =================================================
     Name       Shape            Meaning
     =========  ===============  =================================================
-    leaders    (3, n_var)       alpha, beta, delta positions (unit box)
+    leaders    (3, n_var)       alpha, beta, delta positions (normalised box)
     leaders_f  (3,)             their fitness (``inf`` while a slot is empty)
     x          (n_pop, n_var)   just-evaluated positions
     f          (n_pop,)         their fitness
@@ -144,7 +144,7 @@ def gwo_position_update(
     =======  ==================  ================================================
     Name     Shape               Meaning
     =======  ==================  ================================================
-    x        (n_pop, n_var)      wolf positions, unit box
+    x        (n_pop, n_var)      wolf positions, normalised box
     leaders  (3, n_var)          alpha, beta, delta positions
     a        scalar              control parameter in [0, 2]
     r1, r2   (3, n_pop, n_var)   uniform [0, 1) draws, one set per leader
@@ -171,10 +171,10 @@ class GWOState:
     ==========  =================  ==================================================
     bounds      Bounds             search box
     rng         Generator          private random stream
-    position    (n_pop, n_var)     wolf positions the next ``ask`` returns, unit box
-    leaders     (3, n_var)         alpha, beta, delta, unit box
+    position    (n_pop, n_var)     wolf positions the next ``ask`` returns, normalised box
+    leaders     (3, n_var)         alpha, beta, delta, normalised box
     leaders_f   (3,)               their fitness (``inf`` before the first ``tell``)
-    best_x      (n_var,)           best point so far (alpha's), problem units
+    best_x      (n_var,)           best point so far (alpha's), problem coordinates
     best_f      float              its fitness
     nfev        int                evaluations so far
     nit         int                iterations so far (initial evaluation included)
@@ -257,7 +257,7 @@ class GWO:
         )
 
     def ask(self, state: GWOState) -> np.ndarray:
-        """Current wolf positions in problem units, shape (pop_size, n_var)."""
+        """Current wolf positions in problem coordinates, shape (pop_size, n_var)."""
         return state.bounds.from_normalized(state.position)
 
     def tell(self, state: GWOState, X: np.ndarray, y: np.ndarray) -> GWOState:

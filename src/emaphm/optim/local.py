@@ -33,7 +33,7 @@ def compass_search(objective: Callable[[np.ndarray], np.ndarray], x0: Any, bound
     =========  ======  =========================================================
     argument   unit    meaning
     =========  ======  =========================================================
-    x0         --      starting point, problem units, inside the box
+    x0         --      starting point, problem coordinates, inside the box
     f0         --      its fitness, if known (saves one evaluation)
     step       unit    initial poll step as a fraction of each bound's width
     tol        unit    stop when the step falls below this fraction

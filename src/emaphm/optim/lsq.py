@@ -117,7 +117,7 @@ def least_squares_batched(residuals: Callable[[np.ndarray], np.ndarray], x0: Any
     argument    unit    meaning
     ==========  ======  ==========================================================
     residuals   --      ``R(X)``: (m, n) points -> (m, n_res) residuals, in one call
-    x0          --      start, problem units, inside the box
+    x0          --      start, problem coordinates, inside the box
     diff_step   unit    forward-difference step as a fraction of each bound's width
                         (a scalar or one per variable); taken inward at a bound
     max_evals   --      residual evaluations (points) this call may spend

@@ -56,7 +56,7 @@ def update_personal_best(
     =======  ===============  =====================================
     Name     Shape            Meaning
     =======  ===============  =====================================
-    pbest    (n_pop, n_var)   personal best positions (unit box)
+    pbest    (n_pop, n_var)   personal best positions (normalised box)
     pbest_f  (n_pop,)         their fitness
     x        (n_pop, n_var)   just-evaluated positions
     f        (n_pop,)         their fitness
@@ -86,8 +86,8 @@ def pso_velocity_update(
     =======  ===============  ===============================================
     Name     Shape            Meaning
     =======  ===============  ===============================================
-    v        (n_pop, n_var)   velocities, unit box per iteration
-    x        (n_pop, n_var)   positions, unit box
+    v        (n_pop, n_var)   velocities, normalised box per iteration
+    x        (n_pop, n_var)   positions, normalised box
     pbest    (n_pop, n_var)   personal best positions
     gbest    (n_var,)         swarm best position
     w        scalar           inertia weight
@@ -125,11 +125,11 @@ class PSOState:
     ==========  =================  ==================================================
     bounds      Bounds             search box
     rng         Generator          private random stream
-    position    (n_pop, n_var)     positions the next ``ask`` returns, unit box
+    position    (n_pop, n_var)     positions the next ``ask`` returns, normalised box
     velocity    (n_pop, n_var)     velocities that moved the swarm there
-    pbest       (n_pop, n_var)     personal best positions, unit box
+    pbest       (n_pop, n_var)     personal best positions, normalised box
     pbest_f     (n_pop,)           their fitness (``inf`` before the first ``tell``)
-    best_x      (n_var,)           best point so far (swarm best), problem units
+    best_x      (n_var,)           best point so far (swarm best), problem coordinates
     best_f      float              its fitness
     nfev        int                evaluations so far
     nit         int                iterations so far (initial evaluation included)
@@ -228,7 +228,7 @@ class PSO:
         )
 
     def ask(self, state: PSOState) -> np.ndarray:
-        """Current particle positions in problem units, shape (pop_size, n_var)."""
+        """Current particle positions in problem coordinates, shape (pop_size, n_var)."""
         return state.bounds.from_normalized(state.position)
 
     def tell(self, state: PSOState, X: np.ndarray, y: np.ndarray) -> PSOState:

@@ -25,7 +25,7 @@ import numpy as np
 from .container import COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, _require_columns
 from .limits import MAX_SAMPLES, check_file_size, too_many_samples
 from .metadata import FORMAT_VERSION, _dumps, _loads
-from .validation import _normalise_unit, _unbracket
+from .validation import _normalise_symbol, _unbracket
 
 __all__ = ["CsvLayout", "sniff_csv", "csv_blocks"]
 
@@ -167,7 +167,7 @@ def _looks_numeric(cells: Sequence[str], decimal: str) -> bool:
                                for c in cells) and any(c.strip() for c in cells)
 
 
-def _is_units_row(cells: Sequence[str]) -> bool:
+def _is_symbols_row(cells: Sequence[str]) -> bool:
     from ..quantities import QuantityError, measure
 
     filled = [c for c in cells if c.strip()]
@@ -228,7 +228,7 @@ def _header_index(cands: list[tuple[int, int, str]], delimiter: str, decimal: st
         cells = _split(cands[k][2], delimiter)
         if _looks_numeric(cells, decimal) and len(cells) >= 2:
             head = k - 1
-            if head >= 1 and _is_units_row(_split(cands[head][2], delimiter)) \
+            if head >= 1 and _is_symbols_row(_split(cands[head][2], delimiter)) \
                     and len(_split(cands[head - 1][2], delimiter)) == len(cells):
                 head -= 1
             return head
@@ -261,7 +261,7 @@ def _layout(path: Path, cands: list[tuple[int, int, str]], meta: dict, comments:
     if rest:
         first = _split(rest[0][2], delimiter)
         if (all(not c or c[0] + c[-1] in ("[]", "()") for c in first)
-                or (preamble and _is_units_row(first))):
+                or (preamble and _is_symbols_row(first))):
             units_row, data_offset = first, rest[0][1]
             rest = rest[1:]
     names, units = [], []
@@ -413,7 +413,7 @@ def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], dict]:
         if isinstance(declared, Mapping):
             for name, unit in units.items():
                 other = declared.get(name)
-                if isinstance(other, str) and _normalise_unit(other) != _normalise_unit(unit):
+                if isinstance(other, str) and _normalise_symbol(other) != _normalise_symbol(unit):
                     raise TraceError(
                         f"{source}: column '{name}' is declared in '{other}' by the "
                         f"metadata but in '{unit}' by the header; make them agree"

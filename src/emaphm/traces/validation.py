@@ -49,11 +49,11 @@ def _unbracket(unit: str) -> str:
     return unit
 
 
-def _normalise_unit(unit: str) -> str:
+def _normalise_symbol(unit: str) -> str:
     return " ".join(_unbracket(unit).split()).lower()
 
 
-def _check_unit(column: str, unit: Any, source: str) -> None:
+def _check_symbol(column: str, unit: Any, source: str) -> None:
     """Raise TraceError unless ``unit`` is empty or an SI spelling of ``UNITS[column]``."""
     expected = UNITS[column]
     if not isinstance(unit, str):
@@ -61,7 +61,7 @@ def _check_unit(column: str, unit: Any, source: str) -> None:
             f"{source}: the unit of column '{column}' is {unit!r}, expected the string "
             f"'{expected}'"
         )
-    if _normalise_unit(unit) in ("", "-"):
+    if _normalise_symbol(unit) in ("", "-"):
         return
     try:
         found = measure(unit)
@@ -86,7 +86,7 @@ def _check_unit(column: str, unit: Any, source: str) -> None:
     )
 
 
-def _check_declared_units(units: Any, source: str) -> None:
+def _check_declared_symbols(units: Any, source: str) -> None:
     if units is None:
         return
     if not isinstance(units, Mapping):
@@ -96,9 +96,9 @@ def _check_declared_units(units: Any, source: str) -> None:
         )
     for name, unit in units.items():
         if name == "i_abc":
-            _check_unit("i_a", unit, source)
+            _check_symbol("i_a", unit, source)
         elif name in UNITS:
-            _check_unit(name, unit, source)
+            _check_symbol(name, unit, source)
 
 
 # --------------------------------------------------------------------------------------
@@ -127,7 +127,7 @@ _SPEED_FACTORS: tuple[tuple[float, str], ...] = (
 )
 
 
-def _check_speed_units(trace: Trace) -> None:
+def _check_speed_scale(trace: Trace) -> None:
     theta, omega = trace.theta_m, trace.omega_m
     if np.ptp(theta) == 0.0:
         return
@@ -208,7 +208,7 @@ def _check_time_scale(dt: float, duration: float) -> None:
 def _check_speed_plausible(trace: Trace) -> None:
     """A motor speed no servo motor reaches, where the same numbers read as deg/s would be
     plausible: positions and speed recorded in degrees and deg/s (consistent with each
-    other, so :func:`_check_speed_units` cannot see it)."""
+    other, so :func:`_check_speed_scale` cannot see it)."""
     peak = float(np.max(np.abs(trace.omega_m))) if trace.n else 0.0
     if peak <= _MAX_SPEED:
         return
@@ -301,7 +301,7 @@ def validate(
     if not (math.isfinite(rtol_dt) and rtol_dt > 0):
         raise ValueError(f"rtol_dt must be finite and > 0, got {rtol_dt!r}")
 
-    _check_declared_units(trace.meta.get("units"), "meta['units']")
+    _check_declared_symbols(trace.meta.get("units"), "meta['units']")
 
     n = trace.n
     if n < MIN_SAMPLES:
@@ -358,7 +358,7 @@ def validate(
                 "by 1000"
             )
 
-    _check_speed_units(trace)
+    _check_speed_scale(trace)
     _check_speed_plausible(trace)
 
     if min_rotation > 0:
