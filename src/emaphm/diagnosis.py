@@ -1,7 +1,8 @@
 """From an identified fault vector to the faults it names (fault detection and identification).
 
 A component of ``k`` raises a fault when it leaves its healthy value by more
-than its detection threshold (:func:`read_faults`). The thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`)
+than its detection threshold (:func:`read_faults`: each fault mode of the registry
+:mod:`emaphm.modes` reads its own). The thresholds (:data:`THRESHOLDS_BY_FAULT_MODEL`)
 were set on reference-*plant* traces -- physics the monitoring model lacks
 (Stribeck friction, a compliant backlash contact, PWM ripple, leakage), realistic
 sensor noise -- of healthy and faulty units on tuning seeds
@@ -24,13 +25,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
-from .faults import (K_NOMINAL, as_k, backlash_scale, check_fault_model, eccentricity_phase,
-                     friction_scale, gain_scale, shorted_fraction)
+from .faults import as_k, check_fault_model
 from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
+from .modes import (DEFAULT_THRESHOLDS, FAULT_MODES, THRESHOLDS_BY_FAULT_MODEL, Fault, Reading,
+                    Thresholds)
+from .modes import read_faults as _read_modes
 from .params import ActuatorParams, siemens_1fk7060
 from .search import nuisance_text
 
@@ -40,59 +43,6 @@ __all__ = ["Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL", "Fau
            "fit_ratio_of"]
 
 VERDICTS = ("healthy", "faulty", "unexplained")
-
-
-
-FAULT_MODES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift")
-
-
-@dataclass(frozen=True)
-class Thresholds:
-    """Detection thresholds on the fault vector (deviation from the healthy value).
-
-    ``friction`` on k1, ``backlash`` on k2, ``short_circuit`` on each of k3-k5,
-    ``eccentricity`` on k6, ``gain_drift`` on ``|k8 - 0.5|``.
-    """
-
-    friction: float = 0.100
-    backlash: float = 0.034
-    short_circuit: float = 0.03
-    eccentricity: float = 0.015
-    gain_drift: float = 0.015
-
-    def __post_init__(self) -> None:
-        for name, v in asdict(self).items():
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and 0 < v < 1):
-                raise ValueError(f"Thresholds.{name} must be in (0, 1), got {v!r}")
-
-
-DEFAULT_THRESHOLDS = Thresholds()
-
-#: Thresholds per fault model (k3..k5 mean different things under each; under
-#: ``physical`` a short-circuit component is the shorted fraction of the turns itself).
-#: ``physical``: set on reference-plant traces (Stribeck friction, PWM, leakage, the
-#: contact at the plant's step) -- ``benchmarks/bench_plant.py --tune``: 100 healthy runs,
-#: 40 inter-turn shorts, 35 runs of the other modes of the nominal unit; and
-#: ``bench_commissioning.py --tune``: 60 calibrated production units, healthy and with one
-#: fault -- on tuning seeds disjoint from the seeds they are reported on: 1.25x the largest
-#: deviation of each component in the runs where it is not at fault (friction 0.080,
-#: backlash 0.027, short circuit 0.014, eccentricity 0.011, gain 0.012), at least 0.015.
-#: ``paper``: the same for the components both models share; 0.03 of the paper's turn
-#: removal for a short circuit (the earlier twin-trace benchmark's value).
-THRESHOLDS_BY_FAULT_MODEL = {"paper": DEFAULT_THRESHOLDS,
-                             "physical": Thresholds(short_circuit=0.018)}
-
-
-@dataclass(frozen=True)
-class Fault:
-    """One detected fault: mode, the k component(s), severity and a physical reading."""
-
-    mode: str
-    component: str
-    k: float
-    severity: float          # 0..1, the fault's share of its full range
-    reading: str
-    phase: str | None = None
 
 
 @dataclass(frozen=True)
@@ -166,9 +116,9 @@ class Diagnosis:
 
     def to_dict(self) -> dict[str, Any]:
         return {"verdict": self.verdict, "healthy": self.healthy,
-                "faults": [asdict(f) for f in self.faults],
+                "faults": [f.to_dict() for f in self.faults],
                 "unexplained": None if self.unexplained is None else asdict(self.unexplained),
-                "suspected": [asdict(f) for f in self.suspected],
+                "suspected": [f.to_dict() for f in self.suspected],
                 "thresholds": asdict(self.thresholds), "fault_model": self.fault_model,
                 "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict(),
                 "notes": list(self.notes)}
@@ -269,43 +219,11 @@ def _mismatch_hint(faults: list[Fault], mismatch: MismatchFit) -> str:
             "--params to tell a small fault from the unit's own tolerances")
 
 
-def read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams,
-                 fault_model: str) -> list[Fault]:
-    """The components of ``k`` past their thresholds, as faults with physical readings."""
-    tr, ctl = p.transmission, p.controller
-    faults: list[Fault] = []
-    if k[0] > thresholds.friction:
-        fs = float(friction_scale(k[0]))
-        faults.append(Fault("friction", "k1", float(k[0]), float(k[0]),
-                            f"dry friction {fs:.2f}x nominal (dynamic {tr.FDJ * fs:.3f} N m, "
-                            f"static {tr.FSJ * fs:.3f} N m)"))
-    if k[1] > thresholds.backlash:
-        bs = float(backlash_scale(k[1]))
-        faults.append(Fault("backlash", "k2", float(k[1]), float(k[1]),
-                            f"backlash {bs:.1f}x nominal ({tr.backlash * bs * 1e3:.2f} mrad)"))
-    for j, ph in enumerate("ABC"):
-        kj = float(k[2 + j])
-        if kj > thresholds.short_circuit:
-            s = float(shorted_fraction(kj))
-            if fault_model == "physical":
-                reading = (f"inter-turn short circuit in phase {ph}: {100 * s:.1f}% of its turns "
-                           f"as seen through a fault resistance of {p.motor.R_f[j]:g} ohm (a "
-                           "higher fault resistance needs more shorted turns for the same "
-                           "fault current)")
-            else:
-                reading = (f"{100 * s:.0f}% of phase {ph} turns shorted "
-                           f"(R x{1 - s:.2f}, L x{(1 - s) ** 2:.2f})")
-            faults.append(Fault("short_circuit", f"k{3 + j}", kj, kj, reading, phase=ph))
-    if k[5] > thresholds.eccentricity:
-        phase_deg = math.degrees(float(eccentricity_phase(k[6])))
-        faults.append(Fault("eccentricity", "k6,k7", float(k[5]), float(k[5]),
-                            f"static eccentricity {100 * k[5]:.0f}% of the air gap at "
-                            f"{phase_deg:+.0f} deg"))
-    drift = float(k[7] - K_NOMINAL[7])
-    if abs(drift) > thresholds.gain_drift:
-        g = float(gain_scale(k[7]))
-        faults.append(Fault("gain_drift", "k8", float(k[7]), abs(drift) / 0.5,
-                            f"proportional gain {100 * (g - 1):+.0f}% (Kp {ctl.Kp * g:.1f} 1/s "
-                            f"instead of {ctl.Kp:.1f})"))
-    return faults
-
+def read_faults(k: np.ndarray, thresholds: Thresholds, p: ActuatorParams, fault_model: str,
+                extra: Mapping[str, float] | None = None,
+                findings: Mapping[str, Any] | None = None) -> list[Fault]:
+    """The faults every mode of :data:`emaphm.modes.MODES` reads in ``k`` (and in the
+    values ``extra`` of the parameters searched beside it, the ``findings`` of the checks
+    made), with physical readings."""
+    return _read_modes(Reading(np.asarray(k, dtype=float), p, fault_model, thresholds,
+                               extra or {}, findings or {}))

@@ -1,0 +1,106 @@
+"""What every fault mode is: its reading of an identification, its threshold, its severity
+in the unit a user reads, and how to make a trace of it.
+
+A :class:`FaultMode` is data with two functions: ``read(reading) -> [Fault]`` (the faults
+it names, with a physical reading) and ``inject(severity, phase)`` (an :class:`Injection`:
+what to change in the plant to simulate the fault at that severity). The registry of
+:mod:`emaphm.modes` collects them; adding a mode is adding one module there.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..params import ActuatorParams
+
+__all__ = ["Fault", "Reading", "Injection", "FaultMode", "PHASES"]
+
+#: The phases, as faults name them.
+PHASES = ("A", "B", "C")
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One detected fault: ``mode``, the component(s) it reads (``"k1"``, ``"k6,k7"``,
+    a parameter name), its value there (``k``), ``severity`` (the share of the mode's
+    range, 0..1, or the mode's own measure), a physical ``reading`` in words, the
+    ``phase`` where it applies, and ``details``: the mode's own quantities (a short's
+    fault-loop current, a sensor's gain...), flattened into :meth:`to_dict`."""
+
+    mode: str
+    component: str
+    k: float
+    severity: float
+    reading: str
+    phase: str | None = None
+    details: Mapping[str, Any] = field(default_factory=dict, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = {"mode": self.mode, "component": self.component, "k": self.k,
+             "severity": self.severity, "reading": self.reading, "phase": self.phase}
+        d.update(self.details)
+        return d
+
+
+@dataclass(frozen=True)
+class Reading:
+    """What a mode reads its faults from: the identified ``k``, the healthy actuator
+    ``params``, the ``fault_model``, the detection ``thresholds``, the values of the
+    parameters searched beside k (``extra``, e.g. ``{"flux": -0.12}``) and the findings
+    of the checks made for the modes (``findings``, by mode name)."""
+
+    k: np.ndarray
+    params: ActuatorParams
+    fault_model: str
+    thresholds: Any
+    extra: Mapping[str, float] = field(default_factory=dict)
+    findings: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Injection:
+    """A fault to simulate: components of ``k`` to set (index -> value), and a function
+    ``plant(params) -> params`` for what k does not hold; ``sensor``: ``(phase index,
+    gain, offset [A])`` of a faulty current sensor in the recording chain."""
+
+    k: Mapping[int, float] = field(default_factory=dict)
+    plant: Callable[[ActuatorParams], ActuatorParams] | None = None
+    sensor: tuple[int, float, float] | None = None
+
+
+@dataclass(frozen=True)
+class FaultMode:
+    """A fault mode of the registry.
+
+    ==================  =================================================================
+    field               meaning
+    ==================  =================================================================
+    name                its name in verdicts, thresholds and ``--fault``
+    label               in words
+    threshold           default detection threshold, on the measure ``read`` compares
+    thresholds_by_fm    thresholds that differ by fault model (``{"physical": 0.018}``)
+    read                ``read(Reading) -> list[Fault]``
+    inject              ``inject(severity, phase) -> Injection`` (None: not simulated)
+    severity_unit       the unit of a severity, as a user reads it (``"x nominal"``)
+    grid                severities an assessment runs by default
+    per_phase           whether the mode has a phase
+    spec                the ``--fault`` grammar after the name, for help texts
+    ==================  =================================================================
+    """
+
+    name: str
+    label: str
+    threshold: float
+    read: Callable[[Reading], list[Fault]]
+    inject: Callable[..., Injection] | None = None
+    thresholds_by_fm: Mapping[str, float] = field(default_factory=dict)
+    severity_unit: str = ""
+    grid: tuple[float, ...] = ()
+    per_phase: bool = False
+    spec: str = "SEVERITY"
+
+    def threshold_for(self, fault_model: str) -> float:
+        return float(self.thresholds_by_fm.get(fault_model, self.threshold))

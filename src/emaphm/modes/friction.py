@@ -1,0 +1,28 @@
+"""Dry friction (k1 of the paper's vector): FSJ and FDJ x (1 + 2 k1)."""
+
+from __future__ import annotations
+
+from ..faults import friction_scale
+from .base import Fault, FaultMode, Injection, Reading
+
+
+def read(r: Reading) -> list[Fault]:
+    k1 = float(r.k[0])
+    if not k1 > r.thresholds.friction:
+        return []
+    fs = float(friction_scale(k1))
+    tr = r.params.transmission
+    return [Fault("friction", "k1", k1, k1,
+                  f"dry friction {fs:.2f}x nominal (dynamic {tr.FDJ * fs:.3f} N m, "
+                  f"static {tr.FSJ * fs:.3f} N m)")]
+
+
+def inject(severity: float, phase: str | None = None) -> Injection:
+    """Friction ``severity`` x nominal (1 to 3)."""
+    if not 1.0 <= severity <= 3.0:
+        raise ValueError(f"friction is 1 to 3 x nominal, got {severity:g}")
+    return Injection(k={0: (severity - 1.0) / 2.0})
+
+
+MODE = FaultMode("friction", "dry friction", threshold=0.100, read=read, inject=inject,
+                 severity_unit="x nominal friction", grid=(1.25, 1.5, 2.0, 2.5))
