@@ -78,11 +78,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .simulate import DEFAULT_SENSORS, simulate
     from .traces import write_trace
 
-    if (args.k is None) == (args.scenario is None):
-        raise UsageError("give exactly one of --k K1,...,K8 or --scenario NAME (see `emaphm scenarios`)")
+    if args.k is not None and args.scenario is not None or \
+            (args.k is None and args.scenario is None and not args.fault):
+        raise UsageError("give exactly one of --k K1,...,K8 or --scenario NAME (see `emaphm "
+                         "scenarios`), or faults with --fault MODE:... on the nominal actuator")
     out = out_path(args.out, (".csv", ".parquet"), "--out")
     plot = plot_path(args.plot)
-    k = as_k(args.k) if args.k is not None else scenario(args.scenario)
+    k = as_k(args.k) if args.k is not None else scenario(args.scenario or "nominal")
+    faults = _fault_options(args.fault)
     fault_model = _fault_model_option(args)
     params = _load_params(args.params)
     unit = _unit_options(args, params)
@@ -104,7 +107,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     with compile_notice():
         trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed,
-                         fault_model=fault_model, **unit)
+                         fault_model=fault_model, faults=faults, **unit)
     if args.scenario:
         trace = trace.with_meta(scenario=args.scenario)
     elapsed = time.perf_counter() - t0
@@ -119,6 +122,18 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         plot_trace(trace, overlay, path=plot)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
+
+
+def _fault_options(specs: list[str] | None) -> list[str]:
+    """--fault specs, each checked (a UsageError naming the grammar)."""
+    from .modes import fault_specs, parse_fault
+
+    for spec in specs or []:
+        try:
+            parse_fault(spec)
+        except ValueError as exc:
+            raise UsageError(f"--fault {shown(spec)}: {exc}; the specs are {fault_specs()}") from None
+    return list(specs or [])
 
 
 def _fault_model_option(args: argparse.Namespace) -> str:
@@ -392,6 +407,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", required=True, help="output trace, .csv or .parquet")
     s.add_argument("--plot", help="also write a figure (.png/.svg/.pdf)")
     s.add_argument("--no-overlay", action="store_true", help="do not overlay the nominal run on the plot")
+    s.add_argument("--fault", action="append", metavar="MODE:...",
+                   help="a fault of a mode to simulate, repeatable: friction:2.5 (x nominal), "
+                        "backlash:10, short_circuit:a:0.3[:R_F_OHM] (shorted fraction, fault "
+                        "resistance), eccentricity:0.1, gain_drift:0.9 (x nominal)")
     s.add_argument("--seed", type=_seed, help="seed of the sensor noise (enables realistic sensors)")
     s.add_argument("--noise", type=float, help="current noise in A rms (default 0.02 with --seed, else 0)")
     s.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")

@@ -9,11 +9,13 @@ import numpy as np
 
 from . import __version__
 from .acquisition import Sensors
-from .faults import as_k, check_fault_model, scenario as scenario_k, scenario_fault_model
+from .faults import (MAX_SHORTED_FRACTION, as_k, check_fault_model, scenario as scenario_k,
+                     scenario_fault_model)
 from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
 from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
+from .modes import Injection, parse_fault
 from .seeds import check_seed
 from .traces import Trace
 from .units import Tolerances, Unit, draw_unit, nominal_unit
@@ -40,7 +42,8 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
              unit: Unit | None = None,
              unit_seed: int | None = None,
              tolerances: Tolerances | None = None,
-             unreported_load: float | None = None) -> Trace:
+             unreported_load: float | None = None,
+             faults: Sequence[Injection | str] = ()) -> Trace:
     """Simulate the actuator with fault vector ``k`` (or a named ``scenario``).
 
     Parameters
@@ -74,6 +77,12 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         Sub-steps per control period (default 128 for the RM, 1 for the MM).
     pwm
         Reference model only: switching inverter (True) or averaged (False).
+    faults
+        Faults to simulate beside (or instead of) ``k``, as specs of the fault modes
+        (:func:`emaphm.modes.parse_fault`: ``"friction:2.5"``,
+        ``"short_circuit:a:0.3:0.05"``) or their :class:`~emaphm.modes.Injection`: the
+        components of k they set, what they change in the plant, a faulty current sensor
+        of the recording chain.
     """
     if model not in MODELS:
         raise ValueError(f"unknown model {model!r}; choose 'reference' or 'monitoring'")
@@ -84,19 +93,30 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     if fault_model is None:
         fault_model = scenario_fault_model(scenario) if scenario is not None else "physical"
     check_fault_model(fault_model)
+    injections = [parse_fault(f) if isinstance(f, str) else f for f in faults]
+    if injections:
+        kk = kk.copy()
+        for inj in injections:
+            for j, v in inj.k.items():
+                kk[j] = v
+        kk = as_k(kk)
     if seed is not None:
         check_seed(seed)
     params = params if params is not None else siemens_1fk7060()
     profile = profile if profile is not None else diagnostic()
     sensors = sensors if sensors is not None else Sensors()
     unit = _production_unit(params, model, unit, unit_seed, tolerances, unreported_load)
+    plant = _plant_of(injections)
     if model == "reference":
-        sensors = sensors.with_unit(unit.sensor_gain, unit.sensor_offset)
-        out = run_reference(unit.params, kk, profile, fault_model=fault_model,
+        sensors = _faulty_sensors(sensors.with_unit(unit.sensor_gain, unit.sensor_offset),
+                                  injections)
+        plant_params = plant(unit.params)
+        out = run_reference(plant_params, kk, profile, fault_model=fault_model,
                             n_sub=n_sub or 128, pwm=pwm, extra_load=unit.load + unit.params.load.T_0)
         status = "tripped" if out["trip_time"] is not None else "ok"
     else:
-        mm = MonitoringModel(params, profile, n_sub=n_sub or 1, fault_model=fault_model)
+        sensors = _faulty_sensors(sensors, injections)
+        mm = MonitoringModel(plant(params), profile, n_sub=n_sub or 1, fault_model=fault_model)
         r = mm.simulate(kk)
         out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
                "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}
@@ -122,8 +142,11 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         "drive": status,
         "emaphm_version": __version__,
     }
+    if faults:
+        meta["faults"] = [f if isinstance(f, str) else repr(f) for f in faults]
     if model == "reference":
         meta["unit"] = unit.to_dict()
+        meta["plant"] = _plant_report(out, plant_params, kk, fault_model)
     return Trace(t=t_rec, theta_ref=rec["theta_ref"], theta_m=rec["theta_m"], omega_m=rec["omega_m"],
                  i_abc=rec["i_abc"], torque=rec["torque"], meta=meta)
 
@@ -149,3 +172,42 @@ def _production_unit(params: ActuatorParams, model: str, unit: Unit | None, unit
         raise ValueError("a production unit (unit, unit_seed, unreported_load) is what the "
                          "plant plays: use model='reference'")
     return unit if unit is not None else nominal_unit(params)
+
+
+def _plant_of(injections: Sequence[Injection]):
+    """The injections' changes of the plant, composed (the identity without any)."""
+    def plant(params: ActuatorParams) -> ActuatorParams:
+        for inj in injections:
+            if inj.plant is not None:
+                params = inj.plant(params)
+        return params
+    return plant
+
+
+def _faulty_sensors(sensors: Sensors, injections: Sequence[Injection]) -> Sensors:
+    """``sensors`` with the injections' faulty current sensors: the phase's gain times the
+    fault's, its offset plus the fault's."""
+    gain, offset = list(sensors.gain), list(sensors.offset)
+    for inj in injections:
+        if inj.sensor is not None:
+            j, g, o = inj.sensor
+            gain[j] *= g
+            offset[j] += o
+    if gain == list(sensors.gain) and offset == list(sensors.offset):
+        return sensors
+    return replace(sensors, gain=tuple(gain), offset=tuple(offset))
+
+
+def _plant_report(out: dict, params: ActuatorParams, k: np.ndarray, fault_model: str) -> dict:
+    """What the plant knows and a trace does not: each phase's fault-loop current (RMS
+    over the trace, the PWM ripple the samples miss included) and the mean power in its
+    fault bridge ``R_f i_f^2`` (zero on a phase without a loop)."""
+    i_f = np.asarray(out["i_fault"], dtype=float)
+    ripple = np.asarray(out.get("i_fault_ripple", np.zeros_like(i_f)), dtype=float)
+    ms = np.mean(i_f * i_f, axis=0) + np.mean(ripple * ripple, axis=0)
+    R_f = np.asarray(params.motor.R_f, dtype=float)
+    return {"fault_current_a_rms": [float(x) for x in np.sqrt(ms)],
+            "fault_power_w": [float(x) for x in R_f * ms],
+            "R_f_ohm": [float(x) for x in R_f],
+            "mu": ([float(x) for x in np.minimum(k[2:5], MAX_SHORTED_FRACTION)]
+                   if fault_model == "physical" else None)}

@@ -28,7 +28,8 @@ from typing import Any, Mapping
 from .base import PHASES, Fault, FaultMode, Injection, Reading
 
 __all__ = ["MODES", "FAULT_MODES", "Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL",
-           "mode", "read_faults", "Fault", "FaultMode", "Injection", "Reading", "PHASES"]
+           "mode", "read_faults", "parse_fault", "fault_specs", "Fault", "FaultMode", "Injection", "Reading",
+           "PHASES"]
 
 #: The modules of the modes, in the order a verdict lists their faults.
 _MODULES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift")
@@ -92,3 +93,17 @@ def read_faults(reading: Reading) -> list[Fault]:
     for m in MODES.values():
         out.extend(m.read(reading))
     return out
+
+
+def parse_fault(text: str) -> Injection:
+    """The injection of a fault spec ``MODE[:FIELDS]`` (``friction:2.5``,
+    ``short_circuit:a:0.3:0.05``; each mode's grammar is its ``spec``)."""
+    if not isinstance(text, str) or not text.strip():
+        raise ValueError("a fault spec is MODE:FIELDS, e.g. friction:2.5 or short_circuit:a:0.15")
+    name, *fields = [f.strip() for f in text.strip().split(":")]
+    return mode(name).parse(fields)
+
+
+def fault_specs() -> str:
+    """The ``--fault`` grammar of every mode, for help texts."""
+    return ", ".join(f"{m.name}:{m.spec}" for m in MODES.values() if m.inject is not None)

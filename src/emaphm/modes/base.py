@@ -101,6 +101,33 @@ class FaultMode:
     grid: tuple[float, ...] = ()
     per_phase: bool = False
     spec: str = "SEVERITY"
+    parse_fields: Callable[[list[str]], Injection] | None = None
 
     def threshold_for(self, fault_model: str) -> float:
         return float(self.thresholds_by_fm.get(fault_model, self.threshold))
+
+    def parse(self, fields: list[str]) -> Injection:
+        """The injection of a ``--fault NAME:FIELDS`` spec (``fields`` split at ``:``):
+        ``[PHASE:]SEVERITY`` unless the mode reads more (:attr:`parse_fields`)."""
+        if self.inject is None:
+            raise ValueError(f"fault mode {self.name} cannot be simulated")
+        if self.parse_fields is not None:
+            return self.parse_fields(fields)
+        phase = None
+        if self.per_phase:
+            if not fields or fields[0].upper() not in PHASES:
+                raise ValueError(f"--fault {self.name}:{self.spec}: the phase first (a, b or c)")
+            phase, fields = fields[0].upper(), fields[1:]
+        if len(fields) != 1:
+            raise ValueError(f"--fault {self.name}:{self.spec} ({self.severity_unit})")
+        return self.inject(_number(fields[0], self.name), phase)
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise ValueError(f"--fault {what}: {text!r} is not a number") from None
+    if not np.isfinite(x):
+        raise ValueError(f"--fault {what}: {text!r} is not a finite number")
+    return x

@@ -7,8 +7,10 @@ bridged by the fault resistance ``Motor.R_f`` (a fault-loop current flows); unde
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ..faults import shorted_fraction
-from .base import PHASES, Fault, FaultMode, Injection, Reading
+from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
 
 
 def read(r: Reading) -> list[Fault]:
@@ -30,15 +32,35 @@ def read(r: Reading) -> list[Fault]:
     return faults
 
 
-def inject(severity: float, phase: str | None = "A") -> Injection:
-    """A shorted fraction ``severity`` (0 to 0.99) of phase ``phase``."""
+def inject(severity: float, phase: str | None = "A", R_f: float | None = None) -> Injection:
+    """A shorted fraction ``severity`` (0 to 0.99) of phase ``phase``, through a fault
+    resistance ``R_f`` [ohm] (default the parameters' ``Motor.R_f``)."""
     if not 0.0 <= severity <= 0.99:
         raise ValueError(f"a shorted fraction is 0 to 0.99, got {severity:g}")
     j = PHASES.index((phase or "A").upper())
-    return Injection(k={2 + j: severity})
+    if R_f is None:
+        return Injection(k={2 + j: severity})
+    if not 1e-4 <= R_f <= 100.0:
+        raise ValueError(f"a fault resistance is 1e-4 to 100 ohm, got {R_f:g}")
+
+    def plant(params):
+        R_fs = list(params.motor.R_f)
+        R_fs[j] = float(R_f)
+        return replace(params, motor=replace(params.motor, R_f=tuple(R_fs)))
+
+    return Injection(k={2 + j: severity}, plant=plant)
+
+
+def parse(fields: list[str]) -> Injection:
+    """``PHASE:FRACTION[:R_F_OHM]``."""
+    if len(fields) not in (2, 3) or fields[0].upper() not in PHASES:
+        raise ValueError("--fault short_circuit:PHASE:FRACTION[:R_F_OHM], e.g. "
+                         "short_circuit:a:0.3:0.05")
+    R_f = _number(fields[2], "short_circuit R_f") if len(fields) == 3 else None
+    return inject(_number(fields[1], "short_circuit"), fields[0].upper(), R_f)
 
 
 MODE = FaultMode("short_circuit", "inter-turn short circuit", threshold=0.03,
                  thresholds_by_fm={"physical": 0.018}, read=read, inject=inject,
                  severity_unit="shorted fraction of the turns", grid=(0.03, 0.05, 0.1, 0.2),
-                 per_phase=True, spec="PHASE:FRACTION")
+                 per_phase=True, spec="PHASE:FRACTION[:R_F_OHM]", parse_fields=parse)
