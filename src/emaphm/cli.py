@@ -235,6 +235,13 @@ def _table(ident, diag) -> str:
             lines.append("  components above their thresholds, not a diagnosis: "
                          + ", ".join(f"{f.mode}{' ' + f.phase if f.phase else ''}"
                                      for f in diag.suspected))
+    if diag.refit is not None:
+        r = diag.refit
+        lines.append(f"  read on the refit of the {r.mode.replace('_', ' ')} hypothesis (k searched "
+                     "with " + ", ".join(nuisance_text(n, v) for n, v in r.nuisance.items())
+                     + (f", fit {r.fit_ratio:.2f}x the noise floor" if r.fit_ratio else "")
+                     + "): " + ", ".join(f"k{i + 1} {x:.3f}" for i, x in enumerate(r.k)
+                                         if abs(x - (0.5 if i in (6, 7) else 0.0)) > 1e-3))
     for note in diag.notes:
         lines.append(f"  note: {note}")
     return "\n".join(lines)
@@ -242,8 +249,8 @@ def _table(ident, diag) -> str:
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .faults import scenario
-    from .identify import ALGORITHM_NAMES, IdentificationConfig, identify
-    from .verdict import diagnose_identification
+    from .identify import ALGORITHM_NAMES, IdentificationConfig
+    from .verdict import examine
     from .plots import plot_identification
     from .progress import SearchProgress, compile_notice
     from .simulate import DEFAULT_SENSORS, simulate
@@ -290,12 +297,13 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             config = IdentificationConfig(algorithm=args.algorithm, budget=budget,
                                           fault_model=args.fault_model,
                                           nuisance=_nuisance_option(args.nuisance))
-            ident = identify(trace, config, seed=args.seed, params=params, callback=progress)
+            exam = examine(trace, params=params, config=config, seed=args.seed,
+                           callback=progress)
     except TraceError as exc:            # found in the trace's content: name the file
         raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
     finally:
         progress.close()
-    diag = diagnose_identification(trace, ident, params=params)
+    ident, diag = exam.identification, exam.diagnosis
     if args.json:
         out = {**ident.to_dict(), **diag.to_dict(),
                "scenario": args.scenario or trace.meta.get("scenario"),

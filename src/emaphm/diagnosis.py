@@ -80,6 +80,24 @@ class MismatchFit:
 
 
 @dataclass(frozen=True)
+class Refit:
+    """The refit a fault mode's hypothesis asked for (:func:`emaphm.verdict.diagnose_identification`):
+    the ``mode``, its ``k``, the values of the parameters it searched beside k
+    (``nuisance``) and its ``fit_ratio``. Kept when it fits clearly better than the
+    identification; the verdict is then read on it."""
+
+    mode: str
+    k: np.ndarray
+    nuisance: dict
+    fit_ratio: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"mode": self.mode, "k": [float(x) for x in self.k],
+                "nuisance": {n: float(v) for n, v in self.nuisance.items()},
+                "fit_ratio": None if self.fit_ratio is None else float(self.fit_ratio)}
+
+
+@dataclass(frozen=True)
 class Diagnosis:
     """Health verdict of one identified fault vector.
 
@@ -88,7 +106,8 @@ class Diagnosis:
     components above their thresholds are kept in ``suspected``). ``mismatch``: the
     mismatch check's fit, where one was made (data-sheet parameters and a fault read);
     ``notes``: what the verdict could not test, in words (e.g. a trace without
-    measurement noise, on which the misfit test is not made).
+    measurement noise, on which the misfit test is not made); ``refit``: the refit of a
+    fault mode's hypothesis the verdict was read on, where one fitted clearly better.
     """
 
     k: np.ndarray
@@ -99,6 +118,7 @@ class Diagnosis:
     suspected: tuple[Fault, ...] = ()
     mismatch: MismatchFit | None = None
     notes: tuple[str, ...] = ()
+    refit: Refit | None = None
 
     @property
     def verdict(self) -> str:
@@ -121,6 +141,7 @@ class Diagnosis:
                 "suspected": [f.to_dict() for f in self.suspected],
                 "thresholds": asdict(self.thresholds), "fault_model": self.fault_model,
                 "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict(),
+                "hypothesis_check": None if self.refit is None else self.refit.to_dict(),
                 "notes": list(self.notes)}
 
     def summary(self) -> str:
@@ -141,7 +162,8 @@ def fit_ratio_of(ident: Any) -> float | None:
 def diagnose(k, *, thresholds: Thresholds | None = None,
              params: ActuatorParams | None = None, fault_model: str | None = None,
              fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
-             mismatch: MismatchFit | None = None) -> Diagnosis:
+             mismatch: MismatchFit | None = None, extra: Mapping[str, float] | None = None,
+             findings: Mapping[str, Any] | None = None) -> Diagnosis:
     """The verdict on an identified ``k``: its faults (:func:`emaphm.diagnosis.read_faults`)
     and the rules that make it ``healthy``, ``faulty`` or ``unexplained``.
 
@@ -159,7 +181,9 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
     ``mismatch`` (the mismatch check's fit, :func:`emaphm.verdict.mismatch_fit`),
     when given, keeps only the faults it names too; when it names none of them, the
     verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
-    data sheet explains the reading as well as a fault does.
+    data sheet explains the reading as well as a fault does. ``extra``: the values of the
+    parameters searched beside k (a demagnetization reads the flux there); ``findings``:
+    what the checks made for the modes found (:func:`emaphm.modes.read_faults`).
     """
     k = as_k(k)
     if fault_model is None:
@@ -173,7 +197,7 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
     if thresholds is None:
         thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
     p = params if params is not None else siemens_1fk7060()
-    faults = read_faults(k, thresholds, p, fault_model)
+    faults = read_faults(k, thresholds, p, fault_model, extra, findings)
     unexplained = None
     if fit_ratio is not None:
         pv = misfit_p_value(float(fit_ratio))
@@ -194,7 +218,8 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
             "short circuits: calibrate the unit (emaphm calibrate) and diagnose with --params")
     if unexplained is None and mismatch is not None and faults:
         named = {(f.mode, f.phase) for f in read_faults(as_k(mismatch.k), thresholds, p,
-                                                          fault_model)}
+                                                          fault_model, mismatch.nuisance,
+                                                          findings)}
         kept = [f for f in faults if (f.mode, f.phase) in named]
         if kept:
             faults = kept

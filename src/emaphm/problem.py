@@ -22,7 +22,7 @@ from __future__ import annotations
 import inspect
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -35,7 +35,7 @@ from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, n
                      to_k)
 from .traces import Trace, validate
 
-__all__ = ["IdentificationProblem", "SearchView", "DRIFT_NUISANCE", "default_nuisance",
+__all__ = ["IdentificationProblem", "SearchView", "apply_extra", "DRIFT_NUISANCE", "default_nuisance",
            "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS", "single_fault_points", "true_k"]
 
 #: Nuisance parameters searched with k by default for a calibrated unit: what drifts most
@@ -223,6 +223,35 @@ class IdentificationProblem:
         fault model (``fit_ratio``, ``thresholds``, ``mismatch`` passed on)."""
         return diagnose(k, params=self.params, fault_model=self.fault_model, **kw)
 
+    def params_at(self, nu: np.ndarray | None = None) -> ActuatorParams:
+        """The healthy actuator with the values ``nu`` of the parameters searched beside k
+        applied (:func:`apply_extra`)."""
+        if nu is None or not self.nuisance:
+            return self.params
+        return apply_extra(self.params, self.nuisance, nu)
+
+    def fault_loops(self, k: np.ndarray, nu: np.ndarray | None = None, *,
+                    params: ActuatorParams | None = None) -> dict[str, list[float]]:
+        """What the monitoring model at ``k`` (and ``nu``, or on ``params``) says of each
+        phase's fault loop: ``fault_current_a_rms`` (RMS of the loop current over the
+        trace) and ``fault_power_w`` (mean power in its fault bridge, ``R_f i_f^2``), from
+        the readable loop of the model (:func:`emaphm.models.monitoring.simulate_reference`,
+        which keeps the loop currents the kernels do not)."""
+        from .models.monitoring import simulate_reference
+
+        params = self.params_at(nu) if params is None else params
+        if self.fault_model != "physical":
+            return {"fault_current_a_rms": [0.0] * 3, "fault_power_w": [0.0] * 3,
+                    "R_f_ohm": list(params.motor.R_f)}
+        model = self.objective.model
+        out = simulate_reference(params, k, model.profile, n_sub=model.n_sub,
+                                 theta0=model.theta0, fault_model="physical")
+        ms = np.mean(out["f_abc"] ** 2, axis=0)
+        R_f = np.asarray(params.motor.R_f, dtype=float)
+        return {"fault_current_a_rms": [float(x) for x in np.sqrt(ms)],
+                "fault_power_w": [float(x) for x in R_f * ms],
+                "R_f_ohm": [float(x) for x in R_f]}
+
     def model_trace(self, k: np.ndarray, nu: np.ndarray | None = None) -> Trace:
         """The monitoring model's signals at ``k`` (and nuisance values ``nu``), on the
         trace's clock."""
@@ -233,6 +262,29 @@ class IdentificationProblem:
                      torque=pop.torque[0],
                      meta={"model": "monitoring", "k": np.asarray(k).tolist(),
                            "identified_from": meta.get("scenario") or meta.get("source")})
+
+
+def apply_extra(params: ActuatorParams, names: tuple[str, ...], values: Any) -> ActuatorParams:
+    """``params`` with the values of the parameters searched beside k applied as the model's
+    packing applies them (:data:`emaphm.models.layout.NUISANCE`): R and the flux scaled
+    (``"R"``, ``"flux"``, ``"demag"``: relative deviations), the load added (``"load"``,
+    N m), a phase's fault-bridge resistance scaled by decades (``"Rf_a"``..``"Rf_c"``)."""
+    m, ld = params.motor, params.load
+    R, c0, R_f, T_0 = list(m.R), list(m.c0), list(m.R_f), ld.T_0
+    for name, v in zip(names, np.asarray(values, dtype=float).reshape(-1)):
+        if name == "R":
+            R = [r * (1.0 + v) for r in R]
+        elif name in ("flux", "demag"):
+            c0 = [c * (1.0 + v) for c in c0]
+        elif name == "load":
+            T_0 = T_0 + float(v)
+        elif name.startswith("Rf_"):
+            j = "abc".index(name[-1])
+            R_f[j] = R_f[j] * 10.0 ** float(v)
+        else:
+            raise ValueError(f"unknown parameter {name!r} beside k")
+    return replace(params, motor=replace(m, R=tuple(R), c0=tuple(c0), R_f=tuple(R_f)),
+                   load=replace(ld, T_0=T_0))
 
 
 class _Points:

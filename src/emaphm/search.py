@@ -48,15 +48,22 @@ SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc", "ecc-xy-sq")
 SC_SEARCH_MAX = 0.6
 
 
-#: Range of each nuisance parameter in the search (relative deviation from the
-#: parameters given, calibrated or data sheet): a winding warmer than at calibration
-#: (up to +30 %, about 75 K) or cooler, the magnets' flux within +-6 % (temperature),
-#: and a constant load torque the trace does not report, in N m (``"load"``: 1.5x the
-#: +-0.1 N m of :data:`emaphm.units.DEFAULT_TOLERANCES`).
-NUISANCE_RANGE = {"R": (-0.1, 0.3), "flux": (-0.06, 0.06), "load": (-0.15, 0.15)}
+#: Range of each parameter searched beside k (relative deviation from the parameters
+#: given, calibrated or data sheet): a winding warmer than at calibration (up to +30 %,
+#: about 75 K) or cooler, the magnets' flux within +-6 % (temperature), a constant load
+#: torque the trace does not report, in N m (``"load"``: 1.5x the +-0.1 N m of
+#: :data:`emaphm.units.DEFAULT_TOLERANCES`); for the fault modes: the magnets' flux down
+#: to half (``"demag"``, :mod:`emaphm.modes.demagnetization`) and a fault bridge from 0.03x
+#: to 10x the parameters' ``Motor.R_f`` (``"Rf_a"``..``"Rf_c"``, decades,
+#: :mod:`emaphm.modes.short_circuit`).
+NUISANCE_RANGE = {"R": (-0.1, 0.3), "flux": (-0.06, 0.06), "load": (-0.15, 0.15),
+                  "demag": (-0.5, 0.02), "Rf_a": (-1.5, 1.0), "Rf_b": (-1.5, 1.0),
+                  "Rf_c": (-1.5, 1.0)}
 
 _NUISANCE_WORDS = {"R": "winding resistance", "flux": "magnet flux",
-                   "load": "unreported constant load"}
+                   "load": "unreported constant load", "demag": "magnet flux",
+                   "Rf_a": "fault resistance of phase A", "Rf_b": "fault resistance of phase B",
+                   "Rf_c": "fault resistance of phase C"}
 
 
 def nuisance_text(name: str, value: float) -> str:
@@ -65,6 +72,8 @@ def nuisance_text(name: str, value: float) -> str:
     word = _NUISANCE_WORDS.get(name, name)
     if name == "load":
         return f"{word} {value:+.3f} N m"
+    if name.startswith("Rf_"):
+        return f"{word} x{10.0 ** value:.3g}"
     return f"{word} {100 * value:+.1f} %"
 
 

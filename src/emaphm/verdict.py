@@ -28,19 +28,21 @@ reading from being a diagnosis:
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from .diagnosis import Diagnosis, MismatchFit, Thresholds, diagnose, fit_ratio_of
+from .diagnosis import Diagnosis, MismatchFit, Refit, Thresholds, diagnose, fit_ratio_of
+from .modes import MODES, THRESHOLDS_BY_FAULT_MODEL
 from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit,
                       misfit_p_value)
 from .params import ActuatorParams
-from .problem import IdentificationProblem
+from .problem import IdentificationProblem, apply_extra
 from .traces import Trace
 
-__all__ = ["diagnose", "diagnose_identification", "mismatch_fit", "needs_mismatch_check",
+__all__ = ["diagnose", "diagnose_identification", "examine", "Examination", "mismatch_fit",
+           "needs_mismatch_check",
            "MISMATCH_NUISANCE", "NOISELESS_NOTE", "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P",
            "misfit_p_value", "misfit_limit", "fit_ratio_of"]
 
@@ -66,51 +68,222 @@ def needs_mismatch_check(params: ActuatorParams | None) -> bool:
     return params is None or not params.calibration.date
 
 
-def mismatch_fit(problem: IdentificationProblem, k: Any, *, seed: int) -> MismatchFit:
-    """Fit the trace of ``problem`` again from ``k`` with :data:`MISMATCH_NUISANCE` searched
-    beside it (least squares, warm-started at ``k`` with the nuisance at zero, seeded by
-    ``seed``; the problem's parameters, fault model, sub-steps and fitness mode)."""
+def mismatch_fit(problem: IdentificationProblem, k: Any, *, seed: int,
+                 nuisance: tuple[str, ...] = MISMATCH_NUISANCE) -> MismatchFit:
+    """Fit the trace of ``problem`` again from ``k`` with ``nuisance`` (default
+    :data:`MISMATCH_NUISANCE`) searched beside it (least squares, warm-started at ``k``
+    with the nuisance at zero, seeded by ``seed``; the problem's parameters, fault model,
+    sub-steps and fitness mode)."""
     from .identify import minimize     # local: the search stack is heavy to import
 
-    refit = replace(problem, nuisance=MISMATCH_NUISANCE, start=k, search=None, objective=None)
+    refit = replace(problem, nuisance=tuple(nuisance), start=k, search=None, objective=None)
     ident = minimize(refit, "lsq", seed=seed)
     return MismatchFit(k=ident.k, nuisance=dict(ident.nuisance), fit_ratio=fit_ratio_of(ident))
+
+
+#: A mode's hypothesis refit is kept when it lowers the fit ratio by this share at least
+#: (or turns a misfit into a fit the misfit test accepts): searching one more parameter
+#: always fits a little better.
+HYPOTHESIS_GAIN = 0.03
+
+
+def _problem_of(trace: Trace | IdentificationProblem, ident: Any,
+                params: ActuatorParams | None) -> IdentificationProblem:
+    """The problem ``ident`` was made on: given, or rebuilt from the trace with the
+    identification's parameters, fault model, searched names, sub-steps and mode."""
+    if isinstance(trace, IdentificationProblem):
+        return trace
+    config = getattr(ident, "config", None)
+    opts = getattr(ident, "options", None) or {}
+    return IdentificationProblem(
+        trace, params=params, fault_model=ident.fault_model,
+        nuisance=tuple(getattr(ident, "nuisance", {}) or ()),
+        n_sub=int(config.n_sub if config is not None else opts.get("n_sub", 1)),
+        mode=str(config.mode if config is not None else opts.get("mode", "phases")))
+
+
+def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis,
+                seed: int) -> Refit | None:
+    """The refits the fault modes ask for (:attr:`emaphm.modes.FaultMode.hypothesis`),
+    from the identified k; the best one that fits clearly better, or None."""
+    from .identify import minimize     # local: the search stack is heavy to import
+
+    base = fit_ratio_of(ident)
+    best: Refit | None = None
+    for m in MODES.values():
+        names = m.hypothesis(problem, ident, diag) if m.hypothesis is not None else None
+        if not names:
+            continue
+        trial = replace(problem, nuisance=tuple(names), start=ident.k, search=None,
+                        objective=None)
+        r = minimize(trial, "lsq", seed=seed)
+        ratio = fit_ratio_of(r)
+        if base is not None and ratio is not None:
+            better = ratio < (1.0 - HYPOTHESIS_GAIN) * base or (
+                misfit_p_value(base) < MISFIT_P <= misfit_p_value(ratio))
+        else:
+            better = r.fitness < (1.0 - HYPOTHESIS_GAIN) * ident.fitness
+        if better and (best is None or (ratio or r.fitness) < (best.fit_ratio or np.inf)):
+            best = Refit(m.name, r.k, dict(r.nuisance), ratio)
+    return best
+
+
+def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
+                 diag: Diagnosis, seed: int) -> dict | None:
+    """Each named short's fault loop (physical fault model): its RMS current and the power
+    in its bridge at the fit, and the range of the current over the fault resistances
+    that fit as well (a mild short's shorted fraction and bridge trade off; each point of
+    the profile refits that phase's fraction alone)."""
+    shorts = [f for f in (*diag.faults, *diag.suspected) if f.mode == "short_circuit"]
+    if problem.fault_model != "physical" or not shorts:
+        return None
+    names = tuple(extra)
+    at = problem.fault_loops(k, params=apply_extra(problem.params, names, [extra[n] for n in names]))
+    out = {}
+    for f in shorts:
+        j = "ABC".index(f.phase)
+        cur = [at["fault_current_a_rms"][j]]
+        out[f.phase] = {"fault_current_a_rms": at["fault_current_a_rms"][j],
+                        "fault_power_w": at["fault_power_w"][j]}
+        lo, hi = _valley(problem, k, extra, j, seed)
+        cur += [lo, hi]
+        out[f.phase]["fault_current_interval"] = [float(min(cur)), float(max(cur))]
+    return out
+
+
+#: Fault-bridge resistances (decades from the parameters' Motor.R_f) the valley of a
+#: short is profiled at.
+VALLEY_DECADES = (-1.0, -0.5, 0.0, 0.5, 1.0)
+
+
+def _valley(problem: IdentificationProblem, k: np.ndarray, extra: dict, j: int,
+            seed: int) -> tuple[float, float]:
+    """The range of phase ``j``'s fault-loop current over the fault resistances at which
+    the trace fits about as well (its fit within the misfit test's scatter of the best)."""
+    from .identify import minimize
+
+    name = f"Rf_{'abc'[j]}"
+    rest = tuple(n for n in extra if n != name)
+    base = apply_extra(problem.params, rest, [extra[n] for n in rest])
+    # the fit of the bridge the identification found, and the profile around it
+    r_f = float(extra.get(name, 0.0))
+    points = []
+    best_f = np.inf
+    for d in sorted({r_f, *VALLEY_DECADES}):
+        p = replace(problem, params=_with_bridge(base, j, d), nuisance=(), start=k,
+                    objective=None)
+        r = minimize(p, "lsq", seed=seed, termination=200)
+        loops = p.fault_loops(r.k)
+        points.append((r.fitness, loops["fault_current_a_rms"][j]))
+        best_f = min(best_f, r.fitness)
+    keep = [i for f, i in points if f <= best_f * (1.0 + VALLEY_TOLERANCE)]
+    return (min(keep), max(keep)) if keep else (np.nan, np.nan)
+
+
+#: A point of a short's valley fits "as well" within this share of the best fit (the
+#: scatter of the fit ratio of actuators the model describes, MISFIT_LOG_STD, about 20 %).
+VALLEY_TOLERANCE = 0.05
+
+
+def _with_bridge(params: ActuatorParams, j: int, decades: float) -> ActuatorParams:
+    m = params.motor
+    R_f = list(m.R_f)
+    R_f[j] = R_f[j] * 10.0 ** decades
+    return replace(params, motor=replace(m, R_f=tuple(R_f)))
 
 
 def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
                             params: ActuatorParams | None = None,
                             thresholds: Thresholds | None = None, k: Any = None,
-                            check: bool = True) -> Diagnosis:
+                            check: bool = True, findings: dict | None = None) -> Diagnosis:
     """The verdict of an identification (:func:`emaphm.identify.identify`) of a trace.
 
-    :func:`diagnose` of ``k`` (default ``ident.k``) with the identification's fault model
-    and the fit's ratio to the noise floor; then, where it names a fault and the
-    parameters are a data sheet (:func:`needs_mismatch_check`) and ``check`` is true, the
-    mismatch check (:func:`mismatch_fit`, seeded by ``ident.seed``). ``trace`` may be the
-    identification's problem (its parameters, sub-steps and fitness mode are then the
-    check's; ``params`` must not be given beside it), or the trace with the ``params``
-    it was identified with.
+    :func:`diagnose` of ``k`` (default ``ident.k``) with the identification's fault model,
+    the values of the parameters it searched beside k and the fit's ratio to the noise
+    floor (``findings``: what the checks before the identification found, e.g. the
+    current sensors). Then, where ``check`` is true: the fault modes' hypotheses
+    (:attr:`emaphm.modes.FaultMode.hypothesis`: a refit with the parameters a mode adds,
+    kept when it fits clearly better, :data:`HYPOTHESIS_GAIN`; the verdict is then read
+    on it, ``refit``), each named short's fault loop (its current and power, and the
+    range of the current over the fault resistances that fit as well), and, where the
+    verdict names a fault and the parameters are a data sheet
+    (:func:`needs_mismatch_check`), the mismatch check (:func:`mismatch_fit`, seeded by
+    ``ident.seed``). ``trace`` may be the identification's problem (its parameters,
+    sub-steps and fitness mode are then the checks'; ``params`` must not be given beside
+    it), or the trace with the ``params`` it was identified with.
     """
     if isinstance(trace, IdentificationProblem):
         if params is not None:
             raise ValueError("give params to the IdentificationProblem, not beside it")
-        problem, params = trace, trace.params
-    else:
-        problem = None
+        params = trace.params
     k = ident.k if k is None else k
+    seed = int(ident.seed or 0)
+    findings = dict(findings or {})
     noiseless = 0.0 <= getattr(ident, "noise_sigma", np.inf) < MIN_NOISE
-    kw = dict(thresholds=thresholds, params=params, fault_model=ident.fault_model,
-              fit_ratio=None if noiseless else fit_ratio_of(ident))
+    kw = dict(thresholds=thresholds, params=params, fault_model=ident.fault_model)
+    ratio = None if noiseless else fit_ratio_of(ident)
+    extra = dict(getattr(ident, "nuisance", {}) or {})
     notes = (NOISELESS_NOTE,) if noiseless else ()
-    diag = replace(diagnose(k, **kw), notes=notes)
-    if not (check and diag.verdict == "faulty" and needs_mismatch_check(params)):
-        return diag
-    if problem is None:
-        config = getattr(ident, "config", None)
-        opts = getattr(ident, "options", None) or {}
-        problem = IdentificationProblem(
-            trace, params=params, fault_model=ident.fault_model,
-            n_sub=int(config.n_sub if config is not None else opts.get("n_sub", 1)),
-            mode=str(config.mode if config is not None else opts.get("mode", "phases")))
-    m = mismatch_fit(problem, k, seed=int(ident.seed or 0))
-    return replace(diagnose(k, mismatch=m, **kw), notes=notes)
+    diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
+    if not check:
+        return replace(diag, notes=notes)
+    problem = _problem_of(trace, ident, params)
+    refit = _hypotheses(problem, ident, diag, seed)
+    if refit is not None:
+        k, extra = refit.k, dict(refit.nuisance)
+        ratio = None if noiseless else refit.fit_ratio
+        diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
+    loops = _fault_loops(problem, k, extra, diag, seed)
+    if loops is not None:
+        findings["fault_loops"] = loops
+        diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
+    if diag.verdict == "faulty" and needs_mismatch_check(params):
+        names = tuple(("demag" if n == "flux" and "demag" in extra else n)
+                      for n in MISMATCH_NUISANCE)
+        names += tuple(n for n in extra if n.startswith("Rf_"))
+        m = mismatch_fit(problem, k, seed=seed, nuisance=names)
+        diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, mismatch=m, **kw)
+    return replace(diag, notes=notes, refit=refit)
+
+
+@dataclass(frozen=True)
+class Examination:
+    """The whole examination of one trace (:func:`examine`): the ``identification`` the
+    verdict reads (of the ``trace`` examined: corrected for a faulty current sensor), the
+    ``diagnosis`` and the ``sensor`` finding."""
+
+    identification: Any
+    diagnosis: Diagnosis
+    trace: Trace
+    sensor: Any
+
+
+def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any = None,
+            seed: int = 0, callback: Any = None, thresholds: Thresholds | None = None) -> Examination:
+    """Fault detection and identification of one trace, as ``emaphm diagnose`` makes it.
+
+    1. The current sensors, judged from the sum of the three measured currents
+       (:func:`emaphm.modes.current_sensor.screen`); a faulty one is undone on its phase
+       (an offset alone is placed on the phase whose corrected trace the model fits
+       best), and the machine is identified on the corrected trace. With two measured
+       currents sensor faults are not observable, and the verdict says so.
+    2. The identification (:func:`emaphm.identify.identify` with ``config``, default the
+       least-squares solver's settings; ``params`` the actuator, default the preset).
+    3. The verdict with its checks (:func:`diagnose_identification`).
+    """
+    from .fitness import trace_fault_model
+    from .identify import IdentificationConfig, identify
+    from .modes.current_sensor import UNOBSERVABLE_NOTE, resolve, screen
+
+    config = IdentificationConfig() if config is None else config
+    fault_model = config.fault_model or trace_fault_model(trace)
+    limits = thresholds if thresholds is not None else THRESHOLDS_BY_FAULT_MODEL[fault_model]
+    run = lambda t: identify(t, config, seed=seed, params=params, callback=callback)  # noqa: E731
+    finding, work, ident = resolve(trace, screen(trace, params, limits), run)
+    if ident is None:
+        ident = run(work)
+    diag = diagnose_identification(work, ident, params=params, thresholds=thresholds,
+                                   findings={"current_sensor": finding})
+    if not finding.observable:
+        diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
+    return Examination(ident, diag, work, finding)

@@ -49,7 +49,9 @@ def test_nominal_is_healthy():
 def test_scenario_names_cover_every_mode():
     assert set(SINGLE) | {"nominal", "multiple", "turn-short-5pct", "turn-short-15pct"} \
         == set(SCENARIOS)
-    assert set(SINGLE.values()) == set(FAULT_MODES)
+    from emaphm.modes import PAPER_MODES
+
+    assert set(SINGLE.values()) == set(PAPER_MODES) and set(PAPER_MODES) < set(FAULT_MODES)
 
 
 @pytest.mark.parametrize("name", sorted(SINGLE))

@@ -190,12 +190,18 @@ def _one_winding(R: tuple, L: tuple, sigma: float, mu: tuple, R_f: tuple,
     return Phi, Gamma
 
 
-#: Nuisance parameters a candidate may carry beside its k: relative deviations of the
-#: winding resistance (``"R"``, a warmer winding) and of the magnet flux (``"flux"``: the
-#: back-EMF coefficient, so the torque per ampere) from the nominal parameters, and a
-#: constant load torque (``"load"``, in N m, added to the profile's: a load the bench
-#: does not report).
-NUISANCE = ("R", "flux", "load")
+#: Parameters a candidate may carry beside its k: relative deviations of the winding
+#: resistance (``"R"``, a warmer winding) and of the magnet flux (``"flux"``: the
+#: back-EMF coefficient, so the torque per ampere; ``"demag"``: the same, searched over
+#: the losses of a demagnetized rotor) from the nominal parameters, a constant load
+#: torque (``"load"``, in N m, added to the profile's: a load the bench does not report),
+#: and each phase's fault-bridge resistance as a decade ratio to ``Motor.R_f``
+#: (``"Rf_a"``, ``"Rf_b"``, ``"Rf_c"``: ``R_f x 10**value``; it changes the winding step
+#: of a shorted phase only).
+NUISANCE = ("R", "flux", "load", "demag", "Rf_a", "Rf_b", "Rf_c")
+
+#: The extra parameters that scale the back-EMF coefficients.
+_FLUX = ("flux", "demag")
 
 
 def pack_population(nominal: ActuatorParams, K: np.ndarray, theta0: float = 0.0,
@@ -256,9 +262,15 @@ class PopulationPacker:
                              f" ({N_K} k and {len(nuisance)} nuisance), got {K.shape}")
         K, NU = K[:, :N_K], K[:, N_K:]
         CP = np.repeat(self.base, K.shape[0], axis=0)
+        R_f = None
         for j, name in enumerate(nuisance):
             if name == "load":
                 CP[:, C_T0] += NU[:, j]
+                continue
+            if name.startswith("Rf_"):
+                if R_f is None:
+                    R_f = np.tile(self._R_f, (K.shape[0], 1))
+                R_f[:, "abc".index(name[-1])] *= 10.0 ** NU[:, j]
                 continue
             cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
             CP[:, cols] *= 1.0 + NU[:, j:j + 1]
@@ -279,12 +291,15 @@ class PopulationPacker:
         CP[:, C_ECC] = K[:, 5]
         CP[:, C_ECC_PHASE] = eccentricity_phase(K[:, 6])
         CP[:, C_PHI:C_GAMMA], CP[:, C_GAMMA:C_T0] = self._matrices(
-            CP[:, C_R_A:C_R_C + 1], CP[:, C_L_A:C_L_C + 1], mu)
+            CP[:, C_R_A:C_R_C + 1], CP[:, C_L_A:C_L_C + 1], mu, R_f)
         return self.P.copy(), CP
 
-    def _matrices(self, R: np.ndarray, L: np.ndarray, mu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(Phi, Gamma)`` (n, 25) of each row's winding, from the cache where it is."""
-        keys = np.ascontiguousarray(np.hstack([R, L, mu]))
+    def _matrices(self, R: np.ndarray, L: np.ndarray, mu: np.ndarray,
+                  R_f: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(Phi, Gamma)`` (n, 25) of each row's winding (its fault-bridge resistances
+        ``R_f`` (n, 3), default the nominal ones), from the cache where it is."""
+        parts = [R, L, mu] if R_f is None else [R, L, mu, R_f]
+        keys = np.ascontiguousarray(np.hstack(parts))
         rows = [keys[i].tobytes() for i in range(keys.shape[0])]
         cache = self._windings
         missing = list(dict.fromkeys(r for r in rows if r not in cache))
@@ -293,7 +308,8 @@ class PopulationPacker:
             for i, r in enumerate(rows):
                 first.setdefault(r, i)
             idx = [first[r] for r in missing]
-            Phi, Gamma = _population_matrices(R[idx], L[idx], self._sigma, mu[idx], self._R_f,
+            Phi, Gamma = _population_matrices(R[idx], L[idx], self._sigma, mu[idx],
+                                              self._R_f if R_f is None else R_f[idx],
                                               self.P[P_DT])
             for i, r in enumerate(missing):
                 cache[r] = (Phi[i], Gamma[i])
@@ -314,8 +330,11 @@ def _population_matrices(R, L, sigma, mu, R_f, dt):
     Phi = np.full((n, N_Z * N_Z), np.nan)
     Gamma = np.full((n, N_Z * N_Z), np.nan)
     ok = np.all(np.isfinite(R) & np.isfinite(L) & np.isfinite(mu), axis=1)
+    if np.ndim(R_f) == 2:
+        ok &= np.all(np.isfinite(R_f) & (R_f > 0), axis=1)
     if np.any(ok):
-        Phi[ok], Gamma[ok] = winding_step_matrices(R[ok], L[ok], sigma, mu[ok], R_f, dt)
+        Phi[ok], Gamma[ok] = winding_step_matrices(R[ok], L[ok], sigma, mu[ok],
+                                                   R_f[ok] if np.ndim(R_f) == 2 else R_f, dt)
     return Phi, Gamma
 
 

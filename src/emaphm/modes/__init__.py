@@ -8,6 +8,10 @@ backlash           :mod:`.backlash` (k2)
 short_circuit      :mod:`.short_circuit` (k3..k5, one phase)
 eccentricity       :mod:`.eccentricity` (k6, k7)
 gain_drift         :mod:`.gain_drift` (k8)
+demagnetization    :mod:`.demagnetization` (the magnet flux down on every phase, searched
+                   beside k when the residual asks)
+current_sensor     :mod:`.current_sensor` (a phase-current sensor's gain or offset, from
+                   the sum of the three measured currents)
 =================  ========================================================================
 
 Each module defines ``MODE``, a :class:`~emaphm.modes.base.FaultMode`: its reading of an
@@ -27,12 +31,13 @@ from typing import Any, Mapping
 
 from .base import PHASES, Fault, FaultMode, Injection, Reading
 
-__all__ = ["MODES", "FAULT_MODES", "Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL",
+__all__ = ["MODES", "FAULT_MODES", "PAPER_MODES", "Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL",
            "mode", "read_faults", "parse_fault", "fault_specs", "Fault", "FaultMode", "Injection", "Reading",
            "PHASES"]
 
 #: The modules of the modes, in the order a verdict lists their faults.
-_MODULES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift")
+_MODULES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift",
+            "demagnetization", "current_sensor")
 
 #: name -> mode, in the order a verdict lists their faults.
 MODES: Mapping[str, FaultMode] = MappingProxyType(
@@ -40,6 +45,9 @@ MODES: Mapping[str, FaultMode] = MappingProxyType(
 
 #: The names of the modes.
 FAULT_MODES: tuple[str, ...] = tuple(MODES)
+
+#: The paper's five modes: those of its fault vector k.
+PAPER_MODES: tuple[str, ...] = tuple(n for n, m in MODES.items() if m.k_components)
 
 
 def mode(name: str) -> FaultMode:
@@ -63,7 +71,8 @@ def _check(self: Any) -> None:
 #: ``short_circuit`` on each of k3-k5, ``eccentricity`` on k6, ``gain_drift`` on
 #: ``|k8 - 0.5|``.
 Thresholds = dataclasses.make_dataclass(
-    "Thresholds", [(m.name, float, dataclasses.field(default=m.threshold)) for m in MODES.values()],
+    "Thresholds", [(name, float, dataclasses.field(default=v))
+                   for m in MODES.values() for name, v in m.fields().items()],
     frozen=True, namespace={"__post_init__": _check, "__module__": __name__,
                             "__doc__": "Detection thresholds, one field per fault mode "
                                        "(emaphm.modes.MODES), each on the measure its "
@@ -83,7 +92,7 @@ DEFAULT_THRESHOLDS = Thresholds()
 #: ``paper``: the same for the components both models share; 0.03 of the paper's turn
 #: removal for a short circuit (the earlier twin-trace benchmark's value).
 THRESHOLDS_BY_FAULT_MODEL = MappingProxyType({
-    fm: Thresholds(**{m.name: m.threshold_for(fm) for m in MODES.values()})
+    fm: Thresholds(**{name: v for m in MODES.values() for name, v in m.fields(fm).items()})
     for fm in ("paper", "physical")})
 
 

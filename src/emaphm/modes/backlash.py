@@ -24,4 +24,5 @@ def inject(severity: float, phase: str | None = None) -> Injection:
 
 
 MODE = FaultMode("backlash", "backlash", threshold=0.034, read=read, inject=inject,
-                 severity_unit="x nominal backlash", grid=(5.0, 10.0, 25.0, 50.0))
+                 severity_unit="x nominal backlash", grid=(5.0, 10.0, 25.0, 50.0),
+                 k_components=(1,))

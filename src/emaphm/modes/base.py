@@ -81,6 +81,8 @@ class FaultMode:
     name                its name in verdicts, thresholds and ``--fault``
     label               in words
     threshold           default detection threshold, on the measure ``read`` compares
+    threshold_fields    the mode's fields of :class:`emaphm.modes.Thresholds` with their
+                        defaults, where it has more than one (default ``{name: threshold}``)
     thresholds_by_fm    thresholds that differ by fault model (``{"physical": 0.018}``)
     read                ``read(Reading) -> list[Fault]``
     inject              ``inject(severity, phase) -> Injection`` (None: not simulated)
@@ -88,6 +90,13 @@ class FaultMode:
     grid                severities an assessment runs by default
     per_phase           whether the mode has a phase
     spec                the ``--fault`` grammar after the name, for help texts
+    parse_fields        a parser of the spec's fields, where the mode reads more than
+                        ``[PHASE:]SEVERITY``
+    k_components        the components of the paper's k it reads (none for a mode beside k)
+    hypothesis          ``hypothesis(problem, ident, diag) -> names or None``: when the
+                        residual of an identification asks for the mode, the parameters
+                        to search beside k in a refit (the verdict makes it,
+                        :func:`emaphm.verdict.diagnose_identification`)
     ==================  =================================================================
     """
 
@@ -97,14 +106,24 @@ class FaultMode:
     read: Callable[[Reading], list[Fault]]
     inject: Callable[..., Injection] | None = None
     thresholds_by_fm: Mapping[str, float] = field(default_factory=dict)
+    threshold_fields: Mapping[str, float] = field(default_factory=dict)
     severity_unit: str = ""
     grid: tuple[float, ...] = ()
     per_phase: bool = False
     spec: str = "SEVERITY"
     parse_fields: Callable[[list[str]], Injection] | None = None
+    hypothesis: Callable[[Any, Any, Any], tuple[str, ...] | None] | None = None
+    k_components: tuple[int, ...] = ()
 
     def threshold_for(self, fault_model: str) -> float:
         return float(self.thresholds_by_fm.get(fault_model, self.threshold))
+
+    def fields(self, fault_model: str | None = None) -> dict[str, float]:
+        """The mode's fields of :class:`emaphm.modes.Thresholds` and their defaults (under
+        ``fault_model``)."""
+        if self.threshold_fields:
+            return dict(self.threshold_fields)
+        return {self.name: self.threshold if fault_model is None else self.threshold_for(fault_model)}
 
     def parse(self, fields: list[str]) -> Injection:
         """The injection of a ``--fault NAME:FIELDS`` spec (``fields`` split at ``:``):

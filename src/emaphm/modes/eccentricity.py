@@ -26,4 +26,5 @@ def inject(severity: float, phase: str | None = None) -> Injection:
 
 MODE = FaultMode("eccentricity", "static eccentricity", threshold=0.015, read=read,
                  inject=inject, severity_unit="fraction of the air gap",
-                 grid=(0.02, 0.05, 0.1, 0.25))
+                 grid=(0.02, 0.05, 0.1, 0.25),
+                 k_components=(5, 6))

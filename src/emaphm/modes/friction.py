@@ -25,4 +25,5 @@ def inject(severity: float, phase: str | None = None) -> Injection:
 
 
 MODE = FaultMode("friction", "dry friction", threshold=0.100, read=read, inject=inject,
-                 severity_unit="x nominal friction", grid=(1.25, 1.5, 2.0, 2.5))
+                 severity_unit="x nominal friction", grid=(1.25, 1.5, 2.0, 2.5),
+                 k_components=(0,))

@@ -27,4 +27,5 @@ def inject(severity: float, phase: str | None = None) -> Injection:
 
 MODE = FaultMode("gain_drift", "proportional gain drift", threshold=0.015, read=read,
                  inject=inject, severity_unit="x nominal proportional gain",
-                 grid=(0.9, 0.95, 1.05, 1.1))
+                 grid=(0.9, 0.95, 1.05, 1.1),
+                 k_components=(7,))

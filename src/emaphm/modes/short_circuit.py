@@ -8,6 +8,7 @@ bridged by the fault resistance ``Motor.R_f`` (a fault-loop current flows); unde
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 from ..faults import shorted_fraction
 from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
@@ -15,21 +16,48 @@ from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
 
 def read(r: Reading) -> list[Fault]:
     faults = []
+    loops = r.findings.get("fault_loops")
     for j, ph in enumerate(PHASES):
         kj = float(r.k[2 + j])
         if not kj > r.thresholds.short_circuit:
             continue
         s = float(shorted_fraction(kj))
+        details = {}
         if r.fault_model == "physical":
+            R_f = r.params.motor.R_f[j] * 10.0 ** float(r.extra.get(f"Rf_{'abc'[j]}", 0.0))
+            searched = f"Rf_{'abc'[j]}" in r.extra
             reading = (f"inter-turn short circuit in phase {ph}: {100 * s:.1f}% of its turns "
-                       f"as seen through a fault resistance of {r.params.motor.R_f[j]:g} ohm (a "
-                       "higher fault resistance needs more shorted turns for the same "
-                       "fault current)")
+                       f"through a fault resistance of {R_f:.3g} ohm"
+                       + ("" if searched else " (the parameters', not searched)"))
+            details = {"mu": s, "R_f_ohm": R_f}
+            if loops is not None:
+                details.update(loops.get(ph, {}))
+                if "fault_current_a_rms" in details:
+                    reading += (f": {details['fault_current_a_rms']:.2f} A rms in the fault "
+                                f"loop, {details['fault_power_w']:.2f} W in the bridge")
+                    iv = details.get("fault_current_interval")
+                    if iv is not None and iv[1] > 1.25 * iv[0]:
+                        reading += (f" (fits as well from {iv[0]:.2f} to {iv[1]:.2f} A: a mild "
+                                    "short's shorted fraction and fault resistance trade off)")
         else:
             reading = (f"{100 * s:.0f}% of phase {ph} turns shorted "
                        f"(R x{1 - s:.2f}, L x{(1 - s) ** 2:.2f})")
-        faults.append(Fault("short_circuit", f"k{3 + j}", kj, kj, reading, phase=ph))
+        faults.append(Fault("short_circuit", f"k{3 + j}", kj, kj, reading, phase=ph,
+                            details=details))
     return faults
+
+
+def hypothesis(problem: Any, ident: Any, diag: Any) -> tuple[str, ...] | None:
+    """When a short is read or suspected (physical fault model): the fault-bridge
+    resistance of its phase searched beside k, with the problem's own parameters."""
+    if problem.fault_model != "physical":
+        return None
+    shorts = [f for f in (*diag.faults, *diag.suspected) if f.mode == "short_circuit"]
+    if not shorts:
+        return None
+    worst = max(shorts, key=lambda f: f.k)
+    name = f"Rf_{worst.phase.lower()}"
+    return tuple(n for n in problem.nuisance if n != name) + (name,)
 
 
 def inject(severity: float, phase: str | None = "A", R_f: float | None = None) -> Injection:
@@ -63,4 +91,6 @@ def parse(fields: list[str]) -> Injection:
 MODE = FaultMode("short_circuit", "inter-turn short circuit", threshold=0.03,
                  thresholds_by_fm={"physical": 0.018}, read=read, inject=inject,
                  severity_unit="shorted fraction of the turns", grid=(0.03, 0.05, 0.1, 0.2),
-                 per_phase=True, spec="PHASE:FRACTION[:R_F_OHM]", parse_fields=parse)
+                 per_phase=True, spec="PHASE:FRACTION[:R_F_OHM]", parse_fields=parse,
+                 hypothesis=hypothesis,
+                 k_components=(2, 3, 4))

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -50,7 +51,9 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     release, with a DeprecationWarning.
     """
     from ..fitness import trace_fault_model
-    from ..identify import DEFAULT_ALGORITHM, IdentificationConfig
+    from ..identify import DEFAULT_ALGORITHM, IdentificationConfig, identify
+    from ..modes import THRESHOLDS_BY_FAULT_MODEL
+    from ..modes.current_sensor import UNOBSERVABLE_NOTE, resolve, screen
     from ..traces import validate
     from ..verdict import diagnose_identification
     from .uncertainty import identify_with_spread
@@ -66,15 +69,23 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
         cal = history.calibration(actuator_id, at)
         if cal is not None:
             calibrated_at, params = cal
+    fault_model = config.fault_model or trace_fault_model(trace)
     if config.algorithm == DEFAULT_ALGORITHM and start is None:
         previous = history.inspections(actuator_id)
-        fault_model = config.fault_model or trace_fault_model(trace)
         if previous and (previous[-1].extra or {}).get("fault_model", "paper") == fault_model:
             start = previous[-1].k
-    a = identify_with_spread(trace, config, seed=seed, method=method, level=level, n_runs=n_runs,
+    # the current sensors judged from the sum of the currents; the machine identified on
+    # the corrected trace (emaphm.verdict.examine does the same for one diagnosis)
+    limits = thresholds if thresholds is not None else THRESHOLDS_BY_FAULT_MODEL[fault_model]
+    finding, work, _ = resolve(trace, screen(trace, params, limits),
+                               lambda t: identify(t, config, seed=seed, params=params))
+    a = identify_with_spread(work, config, seed=seed, method=method, level=level, n_runs=n_runs,
                              params=params, start=start, callback=callback)
     ident = a.identification
-    diag = diagnose_identification(trace, ident, params=params, thresholds=thresholds, k=a.k)
+    diag = diagnose_identification(work, ident, params=params, thresholds=thresholds, k=a.k,
+                                   findings={"current_sensor": finding})
+    if not finding.observable:
+        diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
              "fault_model": ident.fault_model,
              "calibrated_at": calibrated_at,
@@ -84,6 +95,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
              "interval_details": {k: v for k, v in a.interval.details.items()
                                   if isinstance(v, (int, float, str))},
              "budget": ident.options.get("budget"),
+             "sensors": finding.to_dict(),
              "seed_used": ident.seed}          # the run kept; ``seed`` replays the inspection
     ins = history.add(actuator_id, at, a.k, k_lo=a.interval.lo, k_hi=a.interval.hi,
                       spread_method=a.interval.method, level=a.interval.level,

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..quantities import QuantityError, measure
 from .container import UNITS, Trace, TraceError, _expected_columns
+from .zero_sum import best_fit
 
 __all__ = ["MIN_SAMPLES", "validate"]
 
@@ -30,6 +31,10 @@ _RATIO_BAND = (0.5, 2.0)  # ratios outside this band (and not a known factor) ar
 # Star connection checks of validate().
 _STAR_MEAN_LIMIT = 0.10  # |mean(i_a+i_b+i_c)| / RMS phase current
 _STAR_AC_LIMIT = 0.25  # RMS of the noise-free part of the sum / that of the phase currents
+#: A sum beyond those limits is accepted when one current sensor's gain or offset (in a
+#: plausible range, emaphm.traces.zero_sum) explains it, leaving at most this share
+#: (the other two sensors' production tolerances leave a few percent)
+_STAR_EXPLAINED = 0.08
 
 
 # --------------------------------------------------------------------------------------
@@ -232,6 +237,23 @@ def _lag1_power(x: np.ndarray) -> float:
 
 
 def _check_star(trace: Trace) -> None:
+    """The phase currents sum to zero (a star connection), or one current sensor's gain or
+    offset explains what they sum to (a sensor fault, diagnosed as such by
+    :mod:`emaphm.modes.current_sensor`); otherwise a wiring error, refused."""
+    try:
+        _check_zero_sum(trace)
+    except TraceError as exc:
+        fit = best_fit(trace.i_abc)
+        if fit.plausible and fit.residual <= _STAR_EXPLAINED:
+            return
+        raise TraceError(
+            f"{exc}; no single current sensor's gain or offset explains it (the best, phase "
+            f"{'abc'[fit.phase]} read with gain {fit.gain:.3g} and offset {fit.offset:+.3g} A, "
+            f"leaves {fit.residual:.0%} of the phase current in the sum, where a faulty "
+            f"sensor would leave at most {_STAR_EXPLAINED:.0%})") from None
+
+
+def _check_zero_sum(trace: Trace) -> None:
     i_abc = trace.i_abc
     i_rms = float(np.sqrt(np.mean(i_abc * i_abc)))
     if i_rms == 0.0:

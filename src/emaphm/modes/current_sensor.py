@@ -1,0 +1,181 @@
+"""A faulty phase-current sensor: one phase read with a gain or an offset off.
+
+Told from the machine by the redundancy of three measured currents, before any model runs
+(:mod:`emaphm.traces.zero_sum`): in a star connection the currents sum to zero, and a
+sensor that reads ``m_j = g i_j + o`` leaves the sum ``(g - 1) i_j + o``. A machine fault
+(an inter-turn short, a demagnetized rotor) leaves it at zero, so a short is never read as
+a sensor fault, nor the reverse: the trace is corrected for the sensor
+(:func:`correct`) before the machine is identified.
+
+:func:`screen` fits one faulty sensor per phase to the sum and keeps the best: a gain is
+named on the phase whose waveform the sum follows; an offset alone moves the sum by a
+constant, which any phase could carry, and the identification on each corrected trace
+tells which (the lowest fit, :func:`emaphm.verdict.examine`). After ``emaphm calibrate``
+the currents are first corrected by the unit's calibrated sensors. A deviation is a fault
+beyond its threshold (``current_sensor_gain``, relative; ``current_sensor_offset``, A),
+set above the spread the production tolerances leave (see :data:`MODE`). With two
+measured currents (the third computed) the sum is zero by construction: sensor faults
+are not observable, and the verdict says so.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Any, Callable
+
+import numpy as np
+
+from ..traces import Trace
+from ..traces.zero_sum import SensorFit, best_fit, two_currents
+from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
+
+__all__ = ["SensorFinding", "screen", "correct", "resolve", "MODE", "UNOBSERVABLE_NOTE"]
+
+#: The verdict's note on a trace with two measured currents.
+UNOBSERVABLE_NOTE = ("current sensor faults are not observable on this trace: two currents "
+                     "were measured and the third computed from them, so they sum to zero "
+                     "whatever the sensors read; a sensor's gain or offset error reads as a "
+                     "machine fault or a misfit")
+
+
+@dataclass(frozen=True)
+class SensorFinding:
+    """What the sum of the measured currents says of the sensors.
+
+    ``observable``: three measured currents; ``fit``: the best single-sensor fit
+    (:class:`~emaphm.traces.zero_sum.SensorFit`, after the calibrated sensors' correction);
+    ``gain_fault``, ``offset_fault``: its gain and offset are past their thresholds;
+    ``phase``: the faulty sensor's phase (0, 1, 2), None while an offset alone has not
+    been placed (:meth:`placed`).
+    """
+
+    observable: bool
+    fit: SensorFit | None = None
+    gain_fault: bool = False
+    offset_fault: bool = False
+    phase: int | None = None
+
+    @property
+    def faulty(self) -> bool:
+        return self.gain_fault or self.offset_fault
+
+    @property
+    def needs_phase(self) -> bool:
+        """An offset alone, whose phase the sum cannot tell."""
+        return self.faulty and self.phase is None
+
+    def placed(self, phase: int) -> "SensorFinding":
+        return replace(self, phase=int(phase))
+
+    def to_dict(self) -> dict:
+        f = self.fit
+        return {"observable": self.observable,
+                "phase": None if self.phase is None else PHASES[self.phase],
+                "gain": None if f is None else f.gain, "offset_a": None if f is None else f.offset,
+                "gain_fault": self.gain_fault, "offset_fault": self.offset_fault}
+
+
+def _measured(trace: Trace, params) -> np.ndarray:
+    """The trace's currents, corrected by the calibrated unit's sensors where it has them."""
+    i = np.asarray(trace.i_abc, dtype=float)
+    s = params.sensors if params is not None else None
+    if s is not None and params.calibration.date and not s.ideal:
+        i = s.correct(i)
+    return i
+
+
+def screen(trace: Trace, params, thresholds) -> SensorFinding:
+    """The sensors of ``trace`` judged from the sum of its currents (``params``: the
+    actuator, calibrated or not; ``thresholds``: :class:`emaphm.modes.Thresholds`)."""
+    if two_currents(trace.i_abc, trace.meta):
+        return SensorFinding(observable=False)
+    fit = best_fit(_measured(trace, params))
+    gain_fault = fit.plausible and abs(fit.gain - 1.0) > thresholds.current_sensor_gain
+    offset_fault = fit.plausible and abs(fit.offset) > thresholds.current_sensor_offset
+    return SensorFinding(True, fit, bool(gain_fault), bool(offset_fault),
+                         fit.phase if gain_fault else None)
+
+
+def correct(trace: Trace, finding: SensorFinding, phase: int | None = None) -> Trace:
+    """``trace`` with the faulty sensor's reading undone on ``phase`` (default the
+    finding's): ``i_j = (m_j - o) / g``."""
+    j = finding.phase if phase is None else phase
+    if j is None or finding.fit is None:
+        return trace
+    i = np.array(trace.i_abc, dtype=float)
+    g = finding.fit.gain if finding.gain_fault else 1.0
+    i[:, j] = (i[:, j] - finding.fit.offset) / g
+    meta = dict(trace.meta)
+    meta["corrected_sensor"] = {"phase": PHASES[j], "gain": g, "offset_a": finding.fit.offset}
+    return replace(trace, i_abc=i, meta=meta)
+
+
+def resolve(trace: Trace, finding: SensorFinding,
+            identify: Callable[[Trace], Any]) -> tuple[SensorFinding, Trace, Any]:
+    """``(finding, corrected trace, identification)``: a faulty sensor undone on its phase;
+    an offset alone, whose phase the sum cannot tell, on the phase whose corrected trace
+    the machine model fits best (``identify(trace)`` -> an object with ``fitness``; its
+    result on the chosen trace is returned, None where no choice was needed)."""
+    if not finding.faulty:
+        return finding, trace, None
+    if not finding.needs_phase:
+        return finding, correct(trace, finding), None
+    tries = [(identify(correct(trace, finding, j)), j) for j in range(3)]
+    ident, j = min(tries, key=lambda x: x[0].fitness)
+    placed = finding.placed(j)
+    return placed, correct(trace, placed), ident
+
+
+def read(r: Reading) -> list[Fault]:
+    f: SensorFinding | None = r.findings.get("current_sensor")
+    if f is None or not f.faulty or f.phase is None:
+        return []
+    ph = PHASES[f.phase]
+    out = []
+    if f.gain_fault:
+        g = f.fit.gain
+        out.append(Fault("current_sensor", f"sensor_{ph.lower()}", g, abs(g - 1.0),
+                         f"current sensor of phase {ph} reads {100 * abs(g - 1):.1f}% "
+                         f"{'low' if g < 1 else 'high'} (gain {g:.3f}); the machine was "
+                         "diagnosed on the corrected currents", phase=ph,
+                         details={"kind": "gain", "value": g}))
+    if f.offset_fault:
+        o = f.fit.offset
+        out.append(Fault("current_sensor", f"sensor_{ph.lower()}", o, abs(o),
+                         f"current sensor of phase {ph} reads with an offset of {o:+.3f} A; "
+                         "the machine was diagnosed on the corrected currents", phase=ph,
+                         details={"kind": "offset", "value": o}))
+    return out
+
+
+def inject(severity: float, phase: str | None = "A", kind: str = "gain") -> Injection:
+    """A sensor of ``phase`` reading with gain ``severity`` (``kind="gain"``, 0.5 to 1.5)
+    or offset ``severity`` A (``kind="offset"``, within +-5 A)."""
+    j = PHASES.index((phase or "A").upper())
+    if kind == "gain":
+        if not 0.5 <= severity <= 1.5:
+            raise ValueError(f"a sensor gain is 0.5 to 1.5, got {severity:g}")
+        return Injection(sensor=(j, float(severity), 0.0))
+    if kind == "offset":
+        if not abs(severity) <= 5.0:
+            raise ValueError(f"a sensor offset is within +-5 A, got {severity:g}")
+        return Injection(sensor=(j, 1.0, float(severity)))
+    raise ValueError(f"a current sensor fault is of kind gain or offset, got {kind!r}")
+
+
+def parse(fields: list[str]) -> Injection:
+    """``PHASE:gain:GAIN`` or ``PHASE:offset:AMPERES``."""
+    if len(fields) != 3 or fields[0].upper() not in PHASES or fields[1] not in ("gain", "offset"):
+        raise ValueError("--fault current_sensor:PHASE:gain:GAIN or current_sensor:PHASE:offset:A, "
+                         "e.g. current_sensor:a:gain:0.9")
+    return inject(_number(fields[2], "current_sensor"), fields[0].upper(), fields[1])
+
+
+#: Thresholds: a gain 5 % off or an offset of 0.08 A, beyond the spread the production
+#: tolerances of the other sensors leave in a healthy unit's single-sensor fit (gains
+#: +-3 %, offsets +-20 mA each; see docs/fault-modes.md for how they were set).
+MODE = FaultMode("current_sensor", "faulty current sensor", threshold=0.05, read=read,
+                 inject=inject, threshold_fields={"current_sensor_gain": 0.05,
+                                                  "current_sensor_offset": 0.08},
+                 severity_unit="sensor gain", grid=(0.97, 0.95, 0.9, 0.8), per_phase=True,
+                 spec="PHASE:gain:GAIN or PHASE:offset:AMPERES", parse_fields=parse)
