@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Literal, Sequence
+from typing import Any, Literal, Sequence
 
 import numpy as np
 
@@ -86,20 +86,8 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     """
     if model not in MODELS:
         raise ValueError(f"unknown model {model!r}; choose 'reference' or 'monitoring'")
-    if k is not None and scenario is not None:
-        raise ValueError("give either a fault vector k or a scenario name, not both")
-    kk = scenario_k(scenario) if scenario is not None else as_k(k if k is not None else
-                                                                 scenario_k("nominal"))
-    if fault_model is None:
-        fault_model = scenario_fault_model(scenario) if scenario is not None else "physical"
-    check_fault_model(fault_model)
     injections = [parse_fault(f) if isinstance(f, str) else f for f in faults]
-    if injections:
-        kk = kk.copy()
-        for inj in injections:
-            for j, v in inj.k.items():
-                kk[j] = v
-        kk = as_k(kk)
+    kk, fault_model = _fault_vector(k, scenario, fault_model, injections)
     if seed is not None:
         check_seed(seed)
     params = params if params is not None else siemens_1fk7060()
@@ -116,15 +104,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         status = "tripped" if out["trip_time"] is not None else "ok"
     else:
         sensors = _faulty_sensors(sensors, injections)
-        mm = MonitoringModel(plant(params), profile, n_sub=n_sub or 1, fault_model=fault_model)
-        r = mm.simulate(kk)
-        out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
-               "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}
-        status = {STATUS_OK: "ok", STATUS_TRIPPED: "tripped"}.get(int(r.status[0]), "diverged")
-    if status == "diverged":
-        raise ValueError(f"the monitoring model diverged for k = {kk.tolist()}: its state left "
-                         "the physical range; check the parameters (e.g. the current loop gains "
-                         "against the inductance)")
+        out, status = _run_monitoring(plant(params), profile, kk, n_sub or 1, fault_model)
     rng = np.random.default_rng(seed) if seed is not None else None
     t_rec, rec = sensors.record(out["t"], {k: out[k] for k in ("theta_ref", "theta_m", "omega_m",
                                                                 "i_abc", "torque")}, rng)
@@ -149,6 +129,41 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         meta["plant"] = _plant_report(out, plant_params, kk, fault_model)
     return Trace(t=t_rec, theta_ref=rec["theta_ref"], theta_m=rec["theta_m"], omega_m=rec["omega_m"],
                  i_abc=rec["i_abc"], torque=rec["torque"], meta=meta)
+
+
+def _fault_vector(k: Any, scenario: str | None, fault_model: str | None,
+                  injections: Sequence[Injection]) -> tuple[np.ndarray, str]:
+    """The fault vector to simulate (``k``, a scenario's, or nominal, with the components
+    the injections set) and its fault model (a scenario's own, ``"physical"`` for k)."""
+    if k is not None and scenario is not None:
+        raise ValueError("give either a fault vector k or a scenario name, not both")
+    kk = scenario_k(scenario) if scenario is not None else as_k(k if k is not None else
+                                                                 scenario_k("nominal"))
+    if fault_model is None:
+        fault_model = scenario_fault_model(scenario) if scenario is not None else "physical"
+    check_fault_model(fault_model)
+    if injections:
+        kk = kk.copy()
+        for inj in injections:
+            for j, v in inj.k.items():
+                kk[j] = v
+        kk = as_k(kk)
+    return kk, fault_model
+
+
+def _run_monitoring(params: ActuatorParams, profile: Profile, k: np.ndarray, n_sub: int,
+                    fault_model: str) -> tuple[dict, str]:
+    """The monitoring model's signals for one k, as the plant's, and its drive status;
+    a diverged state is an error here (one simulation a user asked for)."""
+    r = MonitoringModel(params, profile, n_sub=n_sub, fault_model=fault_model).simulate(k)
+    out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
+           "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}
+    status = {STATUS_OK: "ok", STATUS_TRIPPED: "tripped"}.get(int(r.status[0]), "diverged")
+    if status == "diverged":
+        raise ValueError(f"the monitoring model diverged for k = {k.tolist()}: its state left "
+                         "the physical range; check the parameters (e.g. the current loop gains "
+                         "against the inductance)")
+    return out, status
 
 
 def _production_unit(params: ActuatorParams, model: str, unit: Unit | None, unit_seed: int | None,

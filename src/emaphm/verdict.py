@@ -105,18 +105,15 @@ def _problem_of(trace: Trace | IdentificationProblem, ident: Any,
 def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis,
                 seed: int) -> Refit | None:
     """The refits the fault modes ask for (:attr:`emaphm.modes.FaultMode.hypothesis`),
-    from the identified k; the best one that fits clearly better, or None."""
-    from .identify import minimize     # local: the search stack is heavy to import
-
+    from the identified k and from the healthy actuator; the best one that fits clearly
+    better, or None."""
     base = fit_ratio_of(ident)
     best: Refit | None = None
     for m in MODES.values():
         names = m.hypothesis(problem, ident, diag) if m.hypothesis is not None else None
         if not names:
             continue
-        trial = replace(problem, nuisance=tuple(names), start=ident.k, search=None,
-                        objective=None)
-        r = minimize(trial, "lsq", seed=seed)
+        r = _refit(problem, tuple(names), ident.k, seed)
         ratio = fit_ratio_of(r)
         if base is not None and ratio is not None:
             better = ratio < (1.0 - HYPOTHESIS_GAIN) * base or (
@@ -125,6 +122,22 @@ def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis,
             better = r.fitness < (1.0 - HYPOTHESIS_GAIN) * ident.fitness
         if better and (best is None or (ratio or r.fitness) < (best.fit_ratio or np.inf)):
             best = Refit(m.name, r.k, dict(r.nuisance), ratio)
+    return best
+
+
+def _refit(problem: IdentificationProblem, names: tuple[str, ...], k: np.ndarray,
+           seed: int) -> Any:
+    """A hypothesis' least-squares refit from the identified k and from the healthy
+    actuator, the better: a fault the first fit made up for what the hypothesis explains
+    (a backlash for a weaker magnet) can hold the refit from k in its basin."""
+    from .identify import minimize     # local: the search stack is heavy to import
+
+    best = None
+    for start in (k, None):
+        trial = replace(problem, nuisance=names, start=start, search=None, objective=None)
+        r = minimize(trial, "lsq", seed=seed)
+        if best is None or r.fitness < best.fitness:
+            best = r
     return best
 
 

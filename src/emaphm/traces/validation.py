@@ -295,6 +295,34 @@ def _check_zero_sum(trace: Trace) -> None:
         )
 
 
+def _check_time_column(trace: Trace, rtol_dt: float) -> None:
+    """``t`` strictly increasing, in seconds and uniform within ``rtol_dt``."""
+    t = trace.t
+    steps = np.diff(t)
+    bad = steps <= 0
+    if bad.any():
+        first = int(np.argmax(bad)) + 1
+        raise TraceError(
+            f"column 't' is not strictly increasing: t[{first}] = {t[first]:.9g} s <= "
+            f"t[{first - 1}] = {t[first - 1]:.9g} s ({_where(trace, first)}); sort the "
+            "samples by time and drop duplicated time stamps"
+        )
+
+    _check_time_scale(trace.dt, trace.duration)
+    dt = trace.dt
+
+    spread = float((steps.max() - steps.min()) / dt)
+    if spread > rtol_dt:
+        first = int(np.argmax(np.abs(steps - dt) > 0.5 * rtol_dt * dt)) + 1
+        raise TraceError(
+            f"column 't' is not uniform: the time steps spread by {spread:.3g} of the mean "
+            f"step {dt:.6g} s (tolerance rtol_dt = {rtol_dt:g}); the first irregular step "
+            f"ends at {_where(trace, first)}. Resample onto a uniform grid: "
+            "emaphm.traces.resample(trace, numpy.linspace(trace.t[0], trace.t[-1], "
+            "trace.n)) (read files with read_trace(path, validate=False) first)"
+        )
+
+
 def validate(
     trace: Trace, *, min_rotation: float = 2 * np.pi, rtol_dt: float = 1e-3
 ) -> Trace:
@@ -344,30 +372,7 @@ def validate(
                 "samples (or cut the trace before them)"
             )
 
-    t = trace.t
-    steps = np.diff(t)
-    bad = steps <= 0
-    if bad.any():
-        first = int(np.argmax(bad)) + 1
-        raise TraceError(
-            f"column 't' is not strictly increasing: t[{first}] = {t[first]:.9g} s <= "
-            f"t[{first - 1}] = {t[first - 1]:.9g} s ({_where(trace, first)}); sort the "
-            "samples by time and drop duplicated time stamps"
-        )
-
-    _check_time_scale(trace.dt, trace.duration)
-    dt = trace.dt
-
-    spread = float((steps.max() - steps.min()) / dt)
-    if spread > rtol_dt:
-        first = int(np.argmax(np.abs(steps - dt) > 0.5 * rtol_dt * dt)) + 1
-        raise TraceError(
-            f"column 't' is not uniform: the time steps spread by {spread:.3g} of the mean "
-            f"step {dt:.6g} s (tolerance rtol_dt = {rtol_dt:g}); the first irregular step "
-            f"ends at {_where(trace, first)}. Resample onto a uniform grid: "
-            "emaphm.traces.resample(trace, numpy.linspace(trace.t[0], trace.t[-1], "
-            "trace.n)) (read files with read_trace(path, validate=False) first)"
-        )
+    _check_time_column(trace, rtol_dt)
 
     for k, name in enumerate(("i_a", "i_b", "i_c")):
         column = trace.i_abc[:, k]
