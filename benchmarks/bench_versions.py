@@ -10,9 +10,11 @@ rounds and the ratio now / base.
 
 Workload (fixed, seeded): the SIMD kernel's fitness of 48 candidates on the diagnostic
 profile (ns per candidate-step), the scalar kernel on one candidate (a least-squares
-residual), and identifications of reference-plant traces (friction-high, backlash-low,
+residual), identifications of reference-plant traces (friction-high, backlash-low,
 turn-short-15pct, gain-low, eccentricity-high, multiple; seed 1) with ``lsq`` and, on two
-of them, with the paper's PSO at its defaults.
+of them, with the paper's PSO at its defaults, and ``emaphm diagnose`` of a healthy
+plant trace in the process (the whole verdict: on a healthy trace no fault mode's
+hypothesis runs; "same k" compares the verdicts there).
 
 Run: ``python benchmarks/bench_versions.py [--base REV] [--rounds N]``; writes
 ``benchmarks/results/versions.md``.
@@ -77,6 +79,20 @@ for s in ("friction-high", "gain-low"):
     t = time.process_time(); r = identify(traces[s], "pso", seed=0)
     out[f"pso {s}"] = time.process_time() - t
     out[f"pso {s} k"] = [float(x) for x in r.k]
+# emaphm diagnose of a healthy plant trace, in this process: the whole verdict's cost
+import contextlib, io, os, tempfile
+from emaphm.cli import main
+from emaphm.traces import write_trace
+with tempfile.TemporaryDirectory() as tmp:
+    path = os.path.join(tmp, "healthy.parquet")
+    write_trace(simulate(scenario="nominal", sensors=DEFAULT_SENSORS, seed=7), path)
+    ts = []
+    for _ in range(5):
+        with contextlib.redirect_stdout(io.StringIO()) as buf:
+            t = time.process_time(); main(["diagnose", path, "--json", "--quiet"])
+            ts.append(time.process_time() - t)
+    out["diagnose healthy (CLI, in process)"] = float(np.median(ts))
+    out["diagnose healthy (CLI, in process) k"] = json.loads(buf.getvalue())["verdict"]
 json.dump(out, sys.stdout)
 '''
 

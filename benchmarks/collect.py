@@ -12,7 +12,7 @@ from pathlib import Path
 ROOT = Path(__file__).parent
 ORDER = ["plant.md", "commissioning.md", "pipeline.md", "identification.md", "identification_twin.md",
          "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
-         "fleet.md", "versions.md", "import.md"]
+         "fault_coverage.md", "fleet.md", "versions.md", "import.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
 CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
 HEADER = """# Benchmarks

@@ -213,7 +213,10 @@ def _table(ident, diag) -> str:
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
                  + (f" ({ident.restarts} restart{'s' if ident.restarts > 1 else ''})"
                     if ident.restarts else ""))
-    if ident.suspect and diag.unexplained is None and not noiseless:
+    if ident.suspect and diag.refit is not None:
+        lines.append(f"the fit stays above the noise floor with k alone; the "
+                     f"{diag.refit.mode.replace('_', ' ')} hypothesis explains it (below)")
+    elif ident.suspect and diag.unexplained is None and not noiseless:
         lines.append("WARNING: the best fit stays far above the trace's noise floor: the search may "
                      "have missed the actuator's k, or the model parameters (--params) do not "
                      "describe this actuator; treat the verdict with care")

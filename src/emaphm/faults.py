@@ -47,6 +47,7 @@ from ._text import shown
 from .params import ActuatorParams
 
 __all__ = [
+    "loop_report",
     "N_K",
     "K_NAMES",
     "K_LABELS",
@@ -133,6 +134,22 @@ def backlash_scale(k2):
 def shorted_fraction(k_sc):
     """Fraction of a phase's turns shorted, capped at MAX_SHORTED_FRACTION."""
     return np.minimum(k_sc, MAX_SHORTED_FRACTION)
+
+
+def loop_report(mean_square, R_f, mu) -> dict[str, list[float]]:
+    """Each phase's fault loop from the mean square of its current ``mean_square`` [A^2],
+    its bridge ``R_f`` [ohm] and its shorted fraction ``mu``: ``fault_current_a_rms``,
+    ``fault_power_w`` (``R_f i_f^2``, what heats the insulation), ``fault_mmf_a_rms``
+    (the loop's ampere-turns per turn of the phase, ``mu i_f`` rms: what the terminal
+    currents see, so what a mild short's fit pins while ``mu`` and ``R_f`` trade off) and
+    ``R_f_ohm``."""
+    ms = np.asarray(mean_square, dtype=float)
+    R_f = np.asarray(R_f, dtype=float)
+    rms = np.sqrt(ms)
+    return {"fault_current_a_rms": [float(x) for x in rms],
+            "fault_power_w": [float(x) for x in R_f * ms],
+            "fault_mmf_a_rms": [float(x) for x in np.asarray(mu, dtype=float) * rms],
+            "R_f_ohm": [float(x) for x in R_f]}
 
 
 def eccentricity_phase(k7):

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .diagnosis import diagnose
-from .faults import K_NOMINAL, N_K, as_k
+from .faults import K_NOMINAL, N_K, as_k, loop_report, shorted_fraction
 from .fitness import Eq4Objective
 from .params import ActuatorParams
 from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_to_box,
@@ -233,8 +233,8 @@ class IdentificationProblem:
     def fault_loops(self, k: np.ndarray, nu: np.ndarray | None = None, *,
                     params: ActuatorParams | None = None) -> dict[str, list[float]]:
         """What the monitoring model at ``k`` (and ``nu``, or on ``params``) says of each
-        phase's fault loop: ``fault_current_a_rms`` (RMS of the loop current over the
-        trace) and ``fault_power_w`` (mean power in its fault bridge, ``R_f i_f^2``), from
+        phase's fault loop (:func:`loop_report`: its RMS current, the power in its bridge
+        and its ampere-turns ``mu i_f``), from
         the readable loop of the model (:func:`emaphm.models.monitoring.simulate_reference`,
         which keeps the loop currents the kernels do not)."""
         from .models.monitoring import simulate_reference
@@ -242,15 +242,12 @@ class IdentificationProblem:
         params = self.params_at(nu) if params is None else params
         if self.fault_model != "physical":
             return {"fault_current_a_rms": [0.0] * 3, "fault_power_w": [0.0] * 3,
-                    "R_f_ohm": list(params.motor.R_f)}
+                    "fault_mmf_a_rms": [0.0] * 3, "R_f_ohm": list(params.motor.R_f)}
         model = self.objective.model
         out = simulate_reference(params, k, model.profile, n_sub=model.n_sub,
                                  theta0=model.theta0, fault_model="physical")
-        ms = np.mean(out["f_abc"] ** 2, axis=0)
-        R_f = np.asarray(params.motor.R_f, dtype=float)
-        return {"fault_current_a_rms": [float(x) for x in np.sqrt(ms)],
-                "fault_power_w": [float(x) for x in R_f * ms],
-                "R_f_ohm": [float(x) for x in R_f]}
+        return loop_report(np.mean(out["f_abc"] ** 2, axis=0), params.motor.R_f,
+                           shorted_fraction(np.asarray(k, dtype=float)[2:5]))
 
     def model_trace(self, k: np.ndarray, nu: np.ndarray | None = None) -> Trace:
         """The monitoring model's signals at ``k`` (and nuisance values ``nu``), on the

@@ -9,8 +9,8 @@ import numpy as np
 
 from . import __version__
 from .acquisition import Sensors
-from .faults import (MAX_SHORTED_FRACTION, as_k, check_fault_model, scenario as scenario_k,
-                     scenario_fault_model)
+from .faults import (as_k, check_fault_model, loop_report, scenario as scenario_k,
+                     scenario_fault_model, shorted_fraction)
 from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
 from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
@@ -216,13 +216,12 @@ def _faulty_sensors(sensors: Sensors, injections: Sequence[Injection]) -> Sensor
 def _plant_report(out: dict, params: ActuatorParams, k: np.ndarray, fault_model: str) -> dict:
     """What the plant knows and a trace does not: each phase's fault-loop current (RMS
     over the trace, the PWM ripple the samples miss included) and the mean power in its
-    fault bridge ``R_f i_f^2`` (zero on a phase without a loop)."""
+    fault bridge ``R_f i_f^2`` and its ampere-turns ``mu i_f`` (:func:`emaphm.faults.loop_report`;
+    zero on a phase without a loop)."""
     i_f = np.asarray(out["i_fault"], dtype=float)
     ripple = np.asarray(out.get("i_fault_ripple", np.zeros_like(i_f)), dtype=float)
     ms = np.mean(i_f * i_f, axis=0) + np.mean(ripple * ripple, axis=0)
-    R_f = np.asarray(params.motor.R_f, dtype=float)
-    return {"fault_current_a_rms": [float(x) for x in np.sqrt(ms)],
-            "fault_power_w": [float(x) for x in R_f * ms],
-            "R_f_ohm": [float(x) for x in R_f],
-            "mu": ([float(x) for x in np.minimum(k[2:5], MAX_SHORTED_FRACTION)]
-                   if fault_model == "physical" else None)}
+    physical = fault_model == "physical"
+    mu = shorted_fraction(k[2:5]) if physical else np.zeros(3)
+    return {**loop_report(ms, params.motor.R_f, mu),
+            "mu": [float(x) for x in mu] if physical else None}

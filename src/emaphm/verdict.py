@@ -143,10 +143,11 @@ def _refit(problem: IdentificationProblem, names: tuple[str, ...], k: np.ndarray
 
 def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
                  diag: Diagnosis, seed: int) -> dict | None:
-    """Each named short's fault loop (physical fault model): its RMS current and the power
-    in its bridge at the fit, and the range of the current over the fault resistances
-    that fit as well (a mild short's shorted fraction and bridge trade off; each point of
-    the profile refits that phase's fraction alone)."""
+    """Each named short's fault loop (physical fault model) at the fit: its RMS current,
+    the power in its bridge and its ampere-turns (:func:`emaphm.faults.loop_report`), each
+    with the range over the fault resistances that fit as well (a mild short's shorted
+    fraction and bridge trade off, its ampere-turns stay; each point of the profile
+    refits that phase's fraction alone)."""
     shorts = [f for f in (*diag.faults, *diag.suspected) if f.mode == "short_circuit"]
     if problem.fault_model != "physical" or not shorts:
         return None
@@ -155,14 +156,18 @@ def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
     out = {}
     for f in shorts:
         j = "ABC".index(f.phase)
-        cur = [at["fault_current_a_rms"][j]]
-        out[f.phase] = {"fault_current_a_rms": at["fault_current_a_rms"][j],
-                        "fault_power_w": at["fault_power_w"][j]}
-        lo, hi = _valley(problem, k, extra, j, seed)
-        cur += [lo, hi]
-        out[f.phase]["fault_current_interval"] = [float(min(cur)), float(max(cur))]
+        out[f.phase] = {key: at[key][j] for key in LOOP_QUANTITIES}
+        valley = _valley(problem, k, extra, j, seed)
+        for key, name in LOOP_QUANTITIES.items():
+            span = [at[key][j], *valley[key]]
+            out[f.phase][name] = [float(min(span)), float(max(span))]
     return out
 
+
+#: The fault loop's quantities a short reports, and the names of their ranges.
+LOOP_QUANTITIES = {"fault_current_a_rms": "fault_current_interval",
+                   "fault_power_w": "fault_power_interval",
+                   "fault_mmf_a_rms": "fault_mmf_interval"}
 
 #: Fault-bridge resistances (decades from the parameters' Motor.R_f) the valley of a
 #: short is profiled at.
@@ -170,9 +175,10 @@ VALLEY_DECADES = (-1.0, -0.5, 0.0, 0.5, 1.0)
 
 
 def _valley(problem: IdentificationProblem, k: np.ndarray, extra: dict, j: int,
-            seed: int) -> tuple[float, float]:
-    """The range of phase ``j``'s fault-loop current over the fault resistances at which
-    the trace fits about as well (its fit within the misfit test's scatter of the best)."""
+            seed: int) -> dict[str, tuple[float, float]]:
+    """The range of each of phase ``j``'s :data:`LOOP_QUANTITIES` over the fault
+    resistances at which the trace fits about as well (within :data:`VALLEY_TOLERANCE`
+    of the best)."""
     from .identify import minimize
 
     name = f"Rf_{'abc'[j]}"
@@ -181,16 +187,15 @@ def _valley(problem: IdentificationProblem, k: np.ndarray, extra: dict, j: int,
     # the fit of the bridge the identification found, and the profile around it
     r_f = float(extra.get(name, 0.0))
     points = []
-    best_f = np.inf
     for d in sorted({r_f, *VALLEY_DECADES}):
         p = replace(problem, params=_with_bridge(base, j, d), nuisance=(), start=k,
                     objective=None)
         r = minimize(p, "lsq", seed=seed, termination=200)
-        loops = p.fault_loops(r.k)
-        points.append((r.fitness, loops["fault_current_a_rms"][j]))
-        best_f = min(best_f, r.fitness)
-    keep = [i for f, i in points if f <= best_f * (1.0 + VALLEY_TOLERANCE)]
-    return (min(keep), max(keep)) if keep else (np.nan, np.nan)
+        points.append((r.fitness, p.fault_loops(r.k)))
+    best_f = min(f for f, _ in points)
+    keep = [loops for f, loops in points if f <= best_f * (1.0 + VALLEY_TOLERANCE)]
+    return {key: (min(q[key][j] for q in keep), max(q[key][j] for q in keep))
+            for key in LOOP_QUANTITIES}
 
 
 #: A point of a short's valley fits "as well" within this share of the best fit (the

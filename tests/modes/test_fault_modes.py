@@ -153,10 +153,25 @@ def test_a_short_is_never_a_sensor_fault_and_carries_its_fault_loop(plant):
     d = ex.diagnosis.to_dict()["faults"][0]
     truth = plant["short"].meta["plant"]
     assert d["fault_current_a_rms"] == pytest.approx(truth["fault_current_a_rms"][0], rel=0.25)
-    lo, hi = d["fault_current_interval"]
-    assert lo <= d["fault_current_a_rms"] <= hi
-    assert d["fault_power_w"] > 0 and d["mu"] == pytest.approx(0.1, abs=0.02)
+    for q, iv in (("fault_current_a_rms", "fault_current_interval"),
+                  ("fault_power_w", "fault_power_interval"),
+                  ("fault_mmf_a_rms", "fault_mmf_interval")):
+        lo, hi = d[iv]
+        assert 0 < lo <= d[q] <= hi
+    assert d["fault_mmf_a_rms"] == pytest.approx(truth["fault_mmf_a_rms"][0], rel=0.25)
+    assert d["mu"] == pytest.approx(0.1, abs=0.02)
     json.dumps(ex.diagnosis.to_dict())
+
+
+def test_the_loop_report_of_known_currents():
+    """RMS, power R_f i^2 and ampere-turns mu i from a mean square (known answers)."""
+    from emaphm.faults import loop_report
+
+    r = loop_report([4.0, 0.0, 9.0], [0.5, 0.15, 2.0], [0.1, 0.0, 0.3])
+    assert r["fault_current_a_rms"] == [2.0, 0.0, 3.0]
+    assert r["fault_power_w"] == [2.0, 0.0, 18.0]
+    assert r["fault_mmf_a_rms"] == pytest.approx([0.2, 0.0, 0.9])
+    assert r["R_f_ohm"] == [0.5, 0.15, 2.0]
 
 
 def test_a_severe_short_is_read_with_its_fault_resistance(plant):

@@ -34,11 +34,16 @@ def read(r: Reading) -> list[Fault]:
                 details.update(loops.get(ph, {}))
                 if "fault_current_a_rms" in details:
                     reading += (f": {details['fault_current_a_rms']:.2f} A rms in the fault "
-                                f"loop, {details['fault_power_w']:.2f} W in the bridge")
+                                f"loop, {details['fault_power_w']:.2f} W in the bridge, "
+                                f"ampere-turns mu i_f {details['fault_mmf_a_rms']:.3g} A")
                     iv = details.get("fault_current_interval")
                     if iv is not None and iv[1] > 1.25 * iv[0]:
-                        reading += (f" (fits as well from {iv[0]:.2f} to {iv[1]:.2f} A: a mild "
-                                    "short's shorted fraction and fault resistance trade off)")
+                        pw = details["fault_power_interval"]
+                        mmf = details["fault_mmf_interval"]
+                        reading += (f" (fits as well from {iv[0]:.2f} to {iv[1]:.2f} A and "
+                                    f"{pw[0]:.2f} to {pw[1]:.2f} W, the ampere-turns "
+                                    f"{mmf[0]:.3g} to {mmf[1]:.3g} A: a mild short's shorted "
+                                    "fraction and fault resistance trade off)")
         else:
             reading = (f"{100 * s:.0f}% of phase {ph} turns shorted "
                        f"(R x{1 - s:.2f}, L x{(1 - s) ** 2:.2f})")
