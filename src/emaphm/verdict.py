@@ -29,7 +29,7 @@ reading from being a diagnosis:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -102,11 +102,15 @@ def _problem_of(trace: Trace | IdentificationProblem, ident: Any,
         mode=str(config.mode if config is not None else opts.get("mode", "phases")))
 
 
-def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis,
-                seed: int) -> Refit | None:
+def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis, seed: int,
+                read: Callable[[np.ndarray, dict, float | None], Diagnosis]) -> Refit | None:
     """The refits the fault modes ask for (:attr:`emaphm.modes.FaultMode.hypothesis`),
     from the identified k and from the healthy actuator; the best one that fits clearly
-    better, or None."""
+    better, or None. On a data sheet (:func:`needs_mismatch_check`) a refit must also name
+    its own mode (``read(k, extra, fit_ratio)``: the verdict on it): there, the parameter
+    a hypothesis adds (a weaker magnet, say) also absorbs the unit's own deviations from
+    the data sheet, and a better fit that names nothing of its mode is the unit's mismatch,
+    not its fault."""
     base = fit_ratio_of(ident)
     best: Refit | None = None
     for m in MODES.values():
@@ -120,6 +124,8 @@ def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis,
                 misfit_p_value(base) < MISFIT_P <= misfit_p_value(ratio))
         else:
             better = r.fitness < (1.0 - HYPOTHESIS_GAIN) * ident.fitness
+        if better and needs_mismatch_check(problem.params):
+            better = any(f.mode == m.name for f in read(r.k, dict(r.nuisance), ratio).faults)
         if better and (best is None or (ratio or r.fitness) < (best.fit_ratio or np.inf)):
             best = Refit(m.name, r.k, dict(r.nuisance), ratio)
     return best
@@ -246,7 +252,8 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     if not check:
         return replace(diag, notes=notes)
     problem = _problem_of(trace, ident, params)
-    refit = _hypotheses(problem, ident, diag, seed)
+    refit = _hypotheses(problem, ident, diag, seed, lambda k_, extra_, ratio_: diagnose(
+        k_, fit_ratio=None if noiseless else ratio_, extra=extra_, findings=findings, **kw))
     if refit is not None:
         k, extra = refit.k, dict(refit.nuisance)
         ratio = None if noiseless else refit.fit_ratio

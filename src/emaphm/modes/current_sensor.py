@@ -29,7 +29,7 @@ from ..traces import Trace
 from ..traces.zero_sum import SensorFit, best_fit, two_currents
 from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
 
-__all__ = ["SensorFinding", "screen", "correct", "resolve", "MODE", "UNOBSERVABLE_NOTE"]
+__all__ = ["SensorFinding", "screen", "correct", "resolve", "tolerance", "MODE", "UNOBSERVABLE_NOTE"]
 
 #: The verdict's note on a trace with two measured currents.
 UNOBSERVABLE_NOTE = ("current sensor faults are not observable on this trace: two currents "
@@ -84,14 +84,31 @@ def _measured(trace: Trace, params) -> np.ndarray:
     return i
 
 
+def tolerance(params: Any) -> tuple[float, float]:
+    """What a healthy unit's sensors may leave in the single-sensor fit beyond the
+    thresholds, ``(gain, offset [A])``: nothing after a calibration (the unit's sensors are
+    known and undone); on a data sheet the production tolerance of a sensor's gain and
+    offset (:data:`emaphm.units.DEFAULT_TOLERANCES`, +-3 % and +-20 mA): three sensors
+    within it leave a single-sensor fit up to about twice that (measured: 5.1 % and 52 mA
+    on healthy units of both actuators), under threshold plus tolerance."""
+    if params is not None and params.calibration.date:
+        return 0.0, 0.0
+    from ..units import DEFAULT_TOLERANCES as T
+
+    return (float(max(abs(x) for x in T.sensor_gain)),
+            float(max(abs(x) for x in T.sensor_offset)))
+
+
 def screen(trace: Trace, params, thresholds) -> SensorFinding:
     """The sensors of ``trace`` judged from the sum of its currents (``params``: the
-    actuator, calibrated or not; ``thresholds``: :class:`emaphm.modes.Thresholds`)."""
+    actuator, calibrated or not; ``thresholds``: :class:`emaphm.modes.Thresholds`, on a
+    data sheet plus the sensors' production :func:`tolerance`)."""
     if two_currents(trace.i_abc, trace.meta):
         return SensorFinding(observable=False)
     fit = best_fit(_measured(trace, params))
-    gain_fault = fit.plausible and abs(fit.gain - 1.0) > thresholds.current_sensor_gain
-    offset_fault = fit.plausible and abs(fit.offset) > thresholds.current_sensor_offset
+    tol_gain, tol_offset = tolerance(params)
+    gain_fault = fit.plausible and abs(fit.gain - 1.0) > thresholds.current_sensor_gain + tol_gain
+    offset_fault = fit.plausible and abs(fit.offset) > thresholds.current_sensor_offset + tol_offset
     return SensorFinding(True, fit, bool(gain_fault), bool(offset_fault),
                          fit.phase if gain_fault else None)
 
