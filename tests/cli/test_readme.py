@@ -145,10 +145,18 @@ def test_readme_commands_run_in_order_in_an_empty_folder(tmp_path):
     assert (tmp_path / "emaphm-history.sqlite").exists()
     assert (tmp_path / "report" / "report.md").exists()
     # --json carries the trace's scenario from its metadata
-    (js,) = [out for cmd, out in outputs_of.items() if "--json" in cmd.split()]
+    (js,) = [out for cmd, out in outputs_of.items()
+             if "--json" in cmd.split() and "sc.parquet" in cmd.split()]
     d = json.loads(js)
     assert d["scenario"] == "short-circuit-high" and d["trace"] == "sc.parquet"
     assert d["algorithm"] == "de" and d["seed"] == 3
+    # a severe short's JSON carries its fault loop: current, power, ampere-turns
+    (js,) = [out for cmd, out in outputs_of.items()
+             if "--json" in cmd.split() and "severe.parquet" in cmd.split()]
+    (short,) = [f for f in json.loads(js)["faults"] if f["mode"] == "short_circuit"]
+    assert short["phase"] == "A"
+    for key in ("fault_current_a_rms", "fault_power_w", "fault_mmf_a_rms", "mu", "R_f_ohm"):
+        assert short[key] > 0, key
     # the history table names every component in full
     (show,) = [out for cmd, out in outputs_of.items() if cmd.startswith("emaphm history show")]
     header = show.splitlines()[1].split()
