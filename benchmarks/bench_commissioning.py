@@ -60,8 +60,8 @@ def run_unit(task: tuple[int, int]) -> dict:
     from emaphm.calibration import CalibrationError, calibrate
     from emaphm.diagnosis import fit_ratio_of
     from emaphm.faults import K_NOMINAL
-    from emaphm.identify import identify
-    from emaphm.verdict import diagnose_identification
+    from emaphm.identify import IdentificationConfig
+    from emaphm.verdict import examine
     from emaphm.params import siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
     from emaphm.units import draw_unit
@@ -73,10 +73,10 @@ def run_unit(task: tuple[int, int]) -> dict:
                for s in (1, 2, 3)]
 
     def verdict(trace, params):
-        ident = identify(trace, ALGORITHM, seed=0, params=params)
-        # the verdict as diagnose gives it: on the data sheet, with the mismatch check
-        d = diagnose_identification(trace, ident, params=params)
-        return ident, d
+        # the verdict as `emaphm diagnose` gives it: the sensors from the currents' sum,
+        # on the data sheet the mismatch check, the modes' hypotheses
+        ex = examine(trace, params=params, config=IdentificationConfig(ALGORITHM), seed=0)
+        return ex.identification, ex.diagnosis
 
     i0, d0 = verdict(healthy[2], sheet)
     out = {"unit": i, "deviations": unit.deviations,
