@@ -2,16 +2,22 @@
 
 A fault grows along a chosen law (``emaphm.prognosis.DEGRADATION_SCENARIOS``); at
 each inspection the reference model (switching PWM, 20 mA sensor noise) records a
-trace, PSO identifies k with an interval, the inspection goes into a health
+trace, the identification (least squares by default, or the paper's PSO, DE, GWO:
+``--algorithm``) finds k with an interval, the inspection goes into a health
 history (SQLite), and the remaining useful life is predicted from the inspections
 seen so far.
 
     python examples/degradation_demo.py [--scenario short-circuit-growth]
-        [--inspections 8] [--budget 1500] [--seed 0] [--out-dir DIR] [--synthetic]
+        [--inspections 8] [--algorithm lsq] [--budget N] [--seed 0] [--out-dir DIR]
+        [--synthetic]
 
-``--synthetic`` skips the simulations and identifications (the true k plus
-identification-level noise), for a run of a second. Every random draw flows from
-``--seed``. The same loop is ``emaphm demo-degradation``.
+The identification's settings are one :class:`emaphm.identify.IdentificationConfig`
+(its algorithm and budget: evaluations per identification, default the algorithm's own
+stopping rule). ``--synthetic`` skips the simulations and identifications (the true k
+plus identification-level noise), for a run of a second. Every random draw flows from
+``--seed``. The same loop is ``emaphm demo-degradation``. The tests run it with
+``--inspections 3 --budget 150`` (a budget that small identifies roughly; it shows the
+loop, not its accuracy).
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from emaphm.identify import ALGORITHM_NAMES, DEFAULT_ALGORITHM, IdentificationConfig
 from emaphm.prognosis import (DEGRADATION_SCENARIOS, HealthHistory, degradation_scenario, inspect,
                               inspection_times, prognose, simulate_degradation,
                               synthetic_k_history)
@@ -35,7 +42,10 @@ def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scenario", default="short-circuit-growth", choices=list(DEGRADATION_SCENARIOS))
     ap.add_argument("--inspections", type=int, default=8)
-    ap.add_argument("--budget", type=int, default=1500, help="PSO evaluations per identification")
+    ap.add_argument("--algorithm", default=DEFAULT_ALGORITHM, choices=ALGORITHM_NAMES,
+                    help="identification algorithm (default: least squares)")
+    ap.add_argument("--budget", type=int, default=None,
+                    help="evaluations per identification (default: the algorithm's own rule)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out-dir", help="write the history, prognosis and alpha-lambda figures here")
     ap.add_argument("--synthetic", action="store_true")
@@ -50,10 +60,11 @@ def main(argv: list[str] | None = None) -> dict:
                 for t, k in zip(times, synthetic_k_history(sc, times, seed=args.seed)):
                     history.add("EMA-DEMO", float(t), k, spread_method="synthetic")
             else:                                    # 1. simulate, 2. diagnose and record
+                config = IdentificationConfig(algorithm=args.algorithm, budget=args.budget)
                 run = simulate_degradation(sc, times, seed=args.seed)
                 for t, trace in zip(times, run.traces):
                     ins, _ = inspect(history, "EMA-DEMO", trace, float(t), seed=args.seed,
-                                     budget=args.budget, options={"pop_size": 30})
+                                     config=config)
                     print(f"t = {t:6.0f} h  identified {sc.indicator} = "
                           f"{ins.k[_component(sc)]:.4f}  verdict "
                           f"{'healthy' if ins.healthy else 'FAULTY'}")
