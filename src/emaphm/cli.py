@@ -28,9 +28,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from . import __version__
-from ._cli_common import (EXIT_USAGE, Parser, UsageError, budget_option, calibration_seconds,
-                          identification_seconds, negative_values, out_path, plot_path,
-                          warn_if_long)
+from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_option,
+                          calibration_seconds, identification_seconds, negative_values, out_path,
+                          plot_path, warn_if_long)
 from ._cli_common import seed as _seed
 from ._text import one_line, shown
 
@@ -43,8 +43,9 @@ def _load_params(path: str | None):
     return load_params(path, partial=True) if path else siemens_1fk7060()
 
 
-def _trace_file(name: str) -> Any:
-    """Read the trace file ``name`` (a UsageError when it is missing)."""
+def _trace_file(name: str, min_rotation: float | None = None) -> Any:
+    """Read the trace file ``name`` (a UsageError when it is missing), validated with
+    ``min_rotation`` [rad] (None: the default, one revolution)."""
     from pathlib import Path
 
     from .traces import read_trace
@@ -52,7 +53,7 @@ def _trace_file(name: str) -> Any:
     path = Path(name)
     if not path.exists():
         raise UsageError(f"trace file {path} does not exist")
-    return read_trace(path)
+    return read_trace(path) if min_rotation is None else read_trace(path, min_rotation=min_rotation)
 
 
 # ----------------------------------------------------------------------------- scenarios
@@ -143,6 +144,11 @@ def _fault_model_option(args: argparse.Namespace) -> str:
     if args.fault_model is not None:
         return check_fault_model(args.fault_model)
     return scenario_fault_model(args.scenario) if args.scenario else "physical"
+
+
+_min_rotation = arg_type(float, lambda x: np.isfinite(x) and x >= 0,
+                         "expected a rotation in rad >= 0 (6.283 is one "
+                         "revolution, 0 skips the check)")
 
 
 def _nuisance_option(text: str | None) -> tuple[str, ...] | None:
@@ -274,7 +280,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                 or args.tolerances is not None:
             raise UsageError("--unit-seed, --tolerances and --unreported-load describe a simulated "
                              "plant: use them with --scenario, not with a trace file")
-        trace = _trace_file(args.trace)
+        trace = _trace_file(args.trace, args.min_rotation)
     else:
         k_true = scenario(args.scenario)
         sim_fault_model = _fault_model_option(args)
@@ -299,7 +305,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         with compile_notice(progress, enabled=not args.quiet):
             config = IdentificationConfig(algorithm=args.algorithm, budget=budget,
                                           fault_model=args.fault_model,
-                                          nuisance=_nuisance_option(args.nuisance))
+                                          nuisance=_nuisance_option(args.nuisance),
+                                          **({} if args.min_rotation is None
+                                             else {"min_rotation": args.min_rotation}))
             exam = examine(trace, params=params, config=config, seed=args.seed,
                            callback=progress)
     except TraceError as exc:            # found in the trace's content: name the file
@@ -452,6 +460,10 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--plot", help="write measured vs identified currents and convergence (.png)")
     d.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
     d.add_argument("--quiet", action="store_true", help="no progress line")
+    d.add_argument("--min-rotation", type=_min_rotation, default=None, metavar="RAD",
+                   help="least motor rotation range the trace must show [rad] (default 6.283, "
+                        "one revolution, which the eccentricity needs; 0 skips the check, and "
+                        "the eccentricity read from a shorter trace is then a guess)")
     d.add_argument("--nuisance", default=None,
                    help="parameters searched with k so that a drift is not read as a fault: "
                         "none, or a comma-separated subset of R (winding resistance), flux "

@@ -20,6 +20,7 @@ optimizer plugs in without touching emaphm: an object with the ask/tell protocol
 from __future__ import annotations
 
 import json
+import math
 import re
 import time
 import warnings
@@ -328,7 +329,12 @@ class IdentificationConfig:
     n_sub, mode     monitoring-model sub-steps and fitness mode
     fault_model     what k3..k5 mean (None: the trace's own)
     nuisance        parameters searched beside k (None: by the parameters' calibration)
+    min_rotation    least motor rotation range the trace must show [rad] (default one
+                    revolution, which the eccentricity needs; 0 skips the check)
     ==============  ========================================================================
+
+    The first group chooses and tunes the solver, the second (``search`` on) describes
+    the problem (:meth:`problem`).
     """
 
     algorithm: str = DEFAULT_ALGORITHM
@@ -342,9 +348,15 @@ class IdentificationConfig:
     mode: str = "phases"
     fault_model: str | None = None
     nuisance: tuple[str, ...] | None = None
+    min_rotation: float = 2 * math.pi
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "options", dict(_jsonable(dict(self.options or {}))))
+        if isinstance(self.min_rotation, bool) or not isinstance(self.min_rotation, (int, float)) \
+                or not (math.isfinite(self.min_rotation) and self.min_rotation >= 0):
+            raise ValueError(f"min_rotation [rad] must be a finite number >= 0 (0 skips the "
+                             f"check), got {self.min_rotation!r}")
+        object.__setattr__(self, "min_rotation", float(self.min_rotation))
         if self.nuisance is not None:
             object.__setattr__(self, "nuisance", tuple(self.nuisance))
             bad = [n for n in self.nuisance if n not in NUISANCE_RANGE]
@@ -376,7 +388,8 @@ class IdentificationConfig:
         """The identification problem of ``trace`` with these settings."""
         return IdentificationProblem(trace, params=params, fault_model=self.fault_model,
                                      nuisance=self.nuisance, n_sub=self.n_sub, mode=self.mode,
-                                     search=self.search, start=start)
+                                     search=self.search, start=start,
+                                     min_rotation=self.min_rotation)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON values; :meth:`from_dict` of it gives an equal config."""
@@ -475,7 +488,8 @@ def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, opti
         polish=polish, restarts=getattr(solver, "restarts", None),
         suspect_ratio=getattr(solver, "settle_ratio", getattr(solver, "restart_ratio", None)),
         search=problem.search, n_sub=problem.n_sub, mode=problem.mode,
-        fault_model=problem.fault_model, nuisance=problem.nuisance)
+        fault_model=problem.fault_model, nuisance=problem.nuisance,
+        min_rotation=problem.min_rotation)
 
 
 # ----------------------------------------------------------------------------- identify

@@ -90,7 +90,8 @@ HYPOTHESIS_GAIN = 0.03
 def _problem_of(trace: Trace | IdentificationProblem, ident: Any,
                 params: ActuatorParams | None) -> IdentificationProblem:
     """The problem ``ident`` was made on: given, or rebuilt from the trace with the
-    identification's parameters, fault model, searched names, sub-steps and mode."""
+    identification's parameters, fault model, searched names, sub-steps, mode and least
+    rotation."""
     if isinstance(trace, IdentificationProblem):
         return trace
     config = getattr(ident, "config", None)
@@ -99,7 +100,8 @@ def _problem_of(trace: Trace | IdentificationProblem, ident: Any,
         trace, params=params, fault_model=ident.fault_model,
         nuisance=tuple(getattr(ident, "nuisance", {}) or ()),
         n_sub=int(config.n_sub if config is not None else opts.get("n_sub", 1)),
-        mode=str(config.mode if config is not None else opts.get("mode", "phases")))
+        mode=str(config.mode if config is not None else opts.get("mode", "phases")),
+        min_rotation=config.min_rotation if config is not None else 2 * np.pi)
 
 
 def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis, seed: int,

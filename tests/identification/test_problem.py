@@ -109,6 +109,60 @@ def test_the_config_round_trips_to_json_and_builds_its_solver():
         IdentificationConfig(nuisance=("J",))
 
 
+@pytest.fixture(scope="module")
+def half_turn_trace():
+    """A friction fault on a ramp of half a revolution (less than the default
+    min_rotation), monitoring model with sensor noise."""
+    from emaphm.profiles import ramp
+
+    return simulate(scenario="friction-high", model="monitoring", sensors=DEFAULT_SENSORS,
+                    seed=2, profile=ramp(height=np.pi))
+
+
+def test_min_rotation_is_a_problem_setting_of_the_config(half_turn_trace):
+    """A trace of less than a revolution is refused by default, and identified where the
+    config lowers min_rotation; the setting reaches the problem, the result's config and
+    the verdict's rebuilt problem, and round-trips to JSON."""
+    from emaphm.traces import TraceError
+
+    with pytest.raises(TraceError, match=r"below min_rotation = 6\.283 rad"):
+        identify(half_turn_trace, seed=0)
+    with pytest.raises(TraceError, match=r"below min_rotation = 6\.283 rad"):
+        identify(half_turn_trace, IdentificationConfig(), seed=0)
+    cfg = IdentificationConfig(budget=300, min_rotation=3.0)
+    assert cfg.problem(half_turn_trace).min_rotation == 3.0
+    ident = identify(half_turn_trace, cfg, seed=0)
+    assert ident.config.min_rotation == 3.0
+    assert ident.k[0] > 0.5                      # the friction (k1 0.75) found
+    diag = diagnose_identification(half_turn_trace, ident)    # rebuilds the problem
+    assert [f.mode for f in diag.faults] == ["friction"]
+    back = IdentificationConfig.from_dict(json.loads(json.dumps(cfg.to_dict())))
+    assert back == cfg and back.min_rotation == 3.0
+    assert IdentificationConfig.from_dict({"algorithm": "lsq"}).min_rotation == 2 * np.pi
+    for bad in (-1.0, float("nan"), float("inf"), "1", True):
+        with pytest.raises(ValueError, match=r"min_rotation \[rad\] must be a finite number >= 0"):
+            IdentificationConfig(min_rotation=bad)
+
+
+def test_diagnose_min_rotation_on_the_command_line(half_turn_trace, tmp_path, capsys):
+    from emaphm.cli import main
+    from emaphm.traces import write_trace
+
+    path = write_trace(half_turn_trace, tmp_path / "half-turn.csv")
+    assert main(["diagnose", str(path), "--quiet", "--budget", "300"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "below min_rotation = 6.283 rad" in err
+    assert main(["diagnose", str(path), "--quiet", "--budget", "300", "--min-rotation", "3",
+                 "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["verdict"] == "faulty" and [f["mode"] for f in out["faults"]] == ["friction"]
+    with pytest.raises(SystemExit) as exit_:
+        main(["diagnose", str(path), "--min-rotation", "-1"])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "expected a rotation in rad >= 0" in err
+
+
 def test_an_identification_carries_the_settings_that_replay_it(problem):
     first = identify(problem, IdentificationConfig("de", options={"pop_size": 20}, budget=300),
                      seed=5)

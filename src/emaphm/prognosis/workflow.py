@@ -63,7 +63,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     config = IdentificationConfig() if config is None else config
     fp = trace_fingerprint(trace)
     history.check_next(actuator_id, at, fp)
-    validate(trace)
+    validate(trace, min_rotation=config.min_rotation)
     calibrated_at = None
     if params is None:                 # the actuator's own calibration, where it has one
         cal = history.calibration(actuator_id, at)
