@@ -27,8 +27,10 @@ def as_generator(seed: Any, what: str = "seed") -> np.random.Generator:
     Generator itself."""
     if isinstance(seed, np.random.Generator):
         return seed
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+    try:
+        seed = check_seed(seed, what)
+    except ValueError:
         raise ValueError(f"{what} must be given explicitly as a non-negative integer or a "
                          f"numpy.random.Generator, got {seed!r} (randomness always flows from an "
-                         "explicit seed, e.g. 0)")
-    return np.random.default_rng(int(seed))
+                         "explicit seed, e.g. 0)") from None
+    return np.random.default_rng(seed)

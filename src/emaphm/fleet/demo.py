@@ -36,6 +36,7 @@ import numpy as np
 
 from ..prognosis.simulator import DegradationLaw, DegradationScenario
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS
+from ..seeds import check_seed
 
 __all__ = ["DemoUnit", "demo_fleet", "record_demo_fleet", "FAULT_KINDS", "MAX_ACTUATORS"]
 
@@ -105,11 +106,10 @@ def _check_count(n: Any) -> int:
 def demo_fleet(n: int = 30, *, seed: int = 0) -> tuple[DemoUnit, ...]:
     """``n`` demo actuators (module docstring), all drawn from ``seed``."""
     n = _check_count(n)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    seed = check_seed(seed)
     thr = DEFAULT_FAILURE_THRESHOLDS
     units = []
-    for i, child in enumerate(np.random.SeedSequence(int(seed)).spawn(n)):
+    for i, child in enumerate(np.random.SeedSequence(seed).spawn(n)):
         rng = np.random.default_rng(child)
         kind = FAULT_KINDS[i % len(FAULT_KINDS)]
         life = float(rng.uniform(800.0, 2500.0))

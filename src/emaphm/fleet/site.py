@@ -45,6 +45,7 @@ from typing import Any, Callable, Sequence
 
 from .._files import atomic_write, atomic_write_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
+from ..seeds import check_seed
 from .markup import esc, page_stem, script_json
 from .status import VERDICTS, ActuatorStatus, assess, indicator_state, order_fleet
 
@@ -692,8 +693,7 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     ``out`` are kept unless ``redraw`` (module docstring); ``progress`` is called with a
     short line per actuator done.
     """
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    seed = check_seed(seed)
     if not 0.0 < level < 1.0:
         raise ValueError(f"level must be in (0, 1), e.g. 0.9, got {level!r}")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)

@@ -41,6 +41,7 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from ..faults import K_NOMINAL, as_k
+from ..seeds import check_seed
 from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPONENT,
                          FailureThresholds)
 
@@ -224,13 +225,6 @@ def inspection_times(eol: float, n: int, *, start: float = 0.0, last: float = 0.
     return np.linspace(start, last * eol, int(n))
 
 
-def _check_seed(seed: Any) -> int:
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer (randomness always flows from an "
-                         f"explicit seed), got {seed!r}")
-    return int(seed)
-
-
 def synthetic_k_history(scenario: DegradationScenario, times: Sequence[float], *, seed: int,
                         noise: float | Sequence[float] = 0.007) -> np.ndarray:
     """Identified-like k history (n, 8): the true k plus Gaussian noise, clipped to [0, 1].
@@ -238,7 +232,7 @@ def synthetic_k_history(scenario: DegradationScenario, times: Sequence[float], *
     ``noise`` is the per-component standard deviation of an identification
     (a scalar or 8 values).
     """
-    seed = _check_seed(seed)
+    seed = check_seed(seed)
     sd = np.broadcast_to(np.asarray(noise, dtype=float), (8,))
     if np.any(~np.isfinite(sd)) or np.any(sd < 0):
         raise ValueError(f"noise must be finite and >= 0, got {noise!r}")
@@ -284,7 +278,7 @@ def simulate_degradation(scenario: DegradationScenario, times: Sequence[float], 
     called after each of the ``n`` traces (a progress line)."""
     from ..simulate import DEFAULT_SENSORS, simulate
 
-    seed = _check_seed(seed)
+    seed = check_seed(seed)
     times = np.asarray(times, dtype=float)
     if times.ndim != 1 or times.size == 0 or np.any(np.diff(times) <= 0):
         raise ValueError("inspection times must be a non-empty, strictly increasing 1-D sequence")

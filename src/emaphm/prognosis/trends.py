@@ -55,6 +55,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from scipy import optimize, stats
 
+from ..seeds import as_generator, check_seed
 from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPONENT,
                          INDICATOR_MODE, FailureThresholds)
 
@@ -422,12 +423,10 @@ def _json_float(x: float) -> float | None:
 
 
 def _seed_rng(seed: Any) -> tuple[np.random.Generator, int | None]:
-    if isinstance(seed, np.random.Generator):
-        return seed, None
-    if seed is None or isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer or a numpy Generator (randomness "
-                         f"always flows from an explicit seed), got {seed!r}")
-    return np.random.default_rng(int(seed)), int(seed)
+    """The Generator of ``seed`` (:func:`emaphm.seeds.as_generator`) and the seed as an int
+    (None for a Generator)."""
+    rng = as_generator(seed)
+    return rng, (None if rng is seed else int(seed))
 
 
 def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | None = None,
@@ -671,8 +670,7 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
     each RUL carries (:func:`predict_rul`); other keyword arguments go to
     :func:`predict_rul`.
     """
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    seed = check_seed(seed)
     for name in indicators:
         if name not in INDICATOR_MODE:
             raise ValueError(f"unknown health indicator {name!r}; choose from {', '.join(INDICATORS)}")
@@ -683,7 +681,7 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
                          f"{', '.join(INDICATORS)}")
     series = indicator_series(K)
     times = np.asarray(times, dtype=float)
-    children = np.random.SeedSequence(int(seed)).spawn(len(INDICATORS))
+    children = np.random.SeedSequence(seed).spawn(len(INDICATORS))
     preds = {}
     for name, ss in zip(INDICATORS, children):
         if name not in indicators:
@@ -692,7 +690,7 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
                                   seed=np.random.default_rng(ss), t_now=t_now,
                                   sigma_floor=sigma_floor, indicator=name,
                                   discrepancy=float(discrepancy.get(name, 0.0)), **kwargs)
-        preds[name] = _with_seed(preds[name], int(seed))
+        preds[name] = _with_seed(preds[name], seed)
     return Prognosis(actuator=actuator, t_now=float(times[-1] if t_now is None else t_now),
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
                      times=times, K=np.atleast_2d(np.asarray(K, dtype=float)))
@@ -741,13 +739,12 @@ def rul_track(t: Any, y: Any, threshold: float, *, seed: int, start: int = MIN_I
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     _check_series(t, y)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    seed = check_seed(seed)
     if not MIN_INSPECTIONS <= start <= t.size:
         raise ValueError(f"start must be between {MIN_INSPECTIONS} and the number of "
                          f"inspections ({t.size}), got {start!r}")
     steps = range(start, t.size + 1)
-    children = np.random.SeedSequence(int(seed)).spawn(len(steps))
+    children = np.random.SeedSequence(seed).spawn(len(steps))
     preds = [predict_rul(t[:i], y[:i], threshold, seed=np.random.default_rng(c),
                          indicator=indicator, **kwargs) for i, c in zip(steps, children)]
     return RULTrack(indicator=indicator, threshold=float(threshold), level=preds[0].level,
