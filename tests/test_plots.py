@@ -174,6 +174,33 @@ def test_plot_identification_marks_the_polish_and_the_noise_floor(tmp_path):
     assert 0.03 < y.max() < 0.06 and y.min() == pytest.approx(-y.max())
 
 
+def test_the_diagnosis_figure_heads_its_title_with_the_verdict(faulty, ident, monkeypatch):
+    """HEALTHY, FAULTY with the faults named, or UNEXPLAINED with its reason: read from the
+    Diagnosis given, never made by the plot (no simulation)."""
+    from dataclasses import replace
+
+    from emaphm.diagnosis import Diagnosis, Unexplained
+    from emaphm.modes import Fault
+    from emaphm.plots import verdict_line
+
+    friction = Fault("friction", "k1", 0.75, 0.75, "dry friction 2.5x nominal")
+    short = Fault("short_circuit", "k3", 0.3, 0.3, "inter-turn short", phase="a")
+    faulty_dx = Diagnosis(k=ident.k, faults=(friction, short))
+    healthy_dx = replace(faulty_dx, faults=())
+    odd_dx = replace(healthy_dx, unexplained=Unexplained("misfit", 9.0, 1e-6, "calibrate it"))
+    assert [d.verdict for d in (healthy_dx, faulty_dx, odd_dx)] == ["healthy", "faulty",
+                                                                     "unexplained"]
+    _no_simulation(monkeypatch)
+    titles = [plot_identification(faulty, ident, diagnosis=d)._suptitle.get_text()
+              for d in (healthy_dx, faulty_dx, odd_dx)]
+    assert [t.splitlines()[0] for t in titles] == [
+        "verdict: HEALTHY", "verdict: FAULTY: friction, short circuit (phase a)",
+        "verdict: UNEXPLAINED (misfit)"]
+    assert all("PSO seed 0" in t.splitlines()[1] for t in titles)
+    assert verdict_line(faulty_dx) == "FAULTY: friction, short circuit (phase a)"
+    assert "verdict" not in plot_identification(faulty, ident)._suptitle.get_text()
+
+
 # ----------------------------------------------------------------------------- save_figure
 def test_save_into_a_missing_folder_raises_and_leaves_nothing(faulty, tmp_path):
     target = tmp_path / "missing" / "x.png"

@@ -325,7 +325,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     else:
         print(_table(ident, diag))
     if plot:
-        plot_identification(trace, ident, path=plot)
+        plot_identification(trace, ident, diagnosis=diag, path=plot)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
 

@@ -11,10 +11,11 @@ import numpy as np
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.figure import Figure
 
+    from .diagnosis import Diagnosis
     from .identify import Identification
     from .traces import Trace
 
-__all__ = ["plot_trace", "plot_identification", "plot_calibration", "save_figure"]
+__all__ = ["plot_trace", "plot_identification", "plot_calibration", "save_figure", "verdict_line"]
 
 _PHASES = ("i_a", "i_b", "i_c")
 
@@ -79,7 +80,20 @@ def plot_trace(trace: "Trace", overlay: "Trace | None" = None, *,
     return fig
 
 
+def verdict_line(diagnosis: "Diagnosis") -> str:
+    """The verdict of a diagnosis in a few words, as a figure's title says it:
+    ``HEALTHY``, ``FAULTY: friction, short circuit (phase a)`` or ``UNEXPLAINED
+    (misfit)``."""
+    if diagnosis.unexplained is not None:
+        return f"UNEXPLAINED ({diagnosis.unexplained.reason})"
+    if not diagnosis.faults:
+        return "HEALTHY"
+    return "FAULTY: " + ", ".join(f.mode.replace("_", " ") + (f" (phase {f.phase})" if f.phase else "")
+                                  for f in diagnosis.faults)
+
+
 def plot_identification(measured: "Trace", ident: "Identification", *,
+                        diagnosis: "Diagnosis | None" = None,
                         path: str | os.PathLike[str] | None = None) -> "Figure":
     """Measured vs identified phase currents, their residual, and the convergence curve.
 
@@ -88,6 +102,9 @@ def plot_identification(measured: "Trace", ident: "Identification", *,
     band of +-2 sigma of the trace's white noise (a fit at the noise floor stays inside);
     the best fitness per iteration, the polish's polls after a dotted line, and the
     trace's noise floor (the fitness a perfect model would reach) as a dashed line.
+    ``diagnosis`` (the verdict of ``ident``, :class:`emaphm.diagnosis.Diagnosis`, as
+    :func:`emaphm.verdict.diagnose_identification` gives it): its verdict heads the title
+    (:func:`verdict_line`); it is read, not made here (a verdict refits the model).
     """
     import matplotlib
 
@@ -135,6 +152,8 @@ def plot_identification(measured: "Trace", ident: "Identification", *,
              f"{ident.evaluations} evaluations in {ident.elapsed_s:.2f} s")
     if ident.error_pct is not None:
         title += f", error {ident.error_pct:.2f}% (Eq. 9)"
+    if diagnosis is not None:
+        title = f"verdict: {verdict_line(diagnosis)}\n{title}"
     fig.suptitle(title, fontsize=10)
     if path is not None:
         save_figure(fig, path)

@@ -4,8 +4,10 @@
 class / function       what it shows
 =====================  ======================================================================
 :class:`StatusLine`    the mechanics: on a terminal one line redrawn in place (at most ten
-                       times a second) and ended by ``close()``; elsewhere (a log, a pipe)
-                       nothing, or with ``log=True`` a line at every tenth of a known total
+                       times a second) and ended by ``close()``; in a Jupyter notebook one
+                       output updated in place (IPython's display with a display id); elsewhere
+                       (a log, a pipe) nothing, or with ``log=True`` a line at every tenth of
+                       a known total
 :class:`RunProgress`   runs of a campaign: done / total, failures, elapsed, ETA (logged to a
                        file or pipe too)
 :class:`SearchProgress`  an identification, as its ``callback``: iteration, best fitness,
@@ -17,7 +19,10 @@ class / function       what it shows
 =====================  ======================================================================
 
 Nothing here imports NumPy or a model; :func:`compile_notice` imports Numba's event API
-only when entered.
+only when entered. The notebook is found as ``tqdm.auto`` finds it, without depending on
+tqdm or ipywidgets: IPython already imported and running a kernel
+(:func:`notebook_display`); the progress is then plain text in an output that is
+updated in place.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import time
 from typing import Any, Iterator, TextIO
 
 __all__ = ["StatusLine", "RunProgress", "SearchProgress", "CountProgress", "compile_notice",
-           "COMPILE_NOTICE", "clock"]
+           "COMPILE_NOTICE", "clock", "notebook_display"]
 
 COMPILE_NOTICE = ("compiling the model kernels (first run only; cached on disk for the next "
                   "runs)...")
@@ -51,22 +56,54 @@ def _isatty(stream: Any) -> bool:
         return False
 
 
+def notebook_display() -> Any:
+    """IPython's ``display`` module when this process is a Jupyter kernel (IPython already
+    imported, its shell running a kernel), else None. Imports nothing that is not loaded."""
+    ipython = sys.modules.get("IPython")
+    if ipython is None:
+        return None
+    try:
+        shell = ipython.get_ipython()
+    except Exception:                    # noqa: BLE001 - a broken IPython is no notebook
+        return None
+    if shell is None or getattr(shell, "kernel", None) is None:   # a terminal IPython
+        return None
+    try:
+        from IPython import display
+    except ImportError:                  # pragma: no cover - IPython without display
+        return None
+    return display
+
+
+def _text(text: str) -> dict[str, str]:
+    """``text`` as a plain-text output of a notebook (shown as it is, not as a repr)."""
+    return {"text/plain": text}
+
+
 class StatusLine:
     """One status line on ``stream`` (default stderr).
 
     ``tty`` (default: ``stream.isatty()``): redraw the line in place, at most every
-    ``interval`` seconds. Otherwise nothing is shown unless ``log``, and then a line is
-    written at every tenth of the total given to :meth:`show`. ``enabled=False`` shows
-    nothing at all (``--quiet``). ``header``: a line said once, terminal or not, when the
-    work shows its first progress or notice (so a command refused in its checks prints
-    only its error).
+    ``interval`` seconds. In a Jupyter notebook (``notebook``, default
+    :func:`notebook_display` where neither ``stream`` nor ``tty`` is given; or an object
+    with IPython's ``display(obj, raw=True, display_id=True) -> handle``, ``handle.update``)
+    the line is one output updated in place, as often; where that display gives no
+    handle, plain lines at every tenth of a known total, as in a log. Otherwise nothing
+    is shown unless ``log``, and then a line is written at every tenth of the total given
+    to :meth:`show`. ``enabled=False`` shows nothing at all (``--quiet``). ``header``: a
+    line said once, terminal or not, when the work shows its first progress or notice (so
+    a command refused in its checks prints only its error).
     """
 
     def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None,
                  enabled: bool = True, log: bool = False, interval: float = 0.1,
-                 header: str | None = None) -> None:
+                 header: str | None = None, notebook: Any = None) -> None:
+        if notebook is None and stream is None and tty is None:
+            notebook = notebook_display()
         self.stream = stream if stream is not None else sys.stderr
-        self.tty = _isatty(self.stream) if tty is None else bool(tty)
+        self.notebook = notebook or None
+        self.tty = False if self.notebook is not None else (
+            _isatty(self.stream) if tty is None else bool(tty))
         self.enabled = bool(enabled)
         self.log = bool(log)
         self.interval = float(interval)
@@ -74,6 +111,8 @@ class StatusLine:
         self._last = -float("inf")
         self._drawn = False
         self._next_tenth = 1
+        self._handle: Any = None
+        self._pending: str | None = None
 
     def begin(self) -> None:
         """Say the header, once (nothing when disabled or already said)."""
@@ -84,16 +123,23 @@ class StatusLine:
     @property
     def active(self) -> bool:
         """Whether anything is shown at all."""
-        return self.enabled and (self.tty or self.log)
+        return self.enabled and (self.tty or self.log or self.notebook is not None)
 
     def show(self, text: str, *, done: int | None = None, total: int | None = None,
              force: bool = False) -> None:
-        """Show ``text`` (on a terminal: if ``interval`` has passed or ``force``; in a log:
-        when ``done`` of ``total`` crosses a tenth, or ``force``)."""
+        """Show ``text`` (on a terminal or in a notebook: if ``interval`` has passed or
+        ``force``; in a log: when ``done`` of ``total`` crosses a tenth, or ``force``)."""
         if not self.enabled:
             return
         self.begin()
-        if self.tty:
+        if self.notebook is not None:
+            now = time.perf_counter()
+            if force or now - self._last >= self.interval:
+                self._last, self._pending = now, None
+                self._update_notebook(text, done, total, force)
+            else:
+                self._pending = text             # shown by close(): the last state stays
+        elif self.tty:
             now = time.perf_counter()
             if force or now - self._last >= self.interval:
                 self._last = now
@@ -101,12 +147,29 @@ class StatusLine:
                 self.stream.flush()
                 self._drawn = True
         elif self.log:
-            crossed = bool(total) and done is not None and done * 10 >= self._next_tenth * total
-            if force or crossed:
-                while total and done is not None and done * 10 >= self._next_tenth * total:
-                    self._next_tenth += 1
-                self.stream.write(text + "\n")
-                self.stream.flush()
+            self._log_line(text, done, total, force)
+
+    def _log_line(self, text: str, done: int | None, total: int | None, force: bool) -> None:
+        crossed = bool(total) and done is not None and done * 10 >= self._next_tenth * total
+        if force or crossed:
+            while total and done is not None and done * 10 >= self._next_tenth * total:
+                self._next_tenth += 1
+            self.stream.write(text + "\n")
+            self.stream.flush()
+
+    def _update_notebook(self, text: str, done: int | None, total: int | None,
+                         force: bool) -> None:
+        """The notebook's output updated to ``text`` (made by the first call); a display
+        that gives no handle (an IPython without display ids) falls back to plain lines."""
+        if self._handle is not None:
+            self._handle.update(_text(text), raw=True)
+            return
+        handle = self.notebook.display(_text(text), raw=True, display_id=True)
+        if handle is None or not hasattr(handle, "update"):
+            self.notebook, self.log = None, True      # plain text from here on
+            self._log_line(text, done, total, True)
+            return
+        self._handle = handle
 
     def note(self, text: str) -> None:
         """A line of its own (a notice), above the status line; shown unless disabled."""
@@ -122,7 +185,11 @@ class StatusLine:
         self.stream.flush()
 
     def close(self) -> None:
-        """End the status line (a newline after the last state on a terminal)."""
+        """End the status line (a newline after the last state on a terminal; in a
+        notebook, the last state if it was not shown yet)."""
+        if self.notebook is not None and self._handle is not None and self._pending is not None:
+            self._handle.update(_text(self._pending), raw=True)
+            self._pending = None
         if self.tty and self._drawn:
             self.stream.write("\n")
             self.stream.flush()
@@ -134,8 +201,8 @@ class RunProgress(StatusLine):
     run (``result.ok``), ``close()``. Written to a log or pipe too, at every tenth."""
 
     def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True) -> None:
-        super().__init__(stream, tty=tty, enabled=enabled, log=True)
+                 enabled: bool = True, notebook: Any = None) -> None:
+        super().__init__(stream, tty=tty, enabled=enabled, log=True, notebook=notebook)
         self.total = self.done = self.failed = self.todo = self.new = 0
         self.t0 = time.perf_counter()
 
@@ -172,8 +239,9 @@ class SearchProgress(StatusLine):
     line (e.g. ``"inspection 3/8: "``)."""
 
     def __init__(self, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True, prefix: str = "", header: str | None = None) -> None:
-        super().__init__(stream, tty=tty, enabled=enabled, header=header)
+                 enabled: bool = True, prefix: str = "", header: str | None = None,
+                 notebook: Any = None) -> None:
+        super().__init__(stream, tty=tty, enabled=enabled, header=header, notebook=notebook)
         self.prefix = prefix
         self.run = 1
         self._nfev = 0
@@ -213,8 +281,9 @@ class CountProgress(StatusLine):
     None: no total; ``noun`` what is counted, e.g. ``" model runs"``)."""
 
     def __init__(self, what: str, stream: TextIO | None = None, *, tty: bool | None = None,
-                 enabled: bool = True, noun: str = "", header: str | None = None) -> None:
-        super().__init__(stream, tty=tty, enabled=enabled, header=header)
+                 enabled: bool = True, noun: str = "", header: str | None = None,
+                 notebook: Any = None) -> None:
+        super().__init__(stream, tty=tty, enabled=enabled, header=header, notebook=notebook)
         self.what = what
         self.noun = noun
         self.t0 = time.perf_counter()

@@ -123,3 +123,98 @@ def test_no_notice_when_nothing_compiles(monkeypatch):
     with P.compile_notice(P.StatusLine(buf, tty=False)):
         assert one(2) == 3
     assert buf.getvalue() == ""
+
+
+# ----------------------------------------------------------------------------- a notebook
+class FakeHandle:
+    def __init__(self, shown):
+        self.shown = shown
+
+    def update(self, obj, raw=False):
+        assert raw
+        self.shown.append(("update", obj))
+
+
+class FakeDisplay:
+    """IPython.display as the progress uses it: display(obj, raw=True, display_id=True)
+    returns a handle whose update(obj, raw=True) redraws that output."""
+
+    def __init__(self, handles=True):
+        self.shown, self.handles = [], handles
+
+    def display(self, obj, raw=False, display_id=False):
+        assert raw and display_id
+        self.shown.append(("display", obj))
+        return FakeHandle(self.shown) if self.handles else None
+
+
+def test_a_notebook_sees_one_output_updated_in_place():
+    buf = io.StringIO()
+    nb = FakeDisplay()
+    line = P.SearchProgress(buf, notebook=nb, header="identifying with LSQ (seed 0)")
+    line.interval = 0.0
+    assert line.active and not line.tty
+    for i in range(1, 4):
+        line(_state(i, 50 * i, 10.0 ** -i))
+    line.note("a notice")
+    line.close()
+    kinds = [k for k, _ in nb.shown]
+    assert kinds == ["display", "update", "update"]            # one output, redrawn
+    texts = [obj["text/plain"] for _, obj in nb.shown]
+    assert texts[0].startswith("iteration    1") and "150 evaluations" in texts[-1]
+    assert all(set(obj) == {"text/plain"} for _, obj in nb.shown)   # plain text, no widget
+    # the header and notices are lines of their own; no terminal escapes anywhere
+    assert buf.getvalue() == "identifying with LSQ (seed 0)\na notice\n"
+    assert not any("\r" in t or "\x1b" in t for t in texts)
+
+
+def test_a_notebook_gets_the_last_state_at_close_and_nothing_when_quiet():
+    nb = FakeDisplay()
+    line = P.CountProgress("simulating trace", io.StringIO(), notebook=nb)
+    line.interval = 3600.0                         # only the first state and forced ones
+    line.update(1, None)
+    line.update(2, None)                           # held back by the interval
+    line.close()
+    assert [obj["text/plain"].split(",")[0] for _, obj in nb.shown] == [
+        "simulating trace 1", "simulating trace 2"]
+    quiet = FakeDisplay()
+    q = P.CountProgress("x", io.StringIO(), notebook=quiet, enabled=False)
+    q.update(1, 2)
+    q.close()
+    assert quiet.shown == [] and not q.active
+
+
+def test_a_notebook_display_without_handles_falls_back_to_plain_lines():
+    buf = io.StringIO()
+    nb = FakeDisplay(handles=False)
+    line = P.CountProgress("calibrating:", buf, notebook=nb, noun=" model runs")
+    for i in range(1, 21):
+        line.update(i, 20)
+    line.close()
+    assert len(nb.shown) == 1                      # tried once
+    lines = buf.getvalue().splitlines()
+    assert lines[0].startswith("calibrating: 1/20 model runs")
+    assert lines[-1].startswith("calibrating: 20/20 model runs") and len(lines) <= 11
+
+
+def test_the_notebook_is_found_in_a_kernel_and_not_in_a_terminal_ipython(monkeypatch):
+    import sys
+    import types
+
+    display = types.ModuleType("IPython.display")
+    ipython = types.ModuleType("IPython")
+    ipython.display = display
+    shell = SimpleNamespace()
+    ipython.get_ipython = lambda: shell
+    monkeypatch.setitem(sys.modules, "IPython", ipython)
+    monkeypatch.setitem(sys.modules, "IPython.display", display)
+    assert P.notebook_display() is None                     # a terminal IPython: no kernel
+    shell.kernel = object()
+    assert P.notebook_display() is display
+    assert P.StatusLine().notebook is display               # found by default
+    assert P.StatusLine(io.StringIO()).notebook is None     # an explicit stream is kept
+    assert P.StatusLine(tty=True).notebook is None
+    ipython.get_ipython = lambda: None                      # IPython imported, no shell
+    assert P.notebook_display() is None
+    monkeypatch.delitem(sys.modules, "IPython")
+    assert P.notebook_display() is None
