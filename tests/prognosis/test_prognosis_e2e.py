@@ -153,3 +153,22 @@ def test_example_script_runs(tmp_path):
     errs = [e for e in result["abs_error"] if e is not None and math.isfinite(e)]
     assert errs[-1] < errs[0]
     assert len(list(tmp_path.glob("*.png"))) == 3
+
+
+def test_the_table_says_when_a_trend_is_read_beyond_k_1(tmp_path, capsys):
+    """``emaphm prognose --at`` far past the inspections reads a friction trend at a k
+    above 1: the row stays, and a line under the table says it is extrapolated."""
+    db = str(tmp_path / "h.sqlite")
+    with HealthHistory(db) as h:
+        h.register("EMA-X")
+        for t in (0.0, 100.0, 200.0, 300.0, 400.0, 500.0):
+            h.add("EMA-X", t, [8e-4 * t + 0.002 * (t % 200 == 0), 0, 0, 0, 0, 0, 0.5, 0.5])
+    assert main(["prognose", "EMA-X", "--db", db, "--indicator", "friction"]) == 0
+    assert "extrapolated" not in capsys.readouterr().out
+    assert main(["prognose", "EMA-X", "--db", db, "--indicator", "friction", "--at", "1500",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)["predictions"]["friction"]
+    assert d["current"] > 1.1 and d["extrapolated"].startswith("extrapolated beyond k = 1")
+    assert main(["prognose", "EMA-X", "--db", db, "--indicator", "friction", "--at", "1500"]) == 0
+    out = capsys.readouterr().out
+    assert f"friction: extrapolated beyond k = 1: the trend is at {d['current']:.3g} at 1500" in out

@@ -351,3 +351,87 @@ def test_prognose_carries_each_indicators_measured_discrepancy():
     assert set(MODEL_DISCREPANCY) == set(INDICATORS)   # every indicator has a measured value
     with pytest.raises(ValueError, match="unknown health indicator"):
         prognose(times, K, seed=3, discrepancy={"bearing": 0.1})
+
+
+# ----------------------------------------------------------------- the range of k
+
+def _growing_friction(t: np.ndarray) -> np.ndarray:
+    """A k history whose friction grows by 8e-4 per hour (0.4 at 500 h) over a healthy rest
+    that scatters about zero (clipped at 0, as identifications are)."""
+    from emaphm.faults import K_NOMINAL
+
+    rng = np.random.default_rng(5)
+    K = np.tile(K_NOMINAL, (t.size, 1))
+    K[:, 0] = 8e-4 * t + rng.normal(0, 0.003, t.size)
+    K[:, 1:6] = np.abs(rng.normal(0, 0.003, (t.size, 5)))
+    return np.clip(K, 0.0, 1.0)
+
+
+def test_a_trend_read_beyond_k_1_says_it_is_extrapolated():
+    """k lies in [0, 1] by definition; a trend does not know it. Read at 1500 h the friction
+    trend is at about 1.2, a k that cannot exist: the prediction says so, with the value.
+    At the last inspection nothing is extrapolated, and the healthy components, whose
+    trends dip below 0 by their scatter, are not flagged either."""
+    from emaphm.prognosis.trends import INDICATOR_BOUNDS
+
+    K = _growing_friction(T)
+    now = prognose(T, K, seed=0)
+    assert {n: p.extrapolated for n, p in now.predictions.items()} == dict.fromkeys(INDICATORS, "")
+    assert now.predictions["friction"].to_dict()["extrapolated"] is None
+    late = prognose(T, K, seed=0, t_now=1500.0).predictions
+    f = late["friction"]
+    assert f.current > 1.1 and f.bounds == INDICATOR_BOUNDS["friction"] == (0.0, 1.0)
+    assert f.extrapolated == f"extrapolated beyond k = 1: the trend is at {f.current:.3g} at 1500"
+    assert f.to_dict()["extrapolated"] == f.extrapolated and f.to_dict()["bounds"] == [0.0, 1.0]
+    assert [n for n, p in late.items() if p.extrapolated] == ["friction"]
+    assert INDICATOR_BOUNDS["gain_drift"] == (-0.5, 0.5)
+
+
+def test_draws_whose_threshold_the_discrepancy_moves_past_k_1_are_extrapolated():
+    """A threshold of 0.98 moved by a 5 % model discrepancy lies beyond k = 1 in a third of
+    the draws (P(delta > 0.0204 / 0.98) = P(z > 0.417) = 0.34): their failure needs a k the
+    identification cannot read. Without the discrepancy nothing is extrapolated."""
+    y = 0.002 * T
+    bare = predict_rul(T, y, 0.98, seed=2, bounds=(0.0, 1.0), n_samples=20000)
+    assert bare.extrapolated == ""
+    wide = predict_rul(T, y, 0.98, seed=2, bounds=(0.0, 1.0), n_samples=20000, discrepancy=0.05)
+    head, _, share = wide.extrapolated.partition(": ")
+    assert head == "extrapolated beyond 1"                # a free indicator: its bound
+    assert share.startswith("34% of the draws")
+    k = predict_rul(T, y, 0.98, seed=2, bounds=(0.0, 1.0), n_samples=20000, discrepancy=0.05,
+                    indicator="friction")
+    assert k.extrapolated.startswith("extrapolated beyond k = 1: 34% of the draws")
+
+
+def test_beyond_names_the_bound_where_the_whole_cone_leaves_it():
+    """Known answer: a noise-free 0.002 t (sigma floor 1e-4) is 1 at 500 h and -0.2 at
+    -100 h; the cone is too narrow to hold either bound there, and holds both near them."""
+    p = predict_rul(T, 0.002 * T, 0.5, seed=0, bounds=(0.0, 1.0), indicator="backlash",
+                    sigma_floor=1e-4)
+    assert p.beyond([0.0, 250.0, 499.0]) == ""
+    assert p.beyond([250.0, 520.0]) == "extrapolated beyond k = 1"
+    assert p.beyond([-20.0, 250.0]) == "extrapolated below k = 0"
+    g = predict_rul(T, 0.002 * T, 0.25, seed=0, bounds=(-0.5, 0.5), indicator="gain_drift",
+                    sigma_floor=1e-4)
+    assert g.beyond(300.0) == "extrapolated beyond k8 = 0 or 1"
+    assert predict_rul(T, 0.002 * T, 0.5, seed=0).beyond(1e9) == ""     # unbounded
+    assert predict_rul(T, 0.002 * T, 0.5, seed=0, bounds=(0, 1)).beyond(1e9) == "extrapolated beyond 1"
+
+
+@pytest.mark.parametrize("bounds", [(1.0, 0.0), (0.0, 0.4), (0.0,), "01", (0.0, "a")])
+def test_bounds_must_hold_the_threshold(bounds):
+    with pytest.raises(ValueError, match="bounds"):
+        predict_rul(T, 8e-4 * T, 0.5, seed=0, bounds=bounds)
+
+
+def test_the_rul_figure_says_when_its_trend_leaves_k_1():
+    from emaphm.prognosis.plots import plot_prognosis
+
+    K = _growing_friction(T)
+    notes = lambda fig: [x.get_text() for ax in fig.axes for x in ax.texts]   # noqa: E731
+    assert "extrapolated beyond k = 1" in notes(plot_prognosis(prognose(T, K, seed=0, t_now=1500.0),
+                                                              indicators=["friction"]))
+    assert notes(plot_prognosis(prognose(T, K, seed=0), indicators=["friction"])) == []
+    # drawn far enough, the median trend itself passes k = 1
+    assert "extrapolated beyond k = 1" in notes(plot_prognosis(prognose(T, K, seed=0),
+                                                              indicators=["friction"], horizon=900))

@@ -250,6 +250,7 @@ def _prognosis_table(prog: Any) -> str:
             rul = _fmt_time(p.median, unit)
             iv = f"[{_fmt_time(p.lo, unit)}, {_fmt_time(p.hi, unit) if math.isfinite(p.hi) else 'inf'}]"
         lines.append(f"{name:13s} {p.current:7.3f} {p.threshold:9.3f}  {model:24s} {rul:>12s}  {iv:>22s}")
+    lines += [f"{n}: {p.extrapolated}" for n, p in prog.predictions.items() if p.extrapolated]
     first = prog.first
     if first is not None and math.isfinite(first.median):
         lines.append(f"\nfirst to fail: {first.indicator}, median RUL {_fmt_time(first.median, unit)} "

@@ -212,6 +212,8 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
         ax.plot(t, series[name], "o", color="k", ms=4, label="identified")
         ax.axhline(p.threshold, color="C3", ls="--", lw=1.0, label="failure threshold")
         ax.axvline(p.t_now, color="0.5", lw=0.8)
+        if (note := p.extrapolated.partition(":")[0] or p.beyond(grid)):    # k lies in [0, 1]
+            ax.text(0.99, 0.04, note, transform=ax.transAxes, ha="right", fontsize=8, color="C3")
         if flat:
             ax.text(0.99, 0.95, f"no growth: P(reaching the threshold within "
                     f"{10 * span:.0f} {_unit(prog.time_unit)}) = {p.p_fail_within(10 * span):.2f}",

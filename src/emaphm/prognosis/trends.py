@@ -43,12 +43,19 @@ both models), and take ``RUL = max(t* - t_now, 0)``; a draw whose trend never
 reaches the threshold has an infinite RUL. The median and the central
 ``level`` interval of the draws are reported. Every draw comes from an
 explicit ``numpy.random.Generator`` seed.
+
+A trend knows nothing of the range its indicator can take: a component of k lies in
+[0, 1] by definition (:data:`INDICATOR_BOUNDS`), a straight line does not. A prediction
+whose trend has to leave that range (its value at ``t_now`` past k = 1, or draws whose
+failure threshold, moved by the model discrepancy, lies beyond it) says so in
+:attr:`RULPrediction.extrapolated` ("extrapolated beyond k = 1"), and so do the table of
+``emaphm prognose`` and the cone of its figure (:meth:`RULPrediction.beyond`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import MappingProxyType
 from typing import Any, Mapping, Sequence
 
@@ -62,13 +69,19 @@ from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPO
 __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_trends", "select",
            "RULPrediction", "predict_rul", "Prognosis", "prognose", "indicator_series",
            "MIN_INSPECTIONS", "DEFAULT_MODELS", "RULTrack", "rul_track", "growth_rate",
-           "indicator_state", "MODEL_DISCREPANCY"]
+           "indicator_state", "MODEL_DISCREPANCY", "INDICATOR_BOUNDS"]
 
 TREND_MODELS = ("linear", "exponential", "quadratic")
 _N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3}
 #: The models fitted by default.
 DEFAULT_MODELS = TREND_MODELS
 from .choices import SELECTION_RULES  # noqa: E402  (the CLI reads it without SciPy)
+
+#: The range each health indicator can take: a component of k lies in [0, 1] by
+#: definition, the gain drift's signed series s (k8 - 0.5) (:func:`indicator_series`) in
+#: [-0.5, 0.5]. A trend extrapolated past it predicts a k that cannot exist.
+INDICATOR_BOUNDS: Mapping[str, tuple[float, float]] = MappingProxyType(
+    {name: (-0.5, 0.5) if name == "gain_drift" else (0.0, 1.0) for name in INDICATORS})
 
 #: Least number of inspections for a trend with an uncertainty (two parameters + one dof).
 MIN_INSPECTIONS = 3
@@ -360,6 +373,9 @@ class RULPrediction:
     seed          int|None   seed of the draws
     excluded      tuple      inspections left out as outliers
     discrepancy   float      relative model discrepancy drawn into the threshold (1 sd)
+    bounds        (lo, hi)   range the indicator can take (:data:`INDICATOR_BOUNDS`)
+    extrapolated  str        why the prediction reads its trend outside ``bounds``
+                             ("extrapolated beyond k = 1: ..."); "" when it does not
     ============  =========  ===========================================================
     """
 
@@ -380,6 +396,8 @@ class RULPrediction:
     seed: int | None = None
     excluded: tuple = ()
     discrepancy: float = 0.0
+    bounds: tuple = (-math.inf, math.inf)
+    extrapolated: str = ""
 
     @property
     def p_reach(self) -> float:
@@ -405,6 +423,22 @@ class RULPrediction:
         parts = [_model_value(m, th, tau - self.fits[m].t_ref) for m, th in self.theta.items()]
         return np.quantile(np.concatenate(parts), quantiles, axis=0)
 
+    def beyond(self, t: Any) -> str:
+        """The note for a trend that leaves :attr:`bounds`, the range this indicator can
+        take, at some of the times ``t``: "extrapolated beyond k = 1" (or "below k = 0")
+        where its whole 90 % cone (:meth:`band`) lies outside the range there, "" where it
+        does not. (The cone, not its median: the trend of a healthy component that sits at
+        0 dips below it by its scatter, which is no extrapolation.)"""
+        times = np.atleast_1d(np.asarray(t, dtype=float))
+        if not self.theta or times.size == 0:
+            return ""
+        lo, hi = self.band(times, (0.05, 0.95))
+        if np.any(lo > self.bounds[1]):
+            return _bound_note(self.indicator, "hi", self.bounds)
+        if np.any(hi < self.bounds[0]):
+            return _bound_note(self.indicator, "lo", self.bounds)
+        return ""
+
     def to_dict(self, samples: bool = False) -> dict[str, Any]:
         d = {"indicator": self.indicator, "threshold": self.threshold, "t_now": self.t_now,
              "model": self.model, "weights": self.weights,
@@ -412,7 +446,9 @@ class RULPrediction:
              "rul_median": _json_float(self.median), "rul_lo": _json_float(self.lo),
              "rul_hi": _json_float(self.hi), "level": self.level, "p_failed": self.p_failed,
              "p_reach": self.p_reach, "current": self.current, "seed": self.seed,
-             "excluded": list(self.excluded), "discrepancy": self.discrepancy}
+             "excluded": list(self.excluded), "discrepancy": self.discrepancy,
+             "bounds": [_json_float(b) for b in self.bounds],
+             "extrapolated": self.extrapolated or None}
         if samples:
             d["samples"] = [_json_float(x) for x in self.samples]
         return d
@@ -420,6 +456,31 @@ class RULPrediction:
 
 def _json_float(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
+
+
+def _bound_note(indicator: str, side: str, bounds: tuple) -> str:
+    """"extrapolated beyond k = 1" and its kin, in the words of ``indicator``."""
+    if indicator == "gain_drift":
+        return "extrapolated beyond k8 = 0 or 1"
+    if indicator in INDICATOR_COMPONENT:
+        return "extrapolated beyond k = 1" if side == "hi" else "extrapolated below k = 0"
+    lo, hi = bounds
+    return f"extrapolated beyond {hi:g}" if side == "hi" else f"extrapolated below {lo:g}"
+
+
+def _extrapolation(p: RULPrediction, thresholds: np.ndarray) -> str:
+    """:attr:`RULPrediction.extrapolated` of ``p``, whose draws crossed at ``thresholds``
+    (one per draw, moved by the model discrepancy)."""
+    lo, hi = p.bounds
+    if (note := p.beyond(p.t_now)):
+        return f"{note}: the trend is at {p.current:.3g} at {p.t_now:g}"
+    outside = float(np.mean((thresholds > hi) | (thresholds < lo)))
+    if outside > 0:
+        side = "hi" if np.any(thresholds > hi) else "lo"
+        share = f"{outside:.0%}" if outside >= 0.01 else "under 1%"
+        return (f"{_bound_note(p.indicator, side, p.bounds)}: {share} of the draws reach "
+                f"their failure threshold (moved by the model discrepancy) only there")
+    return ""
 
 
 def _seed_rng(seed: Any) -> tuple[np.random.Generator, int | None]:
@@ -433,7 +494,7 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
                 models: Sequence[str] = DEFAULT_MODELS, selection: str = "average",
                 level: float = 0.9, n_samples: int = 4000, sigma_floor: float = 0.003,
                 reject_outliers: bool = True, indicator: str = "indicator",
-                discrepancy: float = 0.0) -> RULPrediction:
+                discrepancy: float = 0.0, bounds: tuple[float, float] | None = None) -> RULPrediction:
     """RUL distribution of one health indicator ``y`` (n,) observed at times ``t`` (n,).
 
     Parameters
@@ -467,6 +528,10 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
         discrepancy)`` drawn once per Monte Carlo draw, so the actuator fails where the
         trend reaches ``threshold (1 + delta)``. The trend's scatter cannot see such an
         offset: it moves every inspection alike. 0 (default here): none.
+    bounds
+        ``(lo, hi)``, the range ``y`` can take (:data:`INDICATOR_BOUNDS` for an indicator of
+        k; default: unbounded). A prediction that reads its trend outside it says so in
+        :attr:`RULPrediction.extrapolated`.
     """
     if not (isinstance(threshold, (int, float, np.floating)) and math.isfinite(threshold)
             and threshold > 0):
@@ -482,6 +547,7 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
         raise ValueError(f"level must be in (0, 1), e.g. 0.9, got {level!r}")
     if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 100:
         raise ValueError(f"n_samples must be an integer >= 100, got {n_samples!r}")
+    bounds = _check_bounds(bounds, threshold)
     rng, seed_int = _seed_rng(seed)
     fits = fit_trends(t, y, models, sigma_floor=sigma_floor)
     excluded: tuple = ()
@@ -503,27 +569,52 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
     else:
         counts = dict(zip(fits, rng.multinomial(n_samples, [weights[m] for m in fits])))
         model_name = "average"
-    thetas, crossings = {}, []
+    thetas, t_star, thr = _draw_crossings(fits, counts, rng, threshold, discrepancy)
+    rul = np.maximum(t_star - t_now, 0.0)
+    q = np.quantile(rul, [(1 - level) / 2, 0.5, (1 + level) / 2], method="inverted_cdf")
+    chosen = fits[model_name] if model_name in fits else fits[max(weights, key=weights.get)]
+    p = RULPrediction(indicator=indicator, threshold=float(threshold), t_now=t_now,
+                      model=model_name, weights=weights, fits=fits, median=float(q[1]),
+                      lo=float(q[0]), hi=float(q[2]), level=float(level),
+                      p_failed=float(np.mean(t_star <= t_now)), samples=rul, theta=thetas,
+                      current=float(chosen.value(t_now)[0]), seed=seed_int,
+                      excluded=excluded, discrepancy=float(discrepancy), bounds=bounds)
+    return replace(p, extrapolated=_extrapolation(p, thr))
+
+
+def _check_bounds(bounds: Any, threshold: float) -> tuple[float, float]:
+    if bounds is None:
+        return (-math.inf, math.inf)
+    try:
+        if isinstance(bounds, str):
+            raise TypeError
+        lo, hi = (float(b) for b in bounds)
+    except (TypeError, ValueError):
+        raise ValueError(f"bounds must be a pair (lo, hi), e.g. (0, 1), got {bounds!r}") from None
+    if not (lo < hi and lo <= threshold <= hi):
+        raise ValueError(f"bounds ({lo:g}, {hi:g}) must be an interval that holds the failure "
+                         f"threshold {threshold:g}")
+    return (lo, hi)
+
+
+def _draw_crossings(fits: Mapping[str, TrendFit], counts: Mapping[str, int],
+                    rng: np.random.Generator, threshold: float, discrepancy: float):
+    """``(theta, t_star, thresholds)``: ``counts[m]`` parameter draws of each fit (model ->
+    (n_m, p)), the times they reach the failure threshold and that threshold, one per draw
+    (moved by ``(1 + delta)``, ``delta ~ N(0, discrepancy)``, where ``discrepancy > 0``)."""
+    thetas, crossings, thresholds = {}, [], []
     for m, fit in fits.items():
         if counts[m] == 0:
             continue
         th = fit.sample(rng, int(counts[m]))
         thetas[m] = th
-        thr = threshold
+        thr = np.full(th.shape[0], float(threshold))
         if discrepancy > 0:        # (drawn only then: without it the draws are as before)
             thr = threshold * np.maximum(1.0 + discrepancy * rng.standard_normal(th.shape[0]),
                                          0.05)
         crossings.append(fit.crossing_time(thr, th))
-    t_star = np.concatenate(crossings)
-    rul = np.maximum(t_star - t_now, 0.0)
-    q = np.quantile(rul, [(1 - level) / 2, 0.5, (1 + level) / 2], method="inverted_cdf")
-    chosen = fits[model_name] if model_name in fits else fits[max(weights, key=weights.get)]
-    return RULPrediction(indicator=indicator, threshold=float(threshold), t_now=t_now,
-                         model=model_name, weights=weights, fits=fits, median=float(q[1]),
-                         lo=float(q[0]), hi=float(q[2]), level=float(level),
-                         p_failed=float(np.mean(t_star <= t_now)), samples=rul, theta=thetas,
-                         current=float(chosen.value(t_now)[0]), seed=seed_int,
-                         excluded=excluded, discrepancy=float(discrepancy))
+        thresholds.append(thr)
+    return thetas, np.concatenate(crossings), np.concatenate(thresholds)
 
 
 def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_floor: float,
@@ -689,7 +780,8 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
         preds[name] = predict_rul(times, series[name], thresholds.for_indicator(name),
                                   seed=np.random.default_rng(ss), t_now=t_now,
                                   sigma_floor=sigma_floor, indicator=name,
-                                  discrepancy=float(discrepancy.get(name, 0.0)), **kwargs)
+                                  discrepancy=float(discrepancy.get(name, 0.0)),
+                                  bounds=INDICATOR_BOUNDS[name], **kwargs)
         preds[name] = _with_seed(preds[name], seed)
     return Prognosis(actuator=actuator, t_now=float(times[-1] if t_now is None else t_now),
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
@@ -697,8 +789,6 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
 
 
 def _with_seed(p: RULPrediction, seed: int) -> RULPrediction:
-    from dataclasses import replace
-
     return replace(p, seed=seed)
 
 
