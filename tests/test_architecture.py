@@ -1,10 +1,13 @@
-"""The house: imports between emaphm's modules, read from the source (module level and
-inside functions alike), form no loop where this is checked, so each module can be read
-(and imported) after the ones it builds on."""
+"""The house, read from the source: imports between emaphm's modules (module level and
+inside functions alike) form no loop where this is checked, so each module can be read
+(and imported) after the ones it builds on; no function outside the numerical kernels is
+over 100 lines; no private name is imported from another package; seeds are checked only
+by :mod:`emaphm.seeds`. Each rule is also run on a small case it must catch."""
 
 from __future__ import annotations
 
 import ast
+import sys
 from pathlib import Path
 
 import pytest
@@ -97,3 +100,183 @@ def test_the_monitoring_step_exists_once():
 def test_the_cycle_finder_finds_a_loop():
     assert cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
     assert cycle({"a": {"b"}, "b": set()}) is None
+
+
+# ----------------------------------------------------------------------------- the rules of the house
+
+def modules() -> dict[str, Path]:
+    """Every module of emaphm by name."""
+    return {module_name(p): p for p in sorted((SRC / "emaphm").rglob("*.py"))}
+
+
+def package_of(name: str, path: Path) -> str:
+    """The package a module lives in: the folder that holds it (``emaphm`` for the top-level
+    modules, ``emaphm.traces.importers`` for ``emaphm.traces.importers.mdf``)."""
+    return name if path.name == "__init__.py" else name.rpartition(".")[0]
+
+
+#: The numerical kernels allowed over :data:`MAX_LINES` lines, by ``path:qualified name``
+#: (each is Numba-compiled: one function, so that the compiler sees the whole loop).
+LONG_KERNELS = {
+    "emaphm/models/reference.py:_rm_kernel": "the reference plant's time loop (Numba)",
+}
+MAX_LINES = 100
+
+
+def functions(tree: ast.AST, prefix: str = ""):
+    """``(qualified name, node)`` of every function in ``tree``, methods and nested ones too."""
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            name = f"{prefix}{node.name}"
+            if not isinstance(node, ast.ClassDef):
+                yield name, node
+            yield from functions(node, f"{name}.")
+        else:
+            yield from functions(node, prefix)
+
+
+def long_functions(path: Path) -> dict[str, int]:
+    """``path:qualified name -> lines`` of the functions of ``path`` over MAX_LINES lines
+    (from ``def`` to the last line of the body, docstring included)."""
+    rel = path.relative_to(SRC).as_posix()
+    found = {}
+    for name, node in functions(ast.parse(path.read_text(encoding="utf-8"))):
+        lines = node.end_lineno - node.lineno + 1
+        if lines > MAX_LINES:
+            found[f"{rel}:{name}"] = lines
+    return found
+
+
+def test_no_function_outside_the_numerical_kernels_is_over_100_lines():
+    long = {}
+    for path in modules().values():
+        long |= long_functions(path)
+    over = {k: n for k, n in long.items() if k not in LONG_KERNELS}
+    assert over == {}, f"functions over {MAX_LINES} lines (split them): {over}"
+    stale = sorted(set(LONG_KERNELS) - set(long))
+    assert stale == [], f"LONG_KERNELS names functions no longer over {MAX_LINES} lines: {stale}"
+    for key in LONG_KERNELS:                      # an exemption is a compiled kernel
+        rel, name = key.split(":")
+        node = dict(functions(ast.parse((SRC / rel).read_text(encoding="utf-8"))))[name]
+        assert any("jit" in ast.unparse(d) for d in node.decorator_list), key
+
+
+def test_the_length_rule_sees_methods_and_nested_functions():
+    body = "\n".join(f"    x{i} = {i}" for i in range(MAX_LINES))
+    text = f"class A:\n  def m(self):\n{body}\n\ndef f():\n  def g():\n{body}\n  return g\n"
+    lines = {name: node.end_lineno - node.lineno + 1 for name, node in functions(ast.parse(text))}
+    assert lines["A.m"] == MAX_LINES + 1 and lines["f.g"] == MAX_LINES + 1
+    assert lines["f"] == MAX_LINES + 3
+
+
+# Private names. A name that starts with an underscore belongs to its package (the folder
+# that holds its module): other modules of that package may import it, modules of another
+# package may not (make it public, or move the code). A private *module* is its package's
+# too: ``emaphm.models._jit`` is for ``emaphm.models``. The top-level private modules
+# (``emaphm._cli_common``, ``_files``, ``_text``, ``_sqlite``, ``_lazy``) are emaphm's own
+# shared infrastructure, private to the distribution, not to a folder: every package may
+# import their public names, never their private ones.
+
+def imported_names(path: Path, name: str, mods: dict[str, Path]):
+    """``(line, module, imported name or None)`` of every emaphm import of ``path`` (the
+    module ``name`` of ``mods``); ``module`` is the module the name comes from (the name
+    itself where it is a module)."""
+    package = package_of(name, path)
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.startswith("emaphm"):
+                    yield node.lineno, a.name, None
+        elif isinstance(node, ast.ImportFrom):
+            base = package.split(".")
+            if node.level:
+                base = base[:len(base) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            if not target.startswith("emaphm"):
+                continue
+            for a in node.names:
+                full = f"{target}.{a.name}"
+                yield (node.lineno, full, None) if full in mods else (node.lineno, target, a.name)
+
+
+def private_imports() -> list[str]:
+    mods = modules()
+    found = []
+    for name, path in mods.items():
+        here = package_of(name, path)
+        for line, module, imported in imported_names(path, name, mods):
+            owner = package_of(module, mods[module]) if module in mods else module
+            parts = module.split(".")
+            private_module = any(p.startswith("_") and not p.startswith("__") for p in parts)
+            shared = owner == "emaphm" and len(parts) == 2        # emaphm._files and kin
+            private_name = imported is not None and imported.startswith("_") \
+                and not imported.startswith("__")
+            if owner == here:
+                continue
+            if private_name or (private_module and not shared):
+                found.append(f"{name}:{line}: {module}" + (f" import {imported}" if imported else ""))
+    return found
+
+
+def test_no_private_name_is_imported_across_packages():
+    found = private_imports()
+    assert found == [], "private names imported from another package (make them public, or " \
+                        "move the code):\n" + "\n".join(found)
+
+
+def test_the_private_import_rule_reads_every_kind_of_import(tmp_path, monkeypatch):
+    """The rule on a small tree of its own: the same package may share private names, the
+    top-level private modules are shared by all, a subpackage's private module is its own."""
+    src = tmp_path / "src"
+    files = {
+        "emaphm/__init__.py": "",
+        "emaphm/_files.py": "def atomic_write(): pass\ndef _tmp(): pass\n",
+        "emaphm/a/__init__.py": "",
+        "emaphm/a/_kern.py": "def run(): pass\n",
+        "emaphm/a/x.py": "def _helper(): pass\nfrom ._kern import run\n",
+        "emaphm/a/y.py": "from .x import _helper\nfrom .._files import atomic_write\n",
+        "emaphm/b/__init__.py": "",
+        "emaphm/b/z.py": ("from ..a.x import _helper\nfrom emaphm.a import _kern\n"
+                          "import emaphm.a._kern\nfrom .._files import _tmp, atomic_write\n"),
+    }
+    for rel, text in files.items():
+        (src / rel).parent.mkdir(parents=True, exist_ok=True)
+        (src / rel).write_text(text, encoding="utf-8")
+    monkeypatch.setattr(sys.modules[__name__], "SRC", src)
+    assert private_imports() == ["emaphm.b.z:1: emaphm.a.x import _helper",
+                                 "emaphm.b.z:2: emaphm.a._kern",
+                                 "emaphm.b.z:3: emaphm.a._kern",
+                                 "emaphm.b.z:4: emaphm._files import _tmp"]
+
+
+# Seeds: one check, emaphm.seeds.check_seed (and as_generator, which calls it). A copy
+# elsewhere (isinstance on a seed, a seed compared with a number) drifts from it.
+
+def seed_checks(path: Path) -> list[int]:
+    """Lines of ``path`` that check a seed by hand: ``isinstance(<seed>, ...)`` or a seed
+    compared with a number, where ``<seed>`` is a name or attribute that says seed."""
+    def says_seed(node: ast.AST) -> bool:
+        name = node.id if isinstance(node, ast.Name) else \
+            node.attr if isinstance(node, ast.Attribute) else ""
+        return "seed" in name.lower()
+
+    lines = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) \
+                and node.func.id == "isinstance" and node.args and says_seed(node.args[0]):
+            lines.append(node.lineno)
+        elif isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            if any(says_seed(s) for s in sides) and any(
+                    isinstance(s, ast.Constant) and type(s.value) in (int, float) for s in sides):
+                lines.append(node.lineno)
+    return lines
+
+
+def test_seeds_are_checked_only_by_emaphm_seeds():
+    found = {name: lines for name, path in modules().items()
+             if name != "emaphm.seeds" and (lines := seed_checks(path))}
+    assert found == {}, f"seeds checked by hand (use emaphm.seeds.check_seed): {found}"
+    assert seed_checks(SRC / "emaphm" / "seeds.py"), "the seed rule no longer sees the one check"
