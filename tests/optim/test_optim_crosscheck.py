@@ -34,7 +34,7 @@ where scipy resamples them, which costs a constant factor of about 1.5 (median 2
 vs 1.6e-10 at 10,000 evaluations over 40 seeds) but no rate; one decade of slack still
 catches any real loss of convergence speed (a broken operator costs several decades).
 
-The niapy checks are skipped when niapy is not installed (test-only dependency).
+The niapy checks are skipped when niapy is not installed (the ``crosscheck`` extra).
 """
 
 from __future__ import annotations
