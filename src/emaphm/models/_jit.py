@@ -16,6 +16,14 @@ is never read again. The directory (:data:`CACHE_DIR`) is the first writable of
 (``$XDG_CACHE_HOME`` or ``~/.cache``, ``emaphm``); with none writable, kernels are
 compiled in every process. Numba's ``NUMBA_CACHE_DIR`` of other libraries is left
 as it is: it is switched only while this package's kernels are declared.
+
+Each edit of the model sources leaves a directory behind, tens of megabytes after a few
+pulls. On import, :func:`prune_stale` removes the stale ones beside
+:data:`CACHE_DIR`: it keeps the current one and the most recently used other one (a second
+installed version, or the checkout a running campaign was started from), and any used in
+the last hour; it touches nothing but directories named ``kernels-<16 hex digits>``
+directly in that folder (never a link, never outside it), and two processes pruning at
+once do not trip over each other.
 """
 
 from __future__ import annotations
@@ -23,6 +31,9 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import os
+import re
+import shutil
+import time
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
@@ -75,6 +86,66 @@ def cache_dir(digest: str = SOURCES_DIGEST) -> Path | None:
 
 #: Directory of this package's kernel cache (None: not cached).
 CACHE_DIR = cache_dir()
+
+#: Stale kernel caches that :func:`prune_stale` keeps: the most recently used ones, and
+#: any used within this many seconds.
+KEEP_OTHERS = 1
+MIN_AGE_S = 3600.0
+_KERNELS = re.compile(r"kernels-[0-9a-f]{16}")
+_DOOMED = re.compile(r"\.stale-kernels-[0-9a-f]{16}-\d+")
+
+
+def _last_used(folder: Path) -> float:
+    """The newest modification time of ``folder`` and its entries (Numba writes its index
+    and object files there)."""
+    times = [folder.lstat().st_mtime]
+    with os.scandir(folder) as entries:
+        times += [e.stat(follow_symlinks=False).st_mtime for e in entries]
+    return max(times)
+
+
+def prune_stale(root: Path, current: str = SOURCES_DIGEST, *, keep_others: int = KEEP_OTHERS,
+                min_age_s: float = MIN_AGE_S, now: float | None = None) -> list[str]:
+    """Remove from ``root`` the kernel caches of model sources other than ``current`` (all
+    but the ``keep_others`` most recently used, and only those unused for ``min_age_s``
+    seconds); return the names removed.
+
+    Only directories directly in ``root`` named ``kernels-<16 hex digits>`` are candidates
+    (a link of that name is left alone, and so is what it points to). Each is first renamed
+    to ``.stale-kernels-<digest>-<pid>`` (atomic: of two processes pruning at once one
+    wins, the other moves on) and then deleted; a removal left half done (a file in use) is
+    finished by a later prune. Errors are never raised: a cache that cannot be pruned is
+    only a cache."""
+    now = time.time() if now is None else now
+    stale = []
+    try:
+        with os.scandir(root) as entries:
+            for e in entries:
+                if _DOOMED.fullmatch(e.name) and e.is_dir(follow_symlinks=False):
+                    shutil.rmtree(e.path, ignore_errors=True)
+                elif (_KERNELS.fullmatch(e.name) and e.name != f"kernels-{current}"
+                      and e.is_dir(follow_symlinks=False)):
+                    with contextlib.suppress(OSError):
+                        stale.append((_last_used(Path(e.path)), e.name))
+    except OSError:
+        return []
+    stale.sort(reverse=True)
+    removed = []
+    for used, name in stale[max(keep_others, 0):]:
+        if now - used < min_age_s:
+            continue
+        doomed = Path(root) / f".stale-{name}-{os.getpid()}"
+        try:
+            os.rename(Path(root) / name, doomed)
+        except OSError:                 # gone already (another process), or not ours to move
+            continue
+        shutil.rmtree(doomed, ignore_errors=True)
+        removed.append(name)
+    return removed
+
+
+if CACHE_DIR is not None:
+    prune_stale(CACHE_DIR.parent)
 
 
 @contextlib.contextmanager
