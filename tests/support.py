@@ -13,12 +13,18 @@
   nudge is larger than an ulp. The reference decides which candidates are
   ill-conditioned, so a wrong branch cannot hide behind that label on a
   well-conditioned candidate;
-* campaign runs computed by two processes: :func:`assert_same_outcome`.
+* campaign runs computed by two processes: :func:`assert_same_outcome`; the small
+  campaign of the campaign tests, :func:`small_spec`, and a store's outcomes,
+  :func:`outcomes`;
+* errors and convergence: :func:`rms`, :func:`nrms`, :func:`fitted_order`;
+* traces shared by several test modules, as fixtures (``from support import mm_trace``
+  makes it one of the module's): :func:`mm_trace`, :func:`mm_gain_low`.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from emaphm.faults import K_NOMINAL, SCENARIOS
 
@@ -30,6 +36,45 @@ def k_with(**components: float):
     for name, value in components.items():
         k[int(name[1:]) - 1] = value
     return k
+
+
+# ----------------------------------------------------------------------------- errors
+
+def rms(x) -> float:
+    """Root mean square of ``x``."""
+    return float(np.sqrt(np.mean(np.asarray(x, float) ** 2)))
+
+
+def nrms(x, ref) -> float:
+    """Normalised RMS difference ``rms(x - ref) / rms(ref)``."""
+    x, ref = np.asarray(x, float), np.asarray(ref, float)
+    return rms(x - ref) / rms(ref)
+
+
+def fitted_order(steps, errors) -> float:
+    """Slope of log(error) against log(step): the observed order of convergence."""
+    x, y = np.log(np.asarray(steps, float)), np.log(np.asarray(errors, float))
+    return float(np.polyfit(x, y, 1)[0])
+
+
+# ----------------------------------------------------------------------------- shared traces
+
+@pytest.fixture(scope="session")
+def mm_trace():
+    """A noise-free monitoring-model trace of a 15 % turn short (the physical fault model),
+    fast to make; tests that never reach an identification use it as any valid trace."""
+    from emaphm.simulate import simulate
+
+    return simulate(scenario="turn-short-15pct", model="monitoring")
+
+
+@pytest.fixture(scope="session")
+def mm_gain_low():
+    """Noise-free monitoring-model trace of the gain-low scenario (k8 = 0.25): the
+    monitoring model can match it exactly."""
+    from emaphm.simulate import simulate
+
+    return simulate(scenario="gain-low", model="monitoring")
 
 
 # ----------------------------------------------------------------------------- figures
@@ -139,3 +184,33 @@ def assert_same_outcome(got: dict, want: dict, key: str = "") -> None:
                                        rtol=RUN_RTOL, atol=0.0, err_msg=f"{key}: {name}")
         else:
             assert g == w, (key, name, g, w)
+
+
+#: The small campaign of the campaign tests: 2 scenarios x 2 algorithms x 4 runs, 600
+#: evaluations per run (a quarter to half a second each).
+SMALL_CAMPAIGN = {"scenarios": "friction-high,multiple", "algorithms": "pso,de", "runs": 4,
+                  "master_seed": 7, "budget": 600, "name": "small"}
+
+
+def small_spec(**kw):
+    """:data:`SMALL_CAMPAIGN` as a :class:`~emaphm.campaign.CampaignSpec`; ``kw`` replaces
+    its fields or adds others (scenarios and algorithms as names; None: the default of
+    :func:`~emaphm.campaign.paper_spec`)."""
+    from emaphm.campaign import paper_spec
+    from emaphm.campaign.spec import parse_algorithms, parse_scenarios
+
+    fields = {k: v for k, v in {**SMALL_CAMPAIGN, **kw}.items() if v is not None}
+    if isinstance(fields.get("scenarios"), str):
+        fields["scenarios"] = parse_scenarios(fields["scenarios"])
+    if isinstance(fields.get("algorithms"), str):
+        fields["algorithms"] = parse_algorithms(fields["algorithms"])
+    return paper_spec(**fields)
+
+
+def outcomes(path) -> dict[str, dict]:
+    """Run key -> ``RunResult.outcome()`` of every result in the campaign store at ``path``."""
+    from emaphm.campaign import CampaignStore
+
+    with CampaignStore.open(path, readonly=True) as st:
+        return {r.key: r.outcome() for r in st.results()}
+

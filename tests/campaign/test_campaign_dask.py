@@ -14,7 +14,7 @@ import socket
 import threading
 
 import pytest
-from support import assert_same_outcome
+from support import assert_same_outcome, outcomes
 
 distributed = pytest.importorskip("distributed")
 
@@ -29,11 +29,6 @@ def spec():
     return paper_spec(runs=2, master_seed=99, budget=600, name="dask",
                       scenarios=parse_scenarios("backlash-high,short-circuit-low"),
                       algorithms=parse_algorithms("pso,gwo"))
-
-
-def outcomes(path):
-    with CampaignStore.open(path, readonly=True) as st:
-        return {r.key: r.outcome() for r in st.results()}
 
 
 @pytest.fixture(scope="module")

@@ -18,10 +18,10 @@ import sys
 import time
 
 import pytest
-from support import assert_same_outcome
+from support import assert_same_outcome, outcomes, small_spec
 
 from emaphm.campaign import (CampaignInterrupted, CampaignStore, LocalExecutor, ProgressLine, RunResult,
-                             SerialExecutor, execute_run, paper_spec, replay, run_campaign)
+                             SerialExecutor, execute_run, replay, run_campaign)
 from emaphm.campaign.spec import parse_algorithms, parse_scenarios
 from emaphm.cli import main
 
@@ -35,20 +35,7 @@ algorithms = ["pso", "de"]
 """
 
 
-def small_spec(**kw):
-    kw.setdefault("scenarios", parse_scenarios("friction-high,multiple"))
-    kw.setdefault("algorithms", parse_algorithms("pso,de"))
-    kw.setdefault("budget", 600)
-    kw.setdefault("name", "small")
-    return paper_spec(runs=kw.pop("runs", 4), master_seed=kw.pop("master_seed", 7), **kw)
-
-
 N = 16      # runs of the small campaign
-
-
-def outcomes(path) -> dict[str, dict]:
-    with CampaignStore.open(path, readonly=True) as st:
-        return {r.key: r.outcome() for r in st.results()}
 
 
 def row_counts(path) -> tuple[int, int]:

@@ -4,16 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import small_spec
 
 pd = pytest.importorskip("pandas", reason="pandas is not installed: pip install -e '.[pandas]'")
 
 
 def test_campaign_store_frame(tmp_path):
-    from emaphm.campaign import CampaignStore, RunResult, paper_spec
-    from emaphm.campaign.spec import parse_scenarios
-
-    def small_spec():
-        return paper_spec(runs=2, master_seed=3, scenarios=parse_scenarios("friction-low"))
+    from emaphm.campaign import CampaignStore, RunResult
 
     def fake_result(run, status="ok"):
         if status != "ok":
@@ -25,7 +22,7 @@ def test_campaign_store_frame(tmp_path):
                          status="ok", k_true=run.k_true, k=k, fitness=1e-4, error_pct=0.5,
                          k_raw=k, history=(1.0, 0.5))
 
-    spec = small_spec()
+    spec = small_spec(scenarios="friction-low", runs=2, master_seed=3)
     with CampaignStore.open(tmp_path / "s.sqlite", spec) as st:
         runs = spec.runs_list()[:3]
         for run in runs:

@@ -4,6 +4,7 @@ import json
 
 import numpy as np
 import pytest
+from support import mm_trace  # noqa: F401  (a fixture)
 
 from emaphm.campaign.spec import CampaignSpec, ScenarioSpec
 from emaphm.cli import main
@@ -15,11 +16,6 @@ from emaphm.traces import Trace, read_trace
 def _bare(trace, **meta):
     return Trace(t=trace.t, theta_ref=trace.theta_ref, theta_m=trace.theta_m,
                  omega_m=trace.omega_m, i_abc=trace.i_abc, meta=meta)
-
-
-@pytest.fixture(scope="module")
-def mm_trace():
-    return simulate(scenario="turn-short-15pct", model="monitoring")
 
 
 def test_a_trace_is_diagnosed_with_its_own_fault_model(mm_trace):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import mm_gain_low  # noqa: F401  (a fixture)
 
 from emaphm.faults import SCENARIOS
 from emaphm.fitness import FITNESS_MODES, Eq4Objective, eq4_weights, equivalent_current
@@ -24,12 +25,6 @@ P_POLES = 4            # pole pairs of the default preset
 
 
 # ----------------------------------------------------------------------------- fixtures
-@pytest.fixture(scope="module")
-def mm_gain_low():
-    """Noise-free monitoring-model trace of the gain-low scenario (k8 = 0.25)."""
-    return simulate(scenario="gain-low", model="monitoring")
-
-
 @pytest.fixture(scope="module")
 def obj_gain_low(mm_gain_low):
     return Eq4Objective.from_trace(mm_gain_low)

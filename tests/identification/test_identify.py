@@ -13,6 +13,7 @@ import json
 
 import numpy as np
 import pytest
+from support import mm_gain_low  # noqa: F401  (a fixture)
 
 from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, error_pct
 from emaphm.fitness import Eq4Objective
@@ -35,12 +36,6 @@ DOC_KEYS = {"algorithm", "seed", "k", "k_named", "fitness", "evaluations", "iter
 
 
 # ----------------------------------------------------------------------------- fixtures
-@pytest.fixture(scope="module")
-def mm_gain_low():
-    """Noise-free monitoring-model trace of gain-low (k8 = 0.25): the MM can match it exactly."""
-    return simulate(scenario="gain-low", model="monitoring")
-
-
 @pytest.fixture(scope="module")
 def problem(mm_gain_low):
     return IdentificationProblem(mm_gain_low)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support import fitted_order, nrms, rms
 
 from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, apply_faults, scenario, scenario_fault_model
 from emaphm.models.controller import control_step, pi_step
@@ -30,21 +31,6 @@ PARAMS = siemens_1fk7060()
 PROFILE = diagnostic()
 T_S = PARAMS.inverter.T_s
 FAULTS = [name for name in SCENARIOS if name != "nominal"]
-
-
-def nrms(x, ref) -> float:
-    """Normalised RMS difference ``rms(x - ref) / rms(ref)``."""
-    x, ref = np.asarray(x, float), np.asarray(ref, float)
-    return float(np.sqrt(np.mean((x - ref) ** 2)) / np.sqrt(np.mean(ref ** 2)))
-
-
-def rms(x) -> float:
-    return float(np.sqrt(np.mean(np.asarray(x, float) ** 2)))
-
-
-def fitted_order(steps, errors) -> float:
-    """Slope of log(error) against log(step): the observed order of convergence."""
-    return float(np.polyfit(np.log(np.asarray(steps, float)), np.log(np.asarray(errors, float)), 1)[0])
 
 
 def eq4_weights(i_rm: np.ndarray, dT: float) -> np.ndarray:

@@ -17,7 +17,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from support import MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, population
+from support import (MIN_WELL, N_RANDOM, TOL, assert_traces_agree, conditioning, nrms,
+                     population)
 from scipy.integrate import solve_ivp
 
 from emaphm.faults import K_NOMINAL, FaultVectorError, apply_faults, scenario
@@ -34,12 +35,6 @@ from emaphm.profiles import diagnostic
 PARAMS = siemens_1fk7060()
 PROFILE = diagnostic()
 MM = MonitoringModel(PARAMS, PROFILE, fault_model="physical")
-
-
-def nrms(x, ref) -> float:
-    """Normalised RMS difference ``rms(x - ref) / rms(ref)``."""
-    x, ref = np.asarray(x, float), np.asarray(ref, float)
-    return float(np.sqrt(np.mean((x - ref) ** 2)) / np.sqrt(np.mean(ref ** 2)))
 
 
 def shorted(mus, phase: int = 0) -> np.ndarray:

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from support import fitted_order, nrms, rms
 
 from emaphm.faults import K_NOMINAL, scenario, scenario_fault_model
 from emaphm.models.layout import contact_resolved
@@ -36,21 +37,6 @@ PROFILE = diagnostic()
 T_S = PARAMS.inverter.T_s
 J_M, J_L = 7.7e-4, 7.7e-4
 FSJ, FDJ = 0.12, 0.08
-
-
-def nrms(x, ref) -> float:
-    x, ref = np.asarray(x, float), np.asarray(ref, float)
-    return float(np.sqrt(np.mean((x - ref) ** 2)) / np.sqrt(np.mean(ref ** 2)))
-
-
-def rms(x) -> float:
-    return float(np.sqrt(np.mean(np.asarray(x, float) ** 2)))
-
-
-def fitted_order(steps, errors) -> float:
-    """Slope of log(error) against log(step): the observed order of convergence."""
-    x, y = np.log(np.asarray(steps, float)), np.log(np.asarray(errors, float))
-    return float(np.polyfit(x, y, 1)[0])
 
 
 def shorted(mu: float, phase: int = 0) -> np.ndarray:

@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 import pytest
-from support import assert_png_of, legend_texts
+from support import assert_png_of, legend_texts, mm_trace  # noqa: F401  (mm_trace: a fixture)
 
 from emaphm.cli import EXIT_USAGE, main
 from emaphm.faults import K_NOMINAL
@@ -193,12 +193,6 @@ def test_opening(tmp_path):
 
 
 # ----------------------------------------------------------------------------- inspect()
-@pytest.fixture(scope="module")
-def mm_trace():
-    """A fast monitoring-model trace (the checks below never reach an identification)."""
-    return simulate(K1, model="monitoring")
-
-
 def _no_identification(monkeypatch):
     import emaphm.prognosis.uncertainty as unc
 
