@@ -214,3 +214,28 @@ def outcomes(path) -> dict[str, dict]:
     with CampaignStore.open(path, readonly=True) as st:
         return {r.key: r.outcome() for r in st.results()}
 
+
+# ----------------------------------------------------------------------------- SciPy's seeding
+
+def spy_on_init(monkeypatch, cls) -> list[dict]:
+    """The keyword arguments of every construction of ``cls`` from now on (its signature,
+    which emaphm reads to choose ``rng=`` or ``seed=``, stays the class's own)."""
+    import functools
+
+    calls: list[dict] = []
+    init = cls.__init__
+
+    @functools.wraps(init)
+    def spied(self, *args, **kw):
+        calls.append(kw)
+        init(self, *args, **kw)
+
+    monkeypatch.setattr(cls, "__init__", spied)
+    return calls
+
+
+def scipy_rng_keyword(cls) -> str:
+    """``"rng"`` where SciPy's ``cls`` takes it (SciPy >= 1.15, SPEC 7), else ``"seed"``."""
+    import inspect
+
+    return "rng" if "rng" in inspect.signature(cls).parameters else "seed"

@@ -160,3 +160,19 @@ def test_telling_old_states_again_gives_the_copying_results(name):
     cont = resume(rastrigin, opt, states[-1], termination=MaxIterations(60))
     full = minimize(rastrigin, BOX, opt, seed=np.random.default_rng(7), termination=MaxIterations(60))
     assert np.array_equal(cont.history, full.history) and np.array_equal(cont.x, full.x)
+
+
+def test_scipy_de_initial_population_seeds_scipy_with_rng_where_it_has_it(monkeypatch):
+    """The Latin hypercube of scipy-de's first population gets ``rng=`` where SciPy takes
+    it (SPEC 7), and warns of nothing."""
+    import warnings
+
+    from scipy.stats import qmc
+    from support import scipy_rng_keyword, spy_on_init
+
+    calls = spy_on_init(monkeypatch, qmc.LatinHypercube)
+    rng = np.random.default_rng(4)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        ScipyDE(pop_size=12).initial_population(as_bounds(BOX), rng)
+    assert calls == [{"d": 6, scipy_rng_keyword(qmc.LatinHypercube): rng}]

@@ -87,6 +87,21 @@ def test_a_view_maps_the_box_and_counts_one_search(problem):
                                SCENARIOS["turn-short-5pct"], atol=1e-12)
 
 
+def test_the_sobol_sample_seeds_scipy_with_rng_where_it_has_it(problem, monkeypatch):
+    """SciPy 1.15 moved its engines' ``seed=`` to ``rng=`` (SPEC 7; ``seed=`` is to be
+    deprecated): the sample passes ``rng=`` where SciPy takes it, and warns of nothing."""
+    import warnings
+
+    from scipy.stats import qmc
+    from support import scipy_rng_keyword, spy_on_init
+
+    calls = spy_on_init(monkeypatch, qmc.Sobol)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        problem.view("ecc-xy-sq").sample(seed=3)
+    assert calls == [{"scramble": True, scipy_rng_keyword(qmc.Sobol): 3}]
+
+
 # ----------------------------------------------------------------------------- the settings
 def test_the_config_round_trips_to_json_and_builds_its_solver():
     cfg = IdentificationConfig("pso", options={"pop_size": np.int64(30)}, budget="20s",
