@@ -256,3 +256,130 @@ def test_describe_of_a_csv(tmp_path):
     text = describe(inspect_source(src))
     assert "x.csv: csv (fields separated by ','" in text
     assert "t  " in text and " s " in text
+
+
+# ----------------------------------------------------------------------------- issue 22's gaps
+def _foreign_csv(path):
+    """A bench export as the plain reader meets it: its own channel names."""
+    path.write_text("Zeit [s],Lage soll,Lage ist,Drehzahl,IU,IV,IW\n" + "0,0,0,0,0,0,0\n" * 3)
+    return path
+
+
+def test_the_plain_reader_sends_foreign_channel_names_to_emaphm_import(tmp_path, capsys):
+    src = _foreign_csv(tmp_path / "bench run.csv")
+    with pytest.raises(TraceError) as err:
+        read_trace(src)
+    msg = str(err.value)
+    assert "missing column(s)" in msg and "'Lage soll'" in msg          # what it said before
+    command = f"emaphm import '{src}' --inspect"                         # quoted for the shell
+    assert msg.endswith(f"or import the export as it is: `{command}` prints a channel map to "
+                        "edit (names, units, decimal commas)")
+    assert main(["import", str(src), "--inspect"]) == 0                 # and the command works
+    assert "[channels]" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("suffix, offered", [(".tsv", True), (".mf4", True), (".xlsx", False)])
+def test_an_unsupported_suffix_says_whether_emaphm_import_reads_it(tmp_path, suffix, offered):
+    src = tmp_path / f"run{suffix}"
+    src.write_bytes(b"")
+    with pytest.raises(TraceError, match=rf"unsupported file type '\{suffix}'; use one of "
+                                         r"\.csv, \.parquet") as err:
+        read_trace(src)
+    assert (f"`emaphm import {src} --inspect`" in str(err.value)) is offered
+    with pytest.raises(TraceError) as err:                               # writing: no import
+        write_trace(simulate(model="monitoring"), tmp_path / f"out{suffix}")
+    assert "emaphm import" not in str(err.value)
+
+
+def test_the_milliseconds_refusal_names_the_file(tmp_path):
+    trace = simulate(model="monitoring")
+    src = write_trace(trace, tmp_path / "ms.csv")
+    text = src.read_text().splitlines()
+    header = text.index(next(x for x in text if x.startswith("t,")))
+    rows = [",".join([repr(float(r.split(",")[0]) * 1000)] + r.split(",")[1:])
+            for r in text[header + 1:]]
+    src.write_text("\n".join(text[:header + 1] + rows) + "\n")
+    with pytest.raises(TraceError, match="looks like milliseconds") as err:
+        read_trace(src)
+    assert f"`emaphm import {src} --inspect`" in str(err.value) and "FILE" not in str(err.value)
+    from emaphm.traces import validate
+
+    with pytest.raises(TraceError) as err:                               # no file: a placeholder
+        validate(read_trace(src, validate=False))
+    assert "`emaphm import FILE --inspect`" in str(err.value)
+
+
+def _two_clocks(path, motion_t):
+    """An MDF 4 file of two channel groups on their own clocks: currents at 8 kHz from
+    5.0 s (4000 records); motion at the times ``motion_t``, a position 2 + 3 t (linear:
+    interpolated exactly) and a speed sin(2 pi 5 t)."""
+    from asammdf import MDF, Signal
+
+    t_i = 5.0 + np.arange(4000) / 8000.0
+    m = MDF(version="4.10")
+    m.append([Signal(np.cos(t_i), t_i, name="IU", unit="A")], acq_name="currents")
+    m.append([Signal(2.0 + 3.0 * motion_t, motion_t, name="pos", unit="rad"),
+              Signal(np.sin(2 * np.pi * 5.0 * motion_t), motion_t, name="speed", unit="rad/s")],
+             acq_name="motion")
+    m.save(path, overwrite=True)
+    m.close()
+    return t_i
+
+
+def _resampled(path, first, stop):
+    """``(t, columns, reads)``: rows ``first:stop`` of the currents and of the motion
+    resampled onto their clock, and the record ranges read from the motion group."""
+    from emaphm.traces.importers import open_source
+
+    with open_source(path) as source:
+        chans = [source.info.find(n, g, "test") for n, g in
+                 (("IU", "currents"), ("pos", "motion"), ("speed", "motion"))]
+        reads, read = [], source._read
+
+        def spy(info, a, b):
+            if info.group == "motion":
+                reads.append((a, b))
+            return read(info, a, b)
+
+        source._read = spy
+        blocks = list(source.blocks(chans, first, stop))
+    assert len(blocks) == 1
+    return blocks[0].t, blocks[0].columns, reads
+
+
+@needs_bench
+def test_mdf_groups_at_other_rates_and_offsets_are_resampled_onto_the_first(tmp_path):
+    """Known answers: motion at 2 kHz starting 0.7 ms before the currents. A position linear
+    in time is interpolated exactly, a 5 Hz sine to the interpolation's bound (dt^2/8 of
+    its curvature: 3.1e-5), and only the motion records around the window are read."""
+    motion_t = 4.9993 + np.arange(1300) / 2000.0
+    t_i = _two_clocks(tmp_path / "two.mf4", motion_t)
+    t, (iu, pos, speed), reads = _resampled(tmp_path / "two.mf4", 1000, 3000)
+    np.testing.assert_array_equal(t, t_i[1000:3000])
+    np.testing.assert_array_equal(iu, np.cos(t_i[1000:3000]))
+    np.testing.assert_allclose(pos, 2.0 + 3.0 * t, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(speed, np.sin(2 * np.pi * 5.0 * t), rtol=0, atol=3.2e-5)
+    assert np.max(np.abs(speed - np.sin(2 * np.pi * 5.0 * t))) > 1e-6     # really interpolated
+    # records 250 to 750 cover 5.125 to 5.375 s: a slice of the 1300, twice (two channels)
+    assert len(reads) == 2 and all(240 <= a < 252 and 750 <= b < 760 for a, b in reads)
+
+
+@needs_bench
+def test_mdf_group_with_a_gap_in_its_clock_is_read_whole_and_still_right(tmp_path):
+    """A logger dropout of 20 ms in the motion group: the records are no longer where its
+    rate puts them, the slice misses the window, and the whole group is read instead."""
+    motion_t = 4.9993 + np.arange(1300) / 2000.0
+    motion_t[200:] += 0.02
+    _two_clocks(tmp_path / "gap.mf4", motion_t[:1250])
+    t, (_, pos, _), reads = _resampled(tmp_path / "gap.mf4", 2000, 3000)
+    np.testing.assert_allclose(pos, 2.0 + 3.0 * t, rtol=0, atol=1e-12)
+    assert (0, 1250) in reads
+
+
+@needs_bench
+def test_mdf_group_that_does_not_cover_the_first_is_refused(tmp_path):
+    _two_clocks(tmp_path / "late.mf4", 5.1 + np.arange(1300) / 2000.0)
+    with pytest.raises(TraceError, match=r"channel motion/pos covers 5.1 to 5.7495 s, not the 5 to "
+                                         r"5.49988 s of the master time base; cut the window "
+                                         r"inside both \(--window\)"):
+        _resampled(tmp_path / "late.mf4", 0, 4000)

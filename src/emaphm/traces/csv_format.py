@@ -25,7 +25,7 @@ import numpy as np
 from .container import COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, _require_columns
 from .limits import MAX_SAMPLES, check_file_size, too_many_samples
 from .metadata import FORMAT_VERSION, _dumps, _loads
-from .validation import _normalise_symbol, _unbracket
+from .validation import _import_command, _normalise_symbol, _unbracket
 
 __all__ = ["CsvLayout", "sniff_csv", "csv_blocks"]
 
@@ -404,7 +404,12 @@ def _read_csv(path: Path) -> tuple[dict[str, np.ndarray], dict]:
     dupes = sorted({n for n in names if n in UNITS and names.count(n) > 1})
     if dupes:
         raise TraceError(f"{source}: column(s) {dupes} appear more than once; keep one each")
-    _require_columns(names, source)
+    try:
+        _require_columns(names, source)
+    except TraceError as exc:           # a bench export's own channel names, most often
+        raise TraceError(f"{exc}; or import the export as it is: "
+                         f"{_import_command(path, '--inspect')} prints a channel map to edit "
+                         "(names, units, decimal commas)") from None
     wanted = [c for c in COLUMNS + OPTIONAL_COLUMNS if c in names]
     arrays = collect(csv_blocks(layout, [names.index(c) for c in wanted]), len(wanted))
     columns = dict(zip(wanted, arrays))

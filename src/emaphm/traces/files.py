@@ -25,12 +25,17 @@ __all__ = ["SUFFIXES", "write_trace", "read_trace"]
 SUFFIXES: tuple[str, ...] = (".csv", ".parquet")
 
 
-def _suffix(path: Path) -> str:
+def _suffix(path: Path, reading: bool = False) -> str:
     suffix = path.suffix.lower()
     if suffix not in SUFFIXES:
+        from .importers.registry import SUFFIXES as EXPORTS
+        from .validation import _import_command
+
         raise TraceError(
             f"{path}: unsupported file type '{path.suffix}'; use one of "
             f"{', '.join(SUFFIXES)} (e.g. {path.with_suffix('.parquet').name})"
+            + (f", or import the export as it is: {_import_command(path, '--inspect')} "
+               "prints a channel map to edit" if reading and suffix in EXPORTS else "")
         )
     return suffix
 
@@ -75,7 +80,7 @@ def read_trace(
     :class:`~emaphm.traces.container.TraceWarning`.
     """
     path = Path(path)
-    suffix = _suffix(path)
+    suffix = _suffix(path, reading=True)
     if path.is_dir():
         raise TraceError(f"{path} is a folder; give a trace file (.csv or .parquet)")
     try:
@@ -105,7 +110,7 @@ def read_trace(
     warn_if_shorter_than_profile(trace, str(path))
     if validate:
         try:
-            _validate(trace, min_rotation=min_rotation)
+            _validate(trace, min_rotation=min_rotation, source=path)
         except TraceError as exc:
             raise TraceError(f"{path}: {exc}") from None
     return trace

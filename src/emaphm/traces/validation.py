@@ -5,6 +5,7 @@ clean samples on a uniform grid, one revolution of motion, a star connection."""
 from __future__ import annotations
 
 import math
+import shlex
 from collections.abc import Mapping
 from typing import Any
 
@@ -184,21 +185,28 @@ def _clock(seconds: float) -> str:
             if seconds >= 60 else f"{seconds:.3g} s")
 
 
-def _check_time_scale(dt: float, duration: float) -> None:
+def _import_command(source: Any, options: str) -> str:
+    """The command ``emaphm import FILE OPTIONS``, in backquotes, with the file the trace
+    was read from as a shell takes it (``FILE`` where it is not known)."""
+    return f"`emaphm import {shlex.quote(str(source)) if source else 'FILE'} {options}`"
+
+
+def _check_time_scale(dt: float, duration: float, source: Any = None) -> None:
     """Time in s: a step above 0.01 s is milliseconds. A trace longer than 1000 s is a
     long recording in seconds where its step read as ms would be under 1 us; with a step
     of 1-10 ms it may be either, and both readings are said. ``dt`` is the mean step and
-    ``duration`` the span of the time column, in its own unit."""
+    ``duration`` the span of the time column, in its own unit; ``source`` the file it was
+    read from, named in the command the fix gives."""
     if dt > _MAX_TIME_STEP:
         raise TraceError(
             f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, duration "
             f"{duration:.6g} (a trace in seconds has a step <= {_MAX_TIME_STEP} s and lasts <= "
             f"{_MAX_DURATION:g} s); divide t by 1000, or import the export with its time unit: "
-            "`emaphm import FILE --inspect`")
+            f"{_import_command(source, '--inspect')}")
     if duration <= _MAX_DURATION:
         return
-    cut = ("cut the test out of the recording with `emaphm import FILE --map MAP.toml --window "
-           "START:END --out TRACE.parquet`")
+    cut = ("cut the test out of the recording with "
+           + _import_command(source, "--map MAP.toml --window START:END --out TRACE.parquet"))
     if dt < _MIN_TIME_STEP_IF_MS:
         raise TraceError(
             f"the trace lasts {_clock(duration)} ({duration:.6g} s at {1 / dt:.6g} Hz), longer "
@@ -295,8 +303,9 @@ def _check_zero_sum(trace: Trace) -> None:
         )
 
 
-def _check_time_column(trace: Trace, rtol_dt: float) -> None:
-    """``t`` strictly increasing, in seconds and uniform within ``rtol_dt``."""
+def _check_time_column(trace: Trace, rtol_dt: float, source: Any = None) -> None:
+    """``t`` strictly increasing, in seconds and uniform within ``rtol_dt`` (``source``:
+    :func:`_check_time_scale`)."""
     t = trace.t
     steps = np.diff(t)
     bad = steps <= 0
@@ -308,7 +317,7 @@ def _check_time_column(trace: Trace, rtol_dt: float) -> None:
             "samples by time and drop duplicated time stamps"
         )
 
-    _check_time_scale(trace.dt, trace.duration)
+    _check_time_scale(trace.dt, trace.duration, source)
     dt = trace.dt
 
     spread = float((steps.max() - steps.min()) / dt)
@@ -324,7 +333,8 @@ def _check_time_column(trace: Trace, rtol_dt: float) -> None:
 
 
 def validate(
-    trace: Trace, *, min_rotation: float = 2 * np.pi, rtol_dt: float = 1e-3
+    trace: Trace, *, min_rotation: float = 2 * np.pi, rtol_dt: float = 1e-3,
+    source: Any = None,
 ) -> Trace:
     """Check that ``trace`` can be diagnosed; return it unchanged, or raise :class:`TraceError`.
 
@@ -342,6 +352,8 @@ def validate(
     ==============  =====  ==========================================================
     min_rotation    rad    least motor rotation range; one revolution by default
     rtol_dt         1      largest (max step - min step) / mean step
+    source          -      the file the trace was read from, named in the commands the
+                           fixes give (``emaphm import FILE ...`` without it)
     ==============  =====  ==========================================================
     """
     if not isinstance(trace, Trace):
@@ -372,7 +384,7 @@ def validate(
                 "samples (or cut the trace before them)"
             )
 
-    _check_time_column(trace, rtol_dt)
+    _check_time_column(trace, rtol_dt, source)
 
     for k, name in enumerate(("i_a", "i_b", "i_c")):
         column = trace.i_abc[:, k]
