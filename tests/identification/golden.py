@@ -10,7 +10,10 @@ refactor gives the same numbers bit for bit. Re-record it only for a change that
 to change the numbers, and say so in the commit. Changed since: the verdicts of
 gwo/turn-short-5pct/1 and /3 (k and fitness the same), unexplained -> short circuit A,
 when the fault modes' hypotheses came (issue 21: the short's fault resistance searched
-beside k explains the misfit of a 5 % short that GWO's fit left).
+beside k explains the misfit of a 5 % short that GWO's fit left); then /3 back to
+unexplained (k and fitness the same) when, on a data sheet, a hypothesis' refit had to
+name its own mode (bc21c15): its refit from the healthy actuator named the short and no
+demagnetization, and GWO's own fit (friction 2.8x, 12x the noise floor) is a misfit.
 """
 
 from __future__ import annotations
