@@ -1,15 +1,104 @@
-"""The one way emaphm writes an output file: atomically, through an unpredictable
-temporary sibling opened with ``O_EXCL`` (a planted file or symlink of a predictable name
-cannot be followed), then :func:`os.replace`."""
+"""Files named on the command line: the one way emaphm reads them and the one way it writes them.
+
+* :func:`regular_file`: every file argument (a trace, ``--params``, ``--map``, a bench
+  export, ``--tolerances``, ``--spec``, a nameplate, an existing store) is checked to be a
+  regular file, after following its links, before it is opened: a FIFO would block the
+  command forever, a link to ``/dev/zero`` would be read without end, and a link loop is
+  not a missing file;
+* :func:`folder_problem`: whether a file can be created in a folder (tried, as the
+  operating system decides, root included);
+* :func:`atomic_write`: an output file is written atomically, through an unpredictable
+  temporary sibling opened with ``O_EXCL`` (a planted file or symlink of a predictable
+  name cannot be followed), then :func:`os.replace`.
+"""
 
 from __future__ import annotations
 
+import errno
 import os
 import secrets
+import stat
+import tempfile
 from pathlib import Path
 from typing import IO, Callable
 
-__all__ = ["atomic_write", "atomic_write_text"]
+__all__ = ["atomic_write", "atomic_write_text", "regular_file", "file_kind", "folder_problem"]
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+          (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISSOCK, "a socket"))
+
+
+def file_kind(mode: int) -> str:
+    """What an ``st_mode`` is, in words: ``"a regular file"``, ``"a folder"``, ``"a FIFO
+    (named pipe)"``, ``"a character device"``..."""
+    for test, kind in _KINDS:
+        if test(mode):
+            return kind
+    return "a regular file" if stat.S_ISREG(mode) else "not a regular file"
+
+
+def regular_file(path: str | os.PathLike[str], what: str, *, give: str = "a file",
+                 error: type[Exception] = ValueError,
+                 missing: type[Exception] = FileNotFoundError) -> Path:
+    """``path`` as a :class:`~pathlib.Path` if it is, after following its links, a regular
+    file; else ``error`` (``missing`` when nothing is there) with one sentence that names
+    ``what`` (e.g. ``"trace file"``), the path, what it is instead and the fix (``give``,
+    e.g. ``"a TOML file"``).
+
+    Checked before the file is opened: a FIFO blocks the reader until a writer comes, a
+    device such as ``/dev/zero`` never ends, a folder is not a file, and a link loop or a
+    link to nothing is not "missing" to the user who sees the link.
+    """
+    p = Path(path)
+    label = f"{what} {p}" if what else str(p)
+    try:
+        st = os.stat(p)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise error(f"{label} is a symbolic link loop (following its links leads back to "
+                        f"it); point the link at a file or give {give}") from None
+        if exc.errno in (errno.ENOENT, errno.ENOTDIR):
+            if os.path.islink(p):
+                raise missing(f"{label} is a link to {os.readlink(p)}, which does not exist; "
+                              f"give {give}") from None
+            raise missing(f"{label} does not exist") from None
+        if exc.errno == errno.EACCES:
+            raise error(f"{label} cannot be read (permission denied); give {give} you can "
+                        "read") from None
+        if exc.errno == errno.ENAMETOOLONG:
+            raise error(f"{what + ' ' if what else ''}path is too long for this system "
+                        f"({len(str(p))} characters); give {give}") from None
+        raise error(f"{label} cannot be read ({exc.strerror or exc}); give {give}") from None
+    if stat.S_ISREG(st.st_mode):
+        return p
+    kind = file_kind(st.st_mode)
+    if os.path.islink(p):
+        target = os.path.realpath(p)
+        if stat.S_ISDIR(st.st_mode):
+            raise error(f"{label} is a link to {target}, a folder; give {give}")
+        raise error(f"{label} is a link to {target}, {kind}, not a regular file; give {give}")
+    if stat.S_ISDIR(st.st_mode):
+        raise error(f"{label} is a folder; give {give}")
+    raise error(f"{label} is {kind}, not a regular file; give {give}")
+
+
+def folder_problem(folder: str | os.PathLike[str]) -> str | None:
+    """Why no file can be created in ``folder`` (``"it does not exist"``, ``"it is a
+    file"``, ``"Permission denied"``, ``"Read-only file system"``...), or None when one can.
+    Tried with an anonymous temporary file, which leaves nothing behind: the operating
+    system decides, for root as for anyone."""
+    f = Path(folder)
+    if not f.exists():
+        return "it does not exist"
+    if not f.is_dir():
+        return "it is a file, not a folder"
+    try:
+        with tempfile.TemporaryFile(dir=f):
+            pass
+    except OSError as exc:
+        return str(exc.strerror or exc)
+    return None
 
 
 def atomic_write(path: str | os.PathLike[str], write: Callable[[IO[bytes]], None]) -> Path:

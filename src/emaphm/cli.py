@@ -44,15 +44,14 @@ def _load_params(path: str | None):
 
 
 def _trace_file(name: str, min_rotation: float | None = None) -> Any:
-    """Read the trace file ``name`` (a UsageError when it is missing), validated with
-    ``min_rotation`` [rad] (None: the default, one revolution)."""
-    from pathlib import Path
-
+    """Read the trace file ``name`` (a UsageError when it is missing or not a regular
+    file: a folder, a FIFO, a device, a link loop), validated with ``min_rotation`` [rad]
+    (None: the default, one revolution)."""
+    from ._files import regular_file
     from .traces import read_trace
 
-    path = Path(name)
-    if not path.exists():
-        raise UsageError(f"trace file {path} does not exist")
+    path = regular_file(name, "trace file", give="a trace file (.csv or .parquet)",
+                        error=UsageError, missing=UsageError)
     return read_trace(path) if min_rotation is None else read_trace(path, min_rotation=min_rotation)
 
 

@@ -682,14 +682,14 @@ def derive_tuning(motor: Motor, f_pwm: float, J_load: float,
 def read_toml(path: str | os.PathLike[str], what: str,
               error: type[Exception] = ValueError) -> dict[str, Any]:
     """The table of a TOML file; ``error`` naming ``what`` and the path when it cannot be read."""
-    p = Path(path)
+    from ._files import regular_file
+
+    p = regular_file(path, what, give="a TOML file", error=error, missing=error)
     try:
         with p.open("rb") as fh:
             return tomllib.load(fh)
     except FileNotFoundError:
         raise error(f"{what} {p} does not exist") from None
-    except IsADirectoryError:
-        raise error(f"{what} {p} is a folder; give a TOML file") from None
     except tomllib.TOMLDecodeError as exc:
         raise error(f"{what} {p} is not valid TOML: {exc}") from None
     except UnicodeDecodeError:

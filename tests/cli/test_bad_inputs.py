@@ -5,16 +5,26 @@ Every case runs the command in-process (:func:`emaphm.cli.main`) in a folder of 
 and asserts what a user must see: exit status 2, exactly one line on stderr, no
 traceback, the words that name the problem; and that it changed nothing: every file in
 the folder has the same bytes afterwards and no file (a temporary one included) was left.
+A case that could block (a FIFO, a device) runs under an alarm: hanging fails it.
+
+A case about permissions (a read-only file or folder) is ``unprivileged``: as root, for
+whom permissions do not bite, it runs in a child process without the capabilities that
+override them (``CAP_DAC_OVERRIDE``, ``CAP_DAC_READ_SEARCH``), so that it runs as root too;
+as another user it runs in-process like the others.
 """
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import json
 import os
 import random
 import shutil
+import signal
 import stat
+import subprocess
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -114,14 +124,87 @@ def _copy(src: Path, path: Path) -> Path:
     return path
 
 
+def _fifo(path: Path) -> Path:
+    """A named pipe with no writer: opening it for reading blocks until one comes."""
+    os.mkfifo(path)
+    return path
+
+
+def _link(target: str | Path, path: Path) -> Path:
+    os.symlink(target, path)
+    return path
+
+
+def _read_only_file(path: Path) -> Path:
+    path.chmod(stat.S_IRUSR)
+    return path
+
+
+# ----------------------------------------------------------------------------- running
+class Hung(BaseException):
+    """A case ran past its alarm (a BaseException: the CLI's error boundary must not turn
+    it into an exit status)."""
+
+
+def _drop_file_override() -> None:                  # pragma: no cover - in the child
+    """preexec_fn: take the capabilities that override file permissions out of the
+    bounding set, so that the command, even as root, gets them no more after exec."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    for cap in (1, 2):                              # CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH
+        if libc.prctl(24, cap, 0, 0, 0) != 0:       # PR_CAPBSET_DROP
+            os._exit(97)
+
+
+def run_unprivileged(argv: list[str], cwd: Path, timeout: float = 120.0) -> tuple[int, str, str]:
+    """``emaphm ARGV`` in a child process for which file permissions bite, root included
+    (:func:`_drop_file_override`): ``(exit status, stdout, stderr)``; a skip where the
+    platform cannot drop the capabilities."""
+    code = "import sys\nfrom emaphm.cli import main\nsys.exit(main(sys.argv[1:]))"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.run([sys.executable, "-c", code, *argv], cwd=cwd, env=env, text=True,
+                          capture_output=True, timeout=timeout,
+                          preexec_fn=_drop_file_override if IS_ROOT else None)
+    if proc.returncode == 97 and IS_ROOT:
+        pytest.skip("cannot drop CAP_DAC_OVERRIDE here; run the suite as a non-root user")
+    return proc.returncode, proc.stdout, proc.stderr
+
+
+def _run_in_process(argv: list[str], capsys, timeout: int) -> tuple[int, str, str]:
+    def alarm(signum, frame):
+        raise Hung(f"the command ran past {timeout} s (blocked on a FIFO or a device?)")
+
+    previous = signal.signal(signal.SIGALRM, alarm)
+    signal.alarm(timeout)
+    try:
+        rc = main(argv)
+    except SystemExit as exc:                # argparse's own refusals
+        rc = exc.code
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
 # ----------------------------------------------------------------------------- the corpus
-#: name -> (make(folder, base) -> argv, words the message must hold, needs a non-root user)
-CASES: dict[str, tuple[Callable[[Path, Base], list[str]], list[str], bool]] = {}
+@dataclass(frozen=True)
+class Case:
+    """make(folder, base) -> argv; the words the message must hold; whether file
+    permissions must bite (``unprivileged``: a read-only file or folder); the seconds it
+    may take before it counts as hung."""
+
+    make: Callable[[Path, Base], list[str]]
+    words: list[str]
+    unprivileged: bool = False
+    timeout: int = 600
 
 
-def case(name: str, *words: str, not_root: bool = False):
+CASES: dict[str, Case] = {}
+
+
+def case(name: str, *words: str, unprivileged: bool = False, timeout: int = 600):
     def register(make):
-        CASES[name] = (make, list(words), not_root)
+        CASES[name] = Case(make, list(words), unprivileged, timeout)
         return make
     return register
 
@@ -161,13 +244,13 @@ def _(d, b):
 
 
 @case("out-in-a-read-only-folder", "cannot write in the folder", "Permission denied",
-      not_root=True)
+      unprivileged=True)
 def _(d, b):
     ro = _read_only_folder(d / "ro")
     return ["simulate", "--scenario", "nominal", "--model", "monitoring", "--out", str(ro / "x.csv")]
 
 
-@case("plot-in-a-read-only-folder", "--plot: cannot write in the folder", not_root=True)
+@case("plot-in-a-read-only-folder", "--plot: cannot write in the folder", unprivileged=True)
 def _(d, b):
     ro = _read_only_folder(d / "ro")
     return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--plot", str(ro / "p.png")]
@@ -261,7 +344,8 @@ def _(d, b):
     return ["report", str(d / "store.sqlite"), "--out", str(d / "report")]
 
 
-@case("report-out-in-a-read-only-folder", "--out: cannot write in the folder", not_root=True)
+@case("report-out-in-a-read-only-folder", "--out: cannot write in the folder",
+      unprivileged=True)
 def _(d, b):
     ro = _read_only_folder(d / "ro")
     return ["report", str(_copy(b.store, d / "store.sqlite")), "--out", str(ro / "report")]
@@ -585,31 +669,145 @@ def _(d, b):
     return ["diagnose", str(d / "deg.csv")]
 
 
+# issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
+#: the message of a FIFO, of a link to a device and of a link loop
+FIFO = "is a FIFO (named pipe), not a regular file"
+ZERO = "is a link to /dev/zero, a character device, not a regular file"
+LOOP = "is a symbolic link loop"
+
+
+@case("trace-is-a-fifo", "trace file", "t.csv " + FIFO, "give a trace file", timeout=30)
+def _(d, b):
+    return ["diagnose", str(_fifo(d / "t.csv"))]
+
+
+@case("params-is-a-fifo", "parameter file", "p.toml " + FIFO, "give a TOML file", timeout=30)
+def _(d, b):
+    return ["diagnose", str(_copy(b.csv, d / "t.csv")), "--params", str(_fifo(d / "p.toml"))]
+
+
+@case("history-add-trace-is-a-fifo", "t.csv " + FIFO, timeout=30)
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_fifo(d / "t.csv")), "--at", "1",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("history-add-params-is-a-fifo", "p.toml " + FIFO, timeout=30)
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--params", str(_fifo(d / "p.toml")), "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("history-calibrate-trace-is-a-fifo", "t.csv " + FIFO, timeout=30)
+def _(d, b):
+    return ["history", "calibrate", "EMA-1", str(_fifo(d / "t.csv")), "--at", "1",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("calibrate-trace-links-to-dev-zero", "t.csv " + ZERO, timeout=30)
+def _(d, b):
+    return ["calibrate", str(_link("/dev/zero", d / "t.csv")), "--out", str(d / "cal.toml")]
+
+
+@case("trace-links-to-dev-zero", "trace file", "z.parquet " + ZERO, timeout=30)
+def _(d, b):
+    return ["diagnose", str(_link("/dev/zero", d / "z.parquet"))]
+
+
+@case("params-links-to-dev-urandom", "p.toml is a link to /dev/urandom, a character device",
+      timeout=30)
+def _(d, b):
+    return ["simulate", "--scenario", "nominal", "--params", str(_link("/dev/urandom", d / "p.toml")),
+            "--out", str(d / "x.csv")]
+
+
+@case("tolerances-is-a-fifo", "tolerance file", "tol.toml " + FIFO, timeout=30)
+def _(d, b):
+    return ["simulate", "--scenario", "nominal", "--unit-seed", "1", "--tolerances",
+            str(_fifo(d / "tol.toml")), "--out", str(d / "x.csv")]
+
+
+@case("nameplate-links-to-dev-zero", "nameplate", "plate.toml " + ZERO, timeout=30)
+def _(d, b):
+    return ["params", "--datasheet", str(_link("/dev/zero", d / "plate.toml")),
+            "--out", str(d / "p.toml")]
+
+
+@case("import-source-is-a-fifo", "source", "bench.csv " + FIFO, "give the exported file",
+      timeout=30)
+def _(d, b):
+    return _import(d, _fifo(d / "bench.csv"))
+
+
+@case("import-map-is-a-fifo", "channel map", "m.toml " + FIFO, timeout=30)
+def _(d, b):
+    return ["import", str(_bench_csv(b, d / "bench.csv")), "--map", str(_fifo(d / "m.toml")),
+            "--out", str(d / "out.parquet")]
+
+
+@case("campaign-spec-is-a-fifo", "spec file", "spec.toml " + FIFO, timeout=30)
+def _(d, b):
+    return ["campaign", "--spec", str(_fifo(d / "spec.toml")), "--store", str(d / "s.sqlite"),
+            "--dry-run"]
+
+
+@case("trace-is-a-link-loop", "trace file", "t.csv " + LOOP, "point the link at a file")
+def _(d, b):
+    return ["diagnose", str(_link(d / "t.csv", d / "t.csv"))]
+
+
+@case("params-is-a-link-loop", "parameter file", "p.toml " + LOOP)
+def _(d, b):
+    _link(d / "q.toml", d / "p.toml")
+    _link(d / "p.toml", d / "q.toml")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("history-add-trace-is-a-link-loop", "t.csv " + LOOP)
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_link(d / "t.csv", d / "t.csv")), "--at", "1",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("trace-is-a-dangling-link", "t.csv is a link to", "gone.csv, which does not exist")
+def _(d, b):
+    return ["diagnose", str(_link(d / "gone.csv", d / "t.csv"))]
+
+
 # ----------------------------------------------------------------------------- the test
 def _snapshot(folder: Path) -> dict[str, str]:
-    """Every path under ``folder`` with the hash of its bytes (folders: "dir")."""
+    """Every path under ``folder`` with the hash of its bytes (folders: "dir"; a link: its
+    target, never followed; a FIFO or a device: its kind, never read)."""
     out = {}
-    for p in sorted(folder.rglob("*")):
-        rel = str(p.relative_to(folder))
-        out[rel] = "dir" if p.is_dir() else hashlib.sha256(p.read_bytes()).hexdigest()
-    return out
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            p = Path(root) / name
+            rel = str(p.relative_to(folder))
+            mode = os.lstat(p).st_mode
+            if stat.S_ISLNK(mode):
+                out[rel] = f"link to {os.readlink(p)}"
+            elif stat.S_ISDIR(mode):
+                out[rel] = "dir"
+            elif stat.S_ISREG(mode):
+                out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
+            else:
+                out[rel] = f"special {stat.S_IFMT(mode):o}"
+    return dict(sorted(out.items()))
 
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_bad_input_is_one_line_exit_2_and_changes_nothing(name, base, tmp_path, capsys):
-    make, words, not_root = CASES[name]
-    if not_root and IS_ROOT:
-        pytest.skip("root writes into read-only folders; the '-under-a-file' cases cover "
-                    "an unwritable output for root")
+    c = CASES[name]
     folder = tmp_path / "case"
     folder.mkdir()
-    argv = make(folder, base)
+    argv = c.make(folder, base)
+    words = c.words
     before = _snapshot(folder)
-    try:
-        rc = main(argv)
-    except SystemExit as exc:                # argparse's own refusals
-        rc = exc.code
-    out, err = capsys.readouterr()
+    if c.unprivileged:
+        rc, out, err = run_unprivileged(argv, folder, timeout=c.timeout)
+    else:
+        rc, out, err = _run_in_process(argv, capsys, c.timeout)
     assert rc == 2, err
     assert err.endswith("\n") and err.count("\n") == 1, f"not one line on stderr:\n{err}"
     assert err.startswith("emaphm ") and ": error: " in err

@@ -441,7 +441,7 @@ class CampaignSpec:
             path = Path(params)
             if base_dir is not None and not path.is_absolute():
                 path = Path(base_dir) / path
-            if not path.exists():
+            if not path.exists() and not path.is_symlink():    # a link loop: said below
                 raise SpecError(f"params file {path} does not exist")
             try:
                 kw["params"] = load_params(path, partial=True).to_dict()
@@ -454,9 +454,9 @@ class CampaignSpec:
     @classmethod
     def from_toml(cls, path: str | Path) -> "CampaignSpec":
         """Read a spec file (TOML)."""
-        p = Path(path)
-        if not p.exists():
-            raise FileNotFoundError(f"spec file {p} does not exist")
+        from emaphm._files import regular_file
+
+        p = regular_file(path, "spec file", give="a TOML file", error=SpecError)
         try:
             data = tomllib.loads(p.read_text(encoding="utf-8"))
         except tomllib.TOMLDecodeError as exc:

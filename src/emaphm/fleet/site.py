@@ -168,6 +168,8 @@ def _figure_key(data: Any, thresholds: FailureThresholds, seed: int, level: floa
 
 
 def _read_manifest(folder: Path) -> dict:
+    if not (folder / _MANIFEST).is_file():     # a FIFO or a device there would never end
+        return {}
     try:
         data = json.loads((folder / _MANIFEST).read_text(encoding="utf-8"))
     except (OSError, ValueError):

@@ -12,7 +12,7 @@ from typing import IO
 
 import numpy as np
 
-from .._files import atomic_write
+from .._files import atomic_write, regular_file
 from .container import Trace, TraceError
 from .csv_format import _read_csv, _write_csv
 from .parquet_format import _read_parquet, _write_parquet
@@ -73,7 +73,9 @@ def read_trace(
     with the path. Units given in a CSV header (``name [unit]`` or a units row) are
     stored in ``meta["units"]`` and checked by :func:`validate`.
 
-    Files above :data:`~emaphm.traces.limits.MAX_FILE_BYTES` or with more than
+    Only a regular file is read (a folder, a FIFO, a device or a link loop is refused with
+    a :class:`TraceError`; a missing file is a :class:`FileNotFoundError`). Files above
+    :data:`~emaphm.traces.limits.MAX_FILE_BYTES` or with more than
     :data:`~emaphm.traces.limits.MAX_SAMPLES` rows are refused before they are read
     whole. With ``validate``, clock times (a Unix time in ``t``) are shifted to start at 0, and a trace
     shorter than the test profile its metadata names is read; both with a
@@ -81,8 +83,8 @@ def read_trace(
     """
     path = Path(path)
     suffix = _suffix(path, reading=True)
-    if path.is_dir():
-        raise TraceError(f"{path} is a folder; give a trace file (.csv or .parquet)")
+    # a FIFO would block, a link to a device never end: a regular file or a TraceError
+    regular_file(path, "trace file", give="a trace file (.csv or .parquet)", error=TraceError)
     try:
         columns, meta = _read_csv(path) if suffix == ".csv" else _read_parquet(path)
     except (TraceError, FileNotFoundError):

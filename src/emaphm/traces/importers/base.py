@@ -133,10 +133,8 @@ def as_float(x, where: str) -> np.ndarray:
 
 
 def read_path(path: str | Path) -> Path:
-    """``path`` as a Path that is a readable regular file (a TraceError otherwise)."""
-    p = Path(path)
-    if not p.exists():
-        raise FileNotFoundError(2, "No such file", str(p))
-    if p.is_dir():
-        raise TraceError(f"{p} is a folder; give the exported file")
-    return p
+    """``path`` as a Path that is a regular file after its links (a TraceError for a
+    folder, a FIFO, a device or a link loop; a FileNotFoundError when nothing is there)."""
+    from ..._files import regular_file
+
+    return regular_file(path, "source", give="the exported file", error=TraceError)

@@ -13,12 +13,10 @@ __all__ = ["register", "cmd_import"]
 
 
 def _source(name: str) -> Path:
-    path = Path(name)
-    if not path.exists():
-        raise UsageError(f"source {name} does not exist")
-    if path.is_dir():
-        raise UsageError(f"source {name} is a folder; give the exported file")
-    return path
+    from ..._files import regular_file
+
+    return regular_file(name, "source", give="the exported file", error=UsageError,
+                        missing=UsageError)
 
 
 def cmd_import(args: argparse.Namespace) -> int:
