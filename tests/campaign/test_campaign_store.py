@@ -75,10 +75,14 @@ def test_results_round_trip_exactly(tmp_path):
         assert st.spec == spec and st.spec.hash == spec.hash
         assert st.results() == written                 # in run order, bit for bit
         assert st.counts() == {"ok": len(runs), "failed": 0, "total": len(runs)}
-        assert st.meta["schema_version"] == str(SCHEMA_VERSION)
+        assert st.schema_version == SCHEMA_VERSION and "schema_version" not in st.meta
         assert st.meta["emaphm_version"] == __version__
         assert st.integrity_check() == "ok"
-    assert sqlite3.connect(path).execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    conn = sqlite3.connect(path)
+    assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    # one versioning style for both stores: SQLite's user_version, as the health history's
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION
+    conn.close()
 
 
 def test_exactly_once_success_never_overwritten_failure_replaced(tmp_path):
@@ -144,7 +148,7 @@ def test_same_spec_under_another_name_is_accepted(store_path):
 def test_store_of_another_schema_version_is_refused(store_path):
     conn = sqlite3.connect(store_path)
     with conn:
-        conn.execute("UPDATE meta SET value = '999' WHERE key = 'schema_version'")
+        conn.execute("PRAGMA user_version = 999")
         conn.execute("UPDATE meta SET value = '9.9.9' WHERE key = 'emaphm_version'")
     conn.close()
     before = dump(store_path)
@@ -153,6 +157,47 @@ def test_store_of_another_schema_version_is_refused(store_path):
                            match=r"campaign store of schema version 999 written by emaphm 9\.9\.9; "
                                  rf"this emaphm \(.*\) reads schema version {SCHEMA_VERSION}.*it was not changed"):
             CampaignStore.open(store_path, **kw)
+    assert dump(store_path) == before
+
+
+def _version_2_store(path):
+    """``path`` turned into a store as emaphm wrote it at schema version 2: the same tables,
+    its version in ``meta.schema_version`` and ``user_version`` 0."""
+    conn = sqlite3.connect(path)
+    with conn:
+        conn.execute("PRAGMA user_version = 0")
+        conn.execute("INSERT INTO meta (key, value) VALUES ('schema_version', '2')")
+    conn.close()
+
+
+def test_a_version_2_store_is_read_as_it_is_and_migrated_by_a_writing_open(store_path):
+    _version_2_store(store_path)
+    before = store_path.read_bytes()
+    with CampaignStore.open(store_path, readonly=True) as st:      # reading changes nothing
+        assert st.schema_version == 2 and len(st.results()) == 5
+    assert store_path.read_bytes() == before
+    assert not list(store_path.parent.glob("*-wal")) and not list(store_path.parent.glob("*-shm"))
+    with CampaignStore.open(store_path, small_spec()) as st:          # resuming migrates it
+        assert st.schema_version == SCHEMA_VERSION and "schema_version" not in st.meta
+        assert len(st.keys()) == 5
+        st.commit(fake_result(small_spec().runs_list()[6]))
+    conn = sqlite3.connect(store_path)
+    assert conn.execute("PRAGMA user_version").fetchone()[0] == SCHEMA_VERSION
+    assert conn.execute("SELECT count(*) FROM meta WHERE key = 'schema_version'").fetchone()[0] == 0
+    conn.close()
+    with CampaignStore.open(store_path, readonly=True) as st:
+        assert len(st.keys()) == 6
+
+
+def test_a_version_1_store_in_the_meta_table_is_refused_unchanged(store_path):
+    _version_2_store(store_path)
+    conn = sqlite3.connect(store_path)
+    with conn:
+        conn.execute("UPDATE meta SET value = '1' WHERE key = 'schema_version'")
+    conn.close()
+    before = dump(store_path)
+    with pytest.raises(IncompatibleStoreError, match="schema version 1 written by emaphm"):
+        CampaignStore.open(store_path, small_spec())
     assert dump(store_path) == before
 
 

@@ -751,6 +751,16 @@ def _(d, b):
             "--dry-run"]
 
 
+@case("campaign-store-links-to-dev-zero", "s.sqlite " + ZERO, timeout=30)
+def _(d, b):
+    return ["campaign", "--store", str(_link("/dev/zero", d / "s.sqlite")), "--dry-run"]
+
+
+@case("report-of-a-fifo", "store", "s.sqlite " + FIFO, timeout=30)
+def _(d, b):
+    return ["report", str(_fifo(d / "s.sqlite")), "--out", str(d / "report")]
+
+
 @case("trace-is-a-link-loop", "trace file", "t.csv " + LOOP, "point the link at a file")
 def _(d, b):
     return ["diagnose", str(_link(d / "t.csv", d / "t.csv"))]
@@ -773,6 +783,29 @@ def _(d, b):
 @case("trace-is-a-dangling-link", "t.csv is a link to", "gone.csv, which does not exist")
 def _(d, b):
     return ["diagnose", str(_link(d / "gone.csv", d / "t.csv"))]
+
+
+# issue 25 item 3 and 12: stores that cannot be written, and names that are no store ----------
+@case("campaign-in-a-read-only-store", "cannot write the campaign store",
+      "the file is read-only (Permission denied)", unprivileged=True)
+def _(d, b):
+    return ["campaign", "--store", str(_read_only_file(_copy(b.store, d / "store.sqlite"))),
+            "--workers", "0"]
+
+
+@case("campaign-store-in-memory", "--store ':memory:' names SQLite's in-memory database")
+def _(d, b):
+    return ["campaign", "--store", ":memory:", "--dry-run"]
+
+
+@case("campaign-store-empty-name", "--store '' is empty")
+def _(d, b):
+    return ["campaign", "--store", "", "--runs", "1", "--workers", "0"]
+
+
+@case("report-of-an-empty-store-name", "--store '' is empty")
+def _(d, b):
+    return ["report", "", "--out", str(d / "report")]
 
 
 # ----------------------------------------------------------------------------- the test

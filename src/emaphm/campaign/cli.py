@@ -52,6 +52,27 @@ _timeout = arg_type(float, lambda x: 0.0 < x <= 3600.0, "expected seconds, more 
                     "most 3600")
 
 
+def _store_option(text: str) -> str:
+    """``--store`` (or ``report STORE``) as given, unless it names no file: an empty name
+    or ``:memory:`` would keep the runs only until the command ends."""
+    from .._sqlite import store_name_problem
+
+    problem = store_name_problem(text)
+    if problem is not None:
+        raise UsageError(f"--store {text!r} {problem}; give the path of a store file, e.g. "
+                         "--store results.sqlite")
+    return text
+
+
+def _existing_store(text: str, what: str) -> Path:
+    """An existing store named on the command line: a regular file (a UsageError naming
+    what it is instead: missing, a folder, a FIFO, a device, a link loop)."""
+    from .._files import regular_file
+
+    return regular_file(_store_option(text), what, give="the path of a campaign store file",
+                        error=UsageError, missing=UsageError)
+
+
 def build_spec(args: argparse.Namespace) -> Any:
     """The spec of the command line: a TOML file and/or options; None to resume the
     store's own spec (store exists, no spec option given)."""
@@ -87,6 +108,7 @@ def cmd_campaign(args: argparse.Namespace) -> int:
     from .runner import CampaignInterrupted, ProgressLine, replay, run_campaign
     from .store import CampaignStore
 
+    _store_option(args.store)
     if args.replay is not None:
         return _replay(args, replay)
     if args.workers is not None and args.scheduler is not None:
@@ -141,8 +163,9 @@ def cmd_campaign(args: argparse.Namespace) -> int:
 
 
 def _replay(args: argparse.Namespace, replay: Any) -> int:
-    if not Path(args.store).exists():
+    if not Path(args.store).exists() and not Path(args.store).is_symlink():
         raise UsageError(f"--replay needs an existing --store; {args.store} does not exist")
+    _existing_store(args.store, "--store")
     if any(getattr(args, name, None) is not None for name in _SPEC_OPTIONS):
         raise UsageError("--replay takes the spec from the store; leave out the spec options")
     stored, fresh = replay(args.store, args.replay)
@@ -168,8 +191,7 @@ def _brief(r: Any) -> dict[str, Any]:
 def cmd_report(args: argparse.Namespace) -> int:
     from .report import write_report
 
-    if not Path(args.store).exists():
-        raise UsageError(f"store {args.store} does not exist")
+    _existing_store(args.store, "store")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out} exists and is not a folder")

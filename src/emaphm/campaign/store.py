@@ -1,10 +1,15 @@
 """The result store of a campaign: one SQLite file (embedded, no service to run).
 
-Layout (schema version :data:`SCHEMA_VERSION`)::
+Layout (schema version :data:`SCHEMA_VERSION`, in ``PRAGMA user_version`` as the health
+history keeps its own)::
 
-    meta(key PRIMARY KEY, value)   schema_version, emaphm_version (of the creator),
-                                   spec_json, spec_hash, name, created_at
+    meta(key PRIMARY KEY, value)   emaphm_version (of the creator), spec_json, spec_hash,
+                                   name, created_at
     runs(run_key UNIQUE, ...)      one row per finished run (see RunResult)
+
+Version 2 kept its number in ``meta.schema_version`` (``user_version`` 0) with the same
+tables: a writing open moves it to ``user_version`` (one transaction); a read-only open
+reads such a store as it is.
 
 Guarantees
 ----------
@@ -30,14 +35,15 @@ import json
 import os
 import socket
 import sqlite3
-import urllib.parse
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any, Iterator
 
 from emaphm import __version__
-from emaphm._sqlite import enable_wal, journal_files, remove_journal_files
+from emaphm._files import regular_file
+from emaphm._sqlite import (SQLITE_HEADER, connect_readonly, enable_wal, journal_files,
+                            remove_journal_files, store_name_problem, write_problem)
 
 from .spec import CampaignSpec, Run, SpecError
 
@@ -50,10 +56,14 @@ __all__ = [
     "StoreError",
 ]
 
-#: Version of the table layout; a store of another version is refused, untouched.
-SCHEMA_VERSION = 2
+#: Version of the store, in ``PRAGMA user_version``; a store of another version is refused,
+#: untouched. Version 2 (the same tables) kept it in ``meta.schema_version``.
+SCHEMA_VERSION = 3
 
-_SQLITE_HEADER = b"SQLite format 3\x00"
+#: The version kept in the meta table before it moved to ``user_version``.
+_META_VERSION = 2
+
+_SQLITE_HEADER = SQLITE_HEADER
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (
@@ -262,12 +272,15 @@ class CampaignStore:
     """
 
     def __init__(self, path: Path, conn: sqlite3.Connection, meta: dict[str, str],
-                 readonly: bool) -> None:
+                 readonly: bool, created: list[Path] | None = None,
+                 schema_version: int = SCHEMA_VERSION) -> None:
         self.path = path
         self._conn = conn
         self.meta = meta
         self.readonly = readonly
+        self.schema_version = schema_version
         self.spec = CampaignSpec.from_json(meta["spec_json"])
+        self._created = list(created or [])
 
     # ------------------------------------------------------------------ opening
     @classmethod
@@ -280,10 +293,22 @@ class CampaignStore:
         stored spec. ``spec=None`` opens an existing store with its own spec (resume,
         report). ``readonly`` never writes (reports).
         """
+        problem = store_name_problem(path)
+        if problem is not None:
+            raise StoreError(f"--store {os.fspath(path)!r} {problem}; give the path of a store "
+                             "file, e.g. --store results.sqlite")
         p = Path(path)
         if p.is_dir():
             raise StoreError(f"{p} is a folder; give the path of a store file, e.g. {p / 'results.sqlite'}")
+        if os.path.lexists(p):                  # a FIFO, a device or a link loop is no store
+            regular_file(p, "campaign store", give="the path of a store file", error=StoreError)
         exists = p.exists() and p.stat().st_size > 0
+        if exists and not readonly:
+            why = write_problem(p)
+            if why is not None:
+                raise StoreError(f"cannot write the campaign store {p}: {why}; it was not "
+                                 "changed. Make it writable (e.g. chmod u+w) or copy it; `emaphm "
+                                 "report` reads it as it is")
         if exists:
             with open(p, "rb") as fh:
                 header = fh.read(len(_SQLITE_HEADER))
@@ -313,7 +338,10 @@ class CampaignStore:
                 _create(conn, spec)
                 meta = _read_meta(conn, p)
                 assert meta is not None
-            _check_schema(meta, p)
+            version = _check_schema(conn, meta, p)
+            if version == _META_VERSION and not readonly:
+                _migrate_meta_version(conn)
+                version, meta = SCHEMA_VERSION, _read_meta(conn, p) or meta
             try:
                 stored = CampaignSpec.from_json(meta["spec_json"])
             except SpecError as exc:
@@ -333,10 +361,13 @@ class CampaignStore:
             conn.close()
             remove_journal_files(created)       # a refused store is left as it was found
             raise
-        return cls(p, conn, meta, readonly=readonly)
+        return cls(p, conn, meta, readonly=readonly, created=created if readonly else None,
+                   schema_version=version)
 
     def close(self) -> None:
         self._conn.close()
+        remove_journal_files(self._created)     # a read-only open leaves nothing behind
+        self._created = []
 
     def __enter__(self) -> "CampaignStore":
         return self
@@ -450,13 +481,8 @@ class CampaignStore:
 
 
 def _connect(p: Path, readonly: bool) -> sqlite3.Connection:
-    if readonly:
-        uri = f"file:{urllib.parse.quote(str(p.resolve()))}?mode=ro"
-        try:
-            conn = sqlite3.connect(uri, uri=True, timeout=60.0, isolation_level=None)
-            conn.execute("SELECT 1 FROM sqlite_master LIMIT 1").fetchall()
-        except sqlite3.OperationalError:      # WAL files not creatable: fall back, still only reading
-            conn = sqlite3.connect(str(p), timeout=60.0, isolation_level=None)
+    if readonly:                       # mode=ro, immutable where the folder is read-only
+        conn = connect_readonly(p, 60.0)
     else:
         conn = sqlite3.connect(str(p), timeout=60.0, isolation_level=None)
     conn.row_factory = sqlite3.Row
@@ -499,14 +525,34 @@ def _read_meta(conn: sqlite3.Connection, p: Path) -> dict[str, str] | None:
     return {k: v for k, v in conn.execute("SELECT key, value FROM meta")}
 
 
-def _check_schema(meta: dict[str, str], p: Path) -> None:
-    version = meta.get("schema_version")
-    if version != str(SCHEMA_VERSION) or "spec_json" not in meta:
+def _check_schema(conn: sqlite3.Connection, meta: dict[str, str], p: Path) -> int:
+    """The store's schema version (``user_version``; for version 2, ``meta.schema_version``),
+    if this emaphm reads it; else an :class:`IncompatibleStoreError`."""
+    user_version = int(conn.execute("PRAGMA user_version").fetchone()[0])
+    version: Any = user_version if user_version else meta.get("schema_version")
+    if str(version) == str(_META_VERSION) and not user_version and "spec_json" in meta:
+        return _META_VERSION
+    if version != SCHEMA_VERSION or "spec_json" not in meta:
         raise IncompatibleStoreError(
             f"{p} is a campaign store of schema version {version} written by emaphm "
             f"{meta.get('emaphm_version', '?')}; this emaphm ({__version__}) reads schema version "
             f"{SCHEMA_VERSION}. Open it with the emaphm version that wrote it, or start a new "
             "store; it was not changed.")
+    return SCHEMA_VERSION
+
+
+def _migrate_meta_version(conn: sqlite3.Connection) -> None:
+    """A version-2 store to version 3: its number moves from ``meta.schema_version`` to
+    ``user_version`` (the tables are the same), in one transaction."""
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        if int(conn.execute("PRAGMA user_version").fetchone()[0]) == 0:
+            conn.execute("DELETE FROM meta WHERE key = 'schema_version'")
+            conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
 
 
 def _create(conn: sqlite3.Connection, spec: CampaignSpec) -> None:
@@ -515,10 +561,11 @@ def _create(conn: sqlite3.Connection, spec: CampaignSpec) -> None:
     try:
         for stmt in filter(None, (s.strip() for s in _SCHEMA.split(";"))):
             conn.execute(stmt)
-        meta = {"schema_version": str(SCHEMA_VERSION), "emaphm_version": __version__,
-                "spec_json": spec.to_json(), "spec_hash": spec.hash, "name": spec.name,
-                "created_at": _now()}
+        meta = {"emaphm_version": __version__, "spec_json": spec.to_json(),
+                "spec_hash": spec.hash, "name": spec.name, "created_at": _now()}
         conn.executemany("INSERT OR IGNORE INTO meta (key, value) VALUES (?, ?)", meta.items())
+        if int(conn.execute("PRAGMA user_version").fetchone()[0]) == 0:
+            conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
     except BaseException:
         conn.execute("ROLLBACK")
         raise
