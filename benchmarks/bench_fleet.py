@@ -69,7 +69,8 @@ def _parts(db: Path) -> dict:
     from emaphm.fleet.site import FIGURE_DPI
     from emaphm.fleet.status import assess
     from emaphm.prognosis.history import HealthHistory
-    from emaphm.prognosis.plots import _interesting, moved_components, plot_history, plot_prognosis
+    from emaphm.prognosis.plots import (interesting_indicators, moved_components, plot_history,
+                                        plot_prognosis)
     from emaphm.prognosis.thresholds import INDICATOR_COMPONENT
 
     with HealthHistory(db, create=False) as h:
@@ -94,7 +95,7 @@ def _parts(db: Path) -> dict:
             n_prog += 1
             p = s.prognosis
             span = float(p.times[-1] - p.times[0])
-            names = [s.worst] + [n for n in _interesting(p) if n != s.worst
+            names = [s.worst] + [n for n in interesting_indicators(p) if n != s.worst
                                  and not p.predictions[n].no_growth(span)]
             c = time.process_time()
             fig = plot_prognosis(p, indicators=names[:3])

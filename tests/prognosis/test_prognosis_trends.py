@@ -270,7 +270,7 @@ def test_interval_holds_true_rul_from_midlife_and_error_falls(name):
 
 
 def test_the_rul_figure_says_no_growth_and_does_not_stretch_for_it():
-    from emaphm.prognosis.plots import _interesting, plot_prognosis
+    from emaphm.prognosis.plots import interesting_indicators, plot_prognosis
     from emaphm.prognosis.trends import prognose as _prognose
 
     rng = np.random.default_rng(3)
@@ -282,7 +282,8 @@ def test_the_rul_figure_says_no_growth_and_does_not_stretch_for_it():
     span = t[-1] - t[0]
     assert not prog.predictions["friction"].no_growth(span)
     assert prog.predictions["backlash"].no_growth(span)
-    assert "backlash" not in _interesting(prog) and _interesting(prog)[0] == "friction"
+    assert "backlash" not in interesting_indicators(prog)
+    assert interesting_indicators(prog)[0] == "friction"
     fig = plot_prognosis(prog, indicators=["friction", "backlash"])
     grow, flat = fig.axes
     assert flat.get_title() == "backlash: no growth"

@@ -214,7 +214,8 @@ def _assess_and_draw(job: _Job) -> tuple[ActuatorStatus, dict]:
     """One actuator's status, and its figures written into ``job.folder``: name -> (width,
     height) in pixels. Runs in a worker process."""
     from ..plots import save_figure
-    from ..prognosis.plots import _interesting, moved_components, plot_history, plot_prognosis
+    from ..prognosis.plots import (interesting_indicators, moved_components, plot_history,
+                                   plot_prognosis)
     from ..prognosis.thresholds import INDICATOR_COMPONENT
 
     status = assess(job.data, thresholds=job.thresholds, seed=job.seed, level=job.level)
@@ -233,7 +234,7 @@ def _assess_and_draw(job: _Job) -> tuple[ActuatorStatus, dict]:
     prog = status.prognosis
     if prog is not None:                      # the worst, and up to two more that grow
         span = float(prog.times[-1] - prog.times[0])
-        names = [status.worst] + [n for n in _interesting(prog) if n != status.worst
+        names = [status.worst] + [n for n in interesting_indicators(prog) if n != status.worst
                                   and not prog.predictions[n].no_growth(span)]
         fig = plot_prognosis(prog, indicators=names[:3])
         save_figure(fig, Path(job.folder) / prog_name, dpi=FIGURE_DPI)

@@ -19,7 +19,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .history import HistoryData
     from .trends import Prognosis, RULTrack
 
-__all__ = ["plot_history", "plot_prognosis", "plot_alpha_lambda", "ALPHA_LAMBDA_Y_MAX"]
+__all__ = ["plot_history", "plot_prognosis", "plot_alpha_lambda", "ALPHA_LAMBDA_Y_MAX",
+           "interesting_indicators", "moved_components", "component_status", "MOVED_SHARE"]
 
 
 def _figure(width: float, height: float) -> "Figure":
@@ -160,9 +161,10 @@ def component_status(data: "HistoryData") -> np.ndarray:
     return out
 
 
-def _interesting(prog: "Prognosis", n: int = 3) -> list[str]:
-    """The indicators whose threshold is nearest, growing ones only (at least one):
-    finite median first, then most likely."""
+def interesting_indicators(prog: "Prognosis", n: int = 3) -> list[str]:
+    """The ``n`` indicators worth a panel of :func:`plot_prognosis`, whose threshold is
+    nearest: growing ones only (at least one), finite median first, then most likely.
+    The fleet site draws these beside the worst."""
     span = float(prog.times[-1] - prog.times[0])
     preds = list(prog.predictions.values())
     preds.sort(key=lambda p: (p.no_growth(span), not math.isfinite(p.median), p.median,
@@ -183,7 +185,7 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
     """
     from .trends import indicator_series
 
-    names = list(indicators) if indicators is not None else _interesting(prog)
+    names = list(indicators) if indicators is not None else interesting_indicators(prog)
     for n in names:
         if n not in prog.predictions:
             raise ValueError(f"no prediction for indicator {n!r}; have {', '.join(prog.predictions)}")
