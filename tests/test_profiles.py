@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from emaphm.profiles import (PROFILES, Constant, Profile, ProfileError, Ramp, Sine, Step,
-                             Tabulated, Trapezoid, diagnostic, get_profile)
+from emaphm.profiles import (PROFILES, Chirp, Constant, Profile, ProfileError, Ramp, Sine, Step,
+                             Tabulated, Trapezoid, chirp, diagnostic, get_profile, read_profile,
+                             sine)
 
 T_S = 125e-6                     # the default control period
 fine = st.floats(allow_nan=False, allow_infinity=False)
@@ -41,6 +43,44 @@ def test_sine_known_values():
     s = Sine(amplitude=2.0, frequency=5.0, t0=0.1, t1=0.3)
     t = np.array([0.0, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4])
     np.testing.assert_allclose(s(t), [0.0, 0.0, 2.0, 0.0, -2.0, 0.0, 0.0], atol=1e-12)
+
+
+def test_chirp_known_values_and_its_sweep():
+    c = Chirp(amplitude=2.0, f0=1.0, f1=9.0, t0=0.5, t1=1.5)
+    # phase 2 pi (f0 tau + (f1 - f0) tau^2 / (2 T)): the first crest is where
+    # tau + 4 tau^2 = 1/4, tau = (sqrt(5) - 1) / 8, sooner than a quarter period of f0
+    crest = 0.5 + (math.sqrt(5) - 1) / 8
+    np.testing.assert_allclose(c(np.array([0.0, 0.5, crest, 1.5, 2.0])), [0, 0, 2.0, 0, 0],
+                               atol=1e-12)
+    # the instantaneous frequency rises linearly: zero crossings every half period
+    t = np.arange(0.5, 1.5, 1e-6)
+    y = c(t)
+    cross = t[1:][np.sign(y[1:]) != np.sign(y[:-1])]
+    f_inst = 0.5 / np.diff(cross)
+    mid = 0.5 * (cross[1:] + cross[:-1])
+    np.testing.assert_allclose(f_inst, 1.0 + 8.0 * (mid - 0.5), rtol=2e-3)
+
+
+def test_sine_and_chirp_defaults_suit_a_diagnosis():
+    """Like the diagnostic profile: a hold at rest first, more than one revolution of
+    motion, reversals, and speeds and accelerations the preset follows easily."""
+    from emaphm.params import siemens_1fk7060
+
+    m = siemens_1fk7060()
+    J = m.motor.J_m + m.load.J_l
+    for p in (sine(), chirp()):
+        t = p.grid(T_S)
+        y = p.theta_ref(t)
+        assert np.all(y[t < 0.02] == 0.0)                         # at rest first
+        assert np.ptp(y) > 2 * math.pi * 1.2                        # > a revolution
+        v = np.gradient(y, t)
+        reversals = np.count_nonzero(np.diff(np.sign(v[np.abs(v) > 1.0])))
+        assert reversals >= 2
+        assert 0.5 <= p.duration <= 0.7                             # a diagnostic's length
+        a = np.gradient(v, t)[t > 0.03]
+        assert np.max(np.abs(v)) < 150.0                            # rad/s
+        assert J * np.max(np.abs(a)) < 0.5 * m.motor.T_max           # N m of inertia torque
+    assert chirp().command == (Chirp(4.0, 1.0, 5.0, 0.02, 0.62),)
 
 
 def test_tabulated_interpolates_and_holds_the_ends():
@@ -117,7 +157,11 @@ def test_trapezoid_known_cruise():
     (lambda: Profile.from_dict({"duration": 1.0, "command": [{"shape": "Spline"}]}),
      r"unknown profile shape 'Spline'"),
     (lambda: Profile.from_dict({"command": []}), r"cannot rebuild a profile without its duration"),
-    (lambda: get_profile("chirp"), r"unknown profile 'chirp'; choose one of"),
+    (lambda: get_profile("spline"), r"unknown profile 'spline'; choose one of diagnostic, step, "
+                                    r"ramp, sine, chirp, trapezoid, or a CSV file"),
+    (lambda: Chirp(1.0, 0.0, 5.0, 0.0, 1.0), r"Chirp needs f0 > 0 and f1 > 0"),
+    (lambda: Chirp(1.0, 1.0, 5.0, 0.5, 0.5), r"a finite t1 > t0"),
+    (lambda: Chirp(1.0, 1.0, 5.0, 0.0, math.inf), r"Chirp\.t1 must be finite"),
 ])
 def test_profile_errors(build, match):
     with pytest.raises(ProfileError, match=match):
@@ -137,7 +181,8 @@ def test_profile_sums_shapes_and_grid():
 
 @pytest.mark.parametrize("profile", [diagnostic(), diagnostic(load_torque=0.5),
                                      *[f() for f in PROFILES.values()],
-                                     Profile(1.0, (Sine(1.0, 2.0, 0.1, 0.9), Trapezoid(0.0, -2.0, 10.0, 100.0)),
+                                     Profile(1.0, (Sine(1.0, 2.0, 0.1, 0.9), Trapezoid(0.0, -2.0, 10.0, 100.0),
+                                                   Chirp(0.5, 2.0, 1.0, 0.2, 0.8)),
                                              (Constant(0.1),), name="mix", description="all shapes"),
                                      Profile(0.2, (Tabulated((0.0, 0.1, 0.2), (0.0, 1.0, -1.0)),),
                                              (Tabulated((0.0, 0.2), (0.1, 0.3)),), name="tabulated")],
@@ -237,3 +282,107 @@ def test_a_profile_from_data_is_checked_field_by_field(data, match):
 def test_shapes_refuse_what_is_not_a_number():
     with pytest.raises(ProfileError, match=r"^Sine\.amplitude must be a number, got 'abc'$"):
         Sine("abc", 2.0)
+
+
+# --------------------------------------------------------------------------- from a file
+def test_read_profile_replays_a_csv_command(tmp_path):
+    path = tmp_path / "mine.csv"
+    path.write_text("t,theta_ref\n0,0\n0.1,1.0\n0.3,-2.0\n0.4,-2.0\n")
+    p = read_profile(path)
+    assert p.name == "mine" and p.duration == pytest.approx(0.4 + 0.4 / 3)   # a mean step after
+    np.testing.assert_allclose(p.theta_ref(np.array([0.0, 0.05, 0.1, 0.2, 0.4, 0.45])),
+                               [0.0, 0.5, 1.0, -0.5, -2.0, -2.0], atol=1e-12)
+    assert not p.load_torque(np.array([0.1])).any()
+    assert Profile.from_dict(json.loads(json.dumps(p.to_dict()))) == p   # into trace metadata
+
+
+def test_read_profile_takes_the_trace_readers_conventions(tmp_path):
+    """Comments, ';' between fields, names with their unit (converted), other columns
+    ignored, a recording that starts later and elsewhere (replayed from 0, relative)."""
+    path = tmp_path / "bench.csv"
+    path.write_text("# exported by the bench\n# sample rate 10 Hz\n"
+                    "t [ms];i_a [A];theta_ref [deg]\n1000;0.1;90\n1100;0.2;180\n1200;0.3;90\n")
+    p = read_profile(path)
+    np.testing.assert_allclose(p.theta_ref(np.array([0.0, 0.1, 0.2])),
+                               [0.0, math.pi / 2, 0.0], atol=1e-12)
+    units_row = tmp_path / "units.csv"
+    units_row.write_text("t\ttheta_ref\n[s]\t[rev]\n0\t0\n0.5\t1\n")
+    assert read_profile(units_row).theta_ref(np.array([0.5]))[0] == pytest.approx(2 * math.pi)
+
+
+def test_a_trace_file_is_a_profile(tmp_path):
+    from emaphm.traces import write_trace
+
+    tr = simulate_trace()
+    path = write_trace(tr, tmp_path / "recorded.csv")
+    p = read_profile(path)
+    g = p.grid(T_S)
+    assert g.size == tr.n
+    np.testing.assert_allclose(p.theta_ref(g), tr.theta_ref - tr.theta_ref[0], atol=1e-12)
+
+
+def simulate_trace():
+    from emaphm.simulate import simulate
+
+    return simulate(model="monitoring", profile=sine(duration=0.1))
+
+
+@pytest.mark.parametrize("text, match", [
+    ("t,theta_ref\n0,0\n0.2,1\n0.1,2\n", r"time must increase strictly from row to row, but t "
+                                          r"goes from 0\.2 to 0\.1 s at data row 3; sort the rows"),
+    ("t,theta_ref\n0,0\n0.1,1\n0.1,2\n", r"time must increase strictly"),
+    ("t,theta_ref\n0,0\n0.1,\n0.2,2\n", r"column theta_ref holds 1 empty or non-finite value\(s\), "
+                                        r"the first in data row 2"),
+    ("t,theta_ref\n0,0\nnan,1\n", r"column t holds 1 empty or non-finite"),
+    ("t,theta_ref\n0,0\n", r"1 sample\(s\); a profile needs at least two rows"),
+    ("time,position\n0,0\n1,1\n", r"no column t, theta_ref; the header must name t \[s\] and "
+                                    r"theta_ref \[rad\] \(found time, position\)"),
+    ("t [s],theta_ref [A]\n0,0\n1,1\n", r"column theta_ref: 'A' is a unit of current"),
+    ("t,theta_ref\n0,0\n100,1\n", r"lasts 100 s, longer than 60 s \(is t in ms\? divide it by 1000\)"),
+    ("t;theta_ref\n0;0\n0,1;1,5\n", r"decimal comma"),
+    ("t,theta_ref\n0,0\n0.1,abc\n", r"profile file .*bad\.csv"),
+])
+def test_read_profile_refuses_in_one_line(tmp_path, text, match):
+    path = tmp_path / "bad.csv"
+    path.write_text(text)
+    with pytest.raises(ProfileError, match=match) as info:
+        read_profile(path)
+    assert "\n" not in str(info.value) and str(path) in str(info.value)
+
+
+def test_read_profile_refuses_what_is_not_a_csv_file(tmp_path):
+    with pytest.raises(ProfileError, match=r"does not exist"):
+        read_profile(tmp_path / "missing.csv")
+    (tmp_path / "dir.csv").mkdir()
+    with pytest.raises(ProfileError, match=r"is not a file"):
+        read_profile(tmp_path / "dir.csv")
+    with pytest.raises(ProfileError, match=r"expected a \.csv file of columns t, theta_ref"):
+        read_profile(tmp_path / "p.parquet")
+
+
+def test_simulate_takes_a_profile_by_name_or_file(tmp_path, capsys):
+    from emaphm.cli import main
+    from emaphm.traces import read_trace
+
+    out = tmp_path / "chirp.csv"
+    assert main(["simulate", "--scenario", "nominal", "--model", "monitoring", "--profile",
+                 "chirp", "--out", str(out)]) == 0
+    tr = read_trace(out)
+    assert Profile.from_dict(tr.meta["profile"]) == chirp()
+    np.testing.assert_allclose(tr.theta_ref, chirp().theta_ref(tr.t), atol=1e-12)
+    mine = tmp_path / "mine.csv"
+    mine.write_text("t,theta_ref\n0,0\n0.2,8\n0.4,0\n")
+    out2 = tmp_path / "mine-trace.csv"
+    assert main(["simulate", "--scenario", "nominal", "--model", "monitoring", "--profile",
+                 str(mine), "--out", str(out2)]) == 0
+    assert np.max(read_trace(out2, min_rotation=0).theta_ref) == pytest.approx(8.0, abs=0.01)
+    capsys.readouterr()
+    mine.write_text("t,theta_ref\n0,0\n0.2,8\n0.2,0\n")
+    for profile, said in ((str(mine), "--profile: profile file .*time must increase strictly"),
+                          ("spline", "--profile 'spline': give a built-in profile \\(diagnostic, "
+                                     "step, ramp, sine, chirp, trapezoid\\) or a CSV file")):
+        assert main(["simulate", "--scenario", "nominal", "--profile", profile, "--out",
+                     str(tmp_path / "x.csv")]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and re.search(said, err), err
+    assert not (tmp_path / "x.csv").exists()

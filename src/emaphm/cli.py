@@ -104,10 +104,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                           aa_cutoff=args.aa_cutoff or 0.0)
     if sensors.current_noise > 0 and args.seed is None:
         raise UsageError("sensor noise needs --seed S (randomness always flows from an explicit seed)")
+    profile = _profile_option(args.profile)
     t0 = time.perf_counter()
     with compile_notice():
         trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed,
-                         fault_model=fault_model, faults=faults, **unit)
+                         fault_model=fault_model, faults=faults, profile=profile, **unit)
     if args.scenario:
         trace = trace.with_meta(scenario=args.scenario)
     elapsed = time.perf_counter() - t0
@@ -118,7 +119,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         overlay = None
         if not np.allclose(k, scenario("nominal")) and not args.no_overlay:
             overlay = simulate(scenario("nominal"), model=args.model, params=params,
-                               fault_model=fault_model, **unit).with_meta(scenario="nominal")
+                               fault_model=fault_model, profile=profile,
+                               **unit).with_meta(scenario="nominal")
         plot_trace(trace, overlay, path=plot)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
@@ -143,6 +145,23 @@ def _fault_model_option(args: argparse.Namespace) -> str:
     if args.fault_model is not None:
         return check_fault_model(args.fault_model)
     return scenario_fault_model(args.scenario) if args.scenario else "physical"
+
+
+def _profile_option(text: str | None):
+    """--profile NAME | FILE.csv -> a Profile (None: the diagnostic profile)."""
+    from .profiles import PROFILES, ProfileError, get_profile, read_profile
+
+    if text is None:
+        return None
+    if text in PROFILES:
+        return get_profile(text)
+    if not text.lower().endswith(".csv"):
+        raise UsageError(f"--profile {shown(text)}: give a built-in profile ({', '.join(PROFILES)}) "
+                         "or a CSV file of columns t [s], theta_ref [rad]")
+    try:
+        return read_profile(text)
+    except ProfileError as exc:
+        raise UsageError(f"--profile: {exc}") from None
 
 
 _min_rotation = arg_type(float, lambda x: np.isfinite(x) and x >= 0,
@@ -437,6 +456,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--aa-cutoff", type=float, default=None,
                    help="anti-alias low-pass cut-off [Hz] before the ADC (needs --f-sample)")
     s.add_argument("--aa-order", type=int, default=2, help="anti-alias Butterworth order (default 2)")
+    s.add_argument("--profile", metavar="NAME|FILE.csv",
+                   help="the command: a built-in profile (diagnostic, the default; sine, chirp, "
+                        "step, ramp, trapezoid) or a CSV file of columns t [s], theta_ref [rad] "
+                        "(a trace file too), replayed from its first sample")
     _plant_arguments(s)
     s.set_defaults(func=cmd_simulate)
 

@@ -6,7 +6,9 @@ torque ``T_l`` [N m]). Shapes are small frozen dataclasses evaluated on a
 NumPy time grid, so a profile can be stored in trace metadata and rebuilt.
 
 The default :func:`diagnostic` profile is designed so that every fault of the
-vector ``k`` leaves a mark in the phase currents (see its docstring).
+vector ``k`` leaves a mark in the phase currents (see its docstring). The built-in
+profiles (:data:`PROFILES`, :func:`get_profile`) and a user's own command read from a
+CSV file (:func:`read_profile`) are what ``emaphm simulate --profile`` takes.
 """
 
 from __future__ import annotations
@@ -19,8 +21,9 @@ import numpy as np
 
 from ._text import shown
 
-__all__ = ["Step", "Ramp", "Sine", "Trapezoid", "Constant", "Tabulated", "Profile", "ProfileError",
-           "diagnostic", "step", "ramp", "sine", "trapezoid", "PROFILES", "get_profile"]
+__all__ = ["Step", "Ramp", "Sine", "Chirp", "Trapezoid", "Constant", "Tabulated", "Profile",
+           "ProfileError", "diagnostic", "step", "ramp", "sine", "chirp", "trapezoid", "PROFILES",
+           "get_profile", "read_profile"]
 
 
 class ProfileError(ValueError):
@@ -83,6 +86,31 @@ class Sine:
     def __call__(self, t: np.ndarray) -> np.ndarray:
         on = (t >= self.t0) & (t < self.t1)
         return np.where(on, self.amplitude * np.sin(2 * np.pi * self.frequency * (t - self.t0)), 0.0)
+
+
+@dataclass(frozen=True)
+class Chirp:
+    """A linear frequency sweep ``amplitude * sin(2 pi (f0 tau + (f1 - f0) tau^2 / (2 T)))``,
+    ``tau = t - t0``, ``T = t1 - t0``, on ``[t0, t1)``, zero elsewhere: the frequency
+    [Hz] rises (or falls) linearly from ``f0`` at ``t0`` to ``f1`` at ``t1``."""
+
+    amplitude: float
+    f0: float
+    f1: float
+    t0: float
+    t1: float
+
+    def __post_init__(self) -> None:
+        _finite("Chirp", amplitude=self.amplitude, f0=self.f0, f1=self.f1, t0=self.t0, t1=self.t1)
+        if self.f0 <= 0 or self.f1 <= 0 or not self.t1 > self.t0:
+            raise ProfileError("Chirp needs f0 > 0 and f1 > 0 [Hz] and a finite t1 > t0 [s]")
+
+    def __call__(self, t: np.ndarray) -> np.ndarray:
+        tau = t - self.t0
+        rate = (self.f1 - self.f0) / (self.t1 - self.t0)
+        on = (t >= self.t0) & (t < self.t1)
+        return np.where(on, self.amplitude * np.sin(2 * np.pi * (self.f0 * tau + 0.5 * rate * tau ** 2)),
+                        0.0)
 
 
 @dataclass(frozen=True)
@@ -160,8 +188,8 @@ class Tabulated:
         return np.interp(t, self._t, self._v)
 
 
-Shape = Union[Step, Ramp, Sine, Trapezoid, Constant, Tabulated]
-_SHAPES = {c.__name__: c for c in (Step, Ramp, Sine, Trapezoid, Constant, Tabulated)}
+Shape = Union[Step, Ramp, Sine, Chirp, Trapezoid, Constant, Tabulated]
+_SHAPES = {c.__name__: c for c in (Step, Ramp, Sine, Chirp, Trapezoid, Constant, Tabulated)}
 
 
 def _shape_to_dict(s: Shape) -> dict[str, Any]:
@@ -183,7 +211,8 @@ MAX_TABULATED = 10_000_000
 # field -> (unit, largest magnitude, may be +inf); "magnitude" fields take the side's unit
 _FIELDS: dict[str, tuple[str, float, bool]] = {
     "t0": ("s", MAX_TIME_S, False), "t1": ("s", MAX_TIME_S, True),
-    "frequency": ("Hz", MAX_FREQUENCY_HZ, False), "v_max": ("rad/s", MAX_SPEED, False),
+    "frequency": ("Hz", MAX_FREQUENCY_HZ, False), "f0": ("Hz", MAX_FREQUENCY_HZ, False),
+    "f1": ("Hz", MAX_FREQUENCY_HZ, False), "v_max": ("rad/s", MAX_SPEED, False),
     "a_max": ("rad/s^2", MAX_ACCELERATION, False),
 }
 _MAGNITUDES = ("height", "amplitude", "value", "values")
@@ -380,9 +409,35 @@ def ramp(height: float = 2 * math.pi, t0: float = 0.02, t1: float = 0.22,
     return Profile(duration, (Ramp(t0, t1, height),), name="ramp")
 
 
-def sine(amplitude: float = 4.0, frequency: float = 2.0, duration: float = 1.0) -> Profile:
-    """A sinusoidal position command (reversals every half period)."""
-    return Profile(duration, (Sine(amplitude, frequency),), name="sine")
+def sine(amplitude: float = 4.0, frequency: float = 2.0, duration: float = 0.52,
+         t0: float = 0.02) -> Profile:
+    """A sinusoidal position command from ``t0`` on, after a hold at 0 (reversals every
+    half period).
+
+    The defaults fit the diagnosis as the :func:`diagnostic` profile does, on the
+    preset and on actuators like it: one period of 2 Hz in 0.5 s, +-4 rad (8 rad of
+    motion, more than the revolution the eccentricity needs), two reversals (the
+    backlash), a peak speed of 50 rad/s and a peak acceleration of 630 rad/s^2 (under
+    1 N m of inertia torque on the preset, whose motor gives 18 N m).
+    """
+    return Profile(duration, (Sine(amplitude, frequency, t0),), name="sine",
+                   description=f"sine +-{amplitude:g} rad at {frequency:g} Hz from {t0:g} s "
+                               f"({duration:g} s)")
+
+
+def chirp(amplitude: float = 4.0, f0: float = 1.0, f1: float = 5.0, duration: float = 0.62,
+          t0: float = 0.02) -> Profile:
+    """A sinusoidal command whose frequency sweeps linearly from ``f0`` to ``f1`` [Hz]
+    between ``t0`` and the end, after a hold at 0.
+
+    The defaults: +-4 rad from 1 Hz to 5 Hz in 0.6 s (1.8 periods, three reversals, more
+    than a revolution of motion), a peak speed of about 120 rad/s and a peak acceleration
+    of about 3,900 rad/s^2 at the end (6 N m of inertia torque on the preset, a third of
+    its 18 N m): the sweep shows the drive's response at several speeds in one test.
+    """
+    return Profile(duration, (Chirp(amplitude, f0, f1, t0, duration),), name="chirp",
+                   description=f"chirp +-{amplitude:g} rad, {f0:g} to {f1:g} Hz from {t0:g} s "
+                               f"({duration:g} s)")
 
 
 def trapezoid(height: float = 2 * math.pi, v_max: float = 80.0, a_max: float = 4000.0,
@@ -392,7 +447,7 @@ def trapezoid(height: float = 2 * math.pi, v_max: float = 80.0, a_max: float = 4
 
 
 PROFILES = {"diagnostic": diagnostic, "step": step, "ramp": ramp, "sine": sine,
-            "trapezoid": trapezoid}
+            "chirp": chirp, "trapezoid": trapezoid}
 
 
 def get_profile(name: str) -> Profile:
@@ -400,4 +455,91 @@ def get_profile(name: str) -> Profile:
     try:
         return PROFILES[name]()
     except KeyError:
-        raise ProfileError(f"unknown profile {name!r}; choose one of {', '.join(PROFILES)}") from None
+        raise ProfileError(f"unknown profile {name!r}; choose one of {', '.join(PROFILES)}, "
+                           "or a CSV file of t, theta_ref (read_profile)") from None
+
+
+#: Most samples a profile file may hold (a 0.5 s test at 8 kHz is 4,000).
+MAX_PROFILE_SAMPLES = 1_000_000
+#: Longest profile a file may describe [s]: a simulation of the plant takes about as long
+#: as the test; a diagnosis needs one profile of about 0.5 s.
+MAX_PROFILE_DURATION_S = 60.0
+
+
+def read_profile(path: Any) -> Profile:
+    """A position command read from a CSV file: columns ``t`` [s] and ``theta_ref`` [rad]
+    (others are ignored, so a trace file is a profile too), written as the trace reader
+    takes them: ``,`` ``;`` or tab between fields, ``#`` comment lines, names as ``name
+    [unit]`` or a units row. Without a unit they are s and rad; a declared unit of the
+    right quantity is converted (``t [ms]``, ``theta_ref [deg]``, ``[rev]``:
+    :mod:`emaphm.quantities`). The times must be finite and strictly increasing; the
+    command is replayed relative to its first sample (the plant starts at rest at 0) from
+    time 0, linearly interpolated (:class:`Tabulated`). A ProfileError names the file,
+    what is wrong and the fix, in one line."""
+    from pathlib import Path
+
+    from .quantities import QuantityError, measure
+    from .traces import TraceError
+    from .traces.csv_format import collect, csv_blocks, sniff_csv
+
+    p = Path(path)
+    if p.suffix.lower() != ".csv":
+        raise ProfileError(f"profile file {p}: expected a .csv file of columns t, theta_ref "
+                           f"(s, rad), got {p.suffix or 'no suffix'}")
+    if not p.is_file():
+        raise ProfileError(f"profile file {p} does not exist" if not p.exists() else
+                           f"profile file {p} is not a file; give a CSV file of t, theta_ref")
+    try:
+        layout = sniff_csv(p)
+        if layout.decimal == ",":
+            raise ProfileError(f"profile file {p}: the numbers are written with a decimal comma; "
+                               "write them with decimal points")
+        names = list(layout.names)
+        missing = [c for c in ("t", "theta_ref") if c not in names]
+        if missing:
+            raise ProfileError(f"profile file {p}: no column {', '.join(missing)}; the header must "
+                               f"name t [s] and theta_ref [rad] (found {', '.join(names[:8])})")
+        scale = []
+        for c, kind in (("t", "time"), ("theta_ref", "angle")):
+            unit = (layout.units[names.index(c)] or "").strip().strip("[]").strip()
+            scale.append(measure(unit, kind, where=f"profile file {p}: column {c}").factor
+                         if unit not in ("", "-") else 1.0)
+        t, theta = collect(csv_blocks(layout, [names.index("t"), names.index("theta_ref")],
+                                      max_rows=MAX_PROFILE_SAMPLES), 2)
+    except (TraceError, QuantityError) as exc:
+        text = str(exc)
+        text = text[len(f"{p}: "):] if text.startswith(f"{p}: ") else text
+        raise ProfileError(text if text.startswith("profile file") else
+                           f"profile file {p}: {text}") from None
+    return _profile_of_samples(t * scale[0], theta * scale[1], f"profile file {p}", p.stem)
+
+
+def _profile_of_samples(t: np.ndarray, theta: np.ndarray, where: str, name: str) -> Profile:
+    """The checked samples of a profile file as a :class:`Profile` (see :func:`read_profile`)."""
+    if t.size < 2:
+        raise ProfileError(f"{where}: {t.size} sample(s); a profile needs at least two rows of "
+                           "t, theta_ref")
+    for label, x in (("t", t), ("theta_ref", theta)):
+        bad = ~np.isfinite(x)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise ProfileError(f"{where}: column {label} holds {int(bad.sum())} empty or "
+                               f"non-finite value(s), the first in data row {i + 1}; fill them in "
+                               "or remove those rows")
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.argmax(dt <= 0))
+        raise ProfileError(f"{where}: time must increase strictly from row to row, but t goes "
+                           f"from {t[i]:.9g} to {t[i + 1]:.9g} s at data row {i + 2}; sort the "
+                           "rows by time and remove repeated times")
+    span = float(t[-1] - t[0])
+    if span > MAX_PROFILE_DURATION_S:
+        raise ProfileError(f"{where}: the command lasts {span:.6g} s, longer than "
+                           f"{MAX_PROFILE_DURATION_S:g} s (is t in ms? divide it by 1000); a "
+                           "diagnosis needs one test of about 0.5 s")
+    theta = theta - theta[0]
+    peak = float(np.max(np.abs(theta)))
+    if peak > MAX_COMMAND_RAD:
+        raise ProfileError(f"{where}: theta_ref moves {peak:.6g} rad, beyond any actuator test "
+                           f"(at most {MAX_COMMAND_RAD:g} rad); give it in rad")
+    return Profile.from_samples(t, theta, name=name)

@@ -483,3 +483,32 @@ def test_a_backlash_flat_at_the_healthy_k_is_found_from_the_single_fault_starts(
     ident = identify(trace, seed=10119)
     assert ident.restarts >= 1                                # the healthy start was not enough
     assert abs(ident.k[1] - 0.25) < 0.02 and ident.error_pct < 1.0
+
+
+# ----------------------------------------------------------------------------- any profile
+def test_a_friction_fault_on_a_chirp_is_named_from_the_recorded_command():
+    """The identification fits the trace's recorded theta_ref, whatever the profile: a
+    chirp, with its metadata gone (a bench trace says nothing of its profile), on the
+    reference plant with sensor noise, is read as friction and nothing else."""
+    from emaphm.profiles import chirp
+    from emaphm.traces import Trace
+    from emaphm.verdict import examine
+
+    sim = simulate(scenario="friction-high", model="reference", profile=chirp(),
+                   sensors=DEFAULT_SENSORS, seed=4)
+    bench = Trace(sim.t, sim.theta_ref, sim.theta_m, sim.omega_m, sim.i_abc, meta={})
+    exam = examine(bench, seed=0)
+    assert exam.diagnosis.verdict == "faulty"
+    assert [f.mode for f in exam.diagnosis.faults] == ["friction"]
+    assert abs(exam.identification.k[0] - 0.75) < 0.05          # friction-high: k1 = 0.75
+
+
+def test_diagnose_a_trace_simulated_on_the_sine_profile(tmp_path, capsys):
+    from emaphm.cli import main
+
+    out = tmp_path / "sine.csv"
+    assert main(["simulate", "--scenario", "friction-high", "--profile", "sine", "--seed", "5",
+                 "--out", str(out)]) == 0
+    assert main(["diagnose", str(out), "--quiet", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["verdict"] == "faulty" and [f["mode"] for f in d["faults"]] == ["friction"]
