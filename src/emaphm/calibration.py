@@ -42,12 +42,18 @@ monitoring model needs to reproduce the unit's currents.
 
 The result is an :class:`~emaphm.params.ActuatorParams` (the unit's, with a
 ``[calibration]`` section holding the date, the sources, each estimate and
-its standard error) that ``diagnose --params`` and the health history read.
+its standard error) that ``diagnose --params`` and the health history read. The
+section carries its provenance: the emaphm version, a SHA-256 of each source trace's
+signals (:func:`trace_digest`) and a digest of the section and of the parameter values
+the calibration set (:func:`emaphm.params.calibration_digest`), so that a parameter file
+whose calibration was written or edited by hand is told apart when it is read
+(:func:`emaphm.params.load_params` warns).
 """
 
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -58,13 +64,14 @@ import numpy as np
 from .faults import K_NOMINAL
 from .fitness import (MIN_NOISE, aligned_currents, check_diagnosable, effective_samples,
                       eq4_weights, noise_samples, on_model_grid, white_noise_sigma)
-from .params import ActuatorParams, Calibration, CurrentSensors, siemens_1fk7060
+from .params import (ActuatorParams, Calibration, CurrentSensors, calibration_digest,
+                     siemens_1fk7060)
 from .profiles import Profile
 from .traces import Trace, TraceError, validate
 
 __all__ = ["PARAMETERS", "CORRELATION_LIMIT", "MULTIPLE_CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT",
            "CalibrationError", "CalibrationResult", "calibrate", "select_identifiable",
-           "estimates", "apply_deviations"]
+           "estimates", "apply_deviations", "trace_digest"]
 
 #: Calibrated parameters: name -> (lower bound, upper bound, unit) of the deviation.
 PARAMETERS: dict[str, tuple[float, float, str]] = {
@@ -127,6 +134,20 @@ HEALTHY_FIT_LIMIT = 4.0
 
 class CalibrationError(ValueError):
     """The traces cannot calibrate the unit (not healthy, too short, no motion)."""
+
+
+def trace_digest(trace: Trace) -> str:
+    """SHA-256 (hex) of a trace's signals (t, theta_ref, theta_m, omega_m, i_abc) as
+    little-endian float64: the same signals give the same digest whatever file format
+    held them (the recipe of :func:`emaphm.prognosis.history.trace_fingerprint`, with
+    which the health history recognises a trace it has seen)."""
+    h = hashlib.sha256(b"emaphm-trace-v1")
+    for name in ("t", "theta_ref", "theta_m", "omega_m", "i_abc"):
+        a = np.ascontiguousarray(np.asarray(getattr(trace, name), dtype="<f8"))
+        h.update(name.encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 def apply_deviations(params: ActuatorParams, dev: dict[str, float]) -> ActuatorParams:
@@ -468,11 +489,16 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
             "before using it as a reference, or check that the traces are of this unit and "
             "its parameters (--params)")
     est = estimates(names, res.x, sel["cov"])
+    from . import __version__
+
     calib = Calibration(date=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                         sources=tuple(sources),
                         estimates=tuple((n, e["value"], e["se"]) for n, e in est.items()),
-                        fixed=tuple(sel["fixed"]))
-    return CalibrationResult(params=replace(unit, calibration=calib), estimates=est,
+                        fixed=tuple(sel["fixed"]), emaphm_version=__version__,
+                        trace_sha256=tuple(trace_digest(tr) for tr in traces))
+    unit = replace(unit, calibration=calib)
+    unit = replace(unit, calibration=replace(calib, digest=calibration_digest(unit)))
+    return CalibrationResult(params=unit, estimates=est,
                              fixed=tuple(sel["fixed"]), correlated=tuple(sel["pairs"]),
                              weak=tuple(sel["weak"]), fit_ratio=ratios,
                              evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits))

@@ -532,8 +532,10 @@ def build_parser() -> argparse.ArgumentParser:
 @contextlib.contextmanager
 def trace_warnings_as_lines(cmd: str):
     """Inside: a :class:`~emaphm.traces.TraceWarning` (a trace read, but not quite as
-    written) is printed as one line on stderr, ``CMD: warning: ...``; other warnings as
-    Python prints them."""
+    written) or a :class:`~emaphm.params.CalibrationWarning` (a parameter file's
+    calibration not as ``emaphm calibrate`` wrote it) is printed as one line on stderr,
+    ``CMD: warning: ...``; other warnings as Python prints them."""
+    from .params import CalibrationWarning
     from .traces import TraceWarning
 
     with warnings.catch_warnings():
@@ -541,7 +543,7 @@ def trace_warnings_as_lines(cmd: str):
         original = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if issubclass(category, TraceWarning):
+            if issubclass(category, (TraceWarning, CalibrationWarning)):
                 print(f"{cmd}: warning: {one_line(str(message))}", file=sys.stderr)
             else:
                 original(message, category, filename, lineno, file, line)

@@ -88,6 +88,10 @@ __all__ = [
     "Plant",
     "CurrentSensors",
     "Calibration",
+    "CalibrationWarning",
+    "CALIBRATED_FIELDS",
+    "calibration_digest",
+    "check_calibration",
     "ActuatorParams",
     "siemens_1fk7060",
     "back_emf_coefficient",
@@ -162,6 +166,9 @@ _UNITS: dict[str, str] = {
     "sources": "file names",
     "estimates": "[name, value, standard error]",
     "fixed": "names",
+    "emaphm_version": "version of emaphm calibrate",
+    "trace_sha256": "SHA-256 of each source's signals",
+    "digest": "SHA-256 of this block and the calibrated values",
 }
 
 
@@ -434,12 +441,22 @@ class CurrentSensors:
 class Calibration:
     """Where a unit's parameters came from: date, source traces, each estimate with its
     standard error, and the parameters kept at their data-sheet values (not separable on
-    the calibration profile). Written by ``emaphm calibrate``; empty for a data sheet."""
+    the calibration profile). Written by ``emaphm calibrate``; empty for a data sheet.
+
+    Its provenance: ``emaphm_version`` (of the calibration), ``trace_sha256`` (one digest
+    per source: of its signals, :func:`emaphm.calibration.trace_digest`) and ``digest``
+    (:func:`calibration_digest`: of this block and of the parameter values the
+    calibration set, :data:`CALIBRATED_FIELDS`). :func:`load_params` warns
+    (:class:`CalibrationWarning`) when a block lacks it or no longer matches it: written
+    or edited by hand, not by ``emaphm calibrate``."""
 
     date: str = ""
     sources: tuple[str, ...] = ()
     estimates: tuple[tuple[str, float, float], ...] = ()
     fixed: tuple[str, ...] = ()
+    emaphm_version: str = ""
+    trace_sha256: tuple[str, ...] = ()
+    digest: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "date", str(self.date))
@@ -451,6 +468,72 @@ class Calibration:
                                  f"standard error] triples, got {self.estimates!r}") from None
         object.__setattr__(self, "estimates", est)
         object.__setattr__(self, "fixed", tuple(str(x) for x in self.fixed))
+        object.__setattr__(self, "emaphm_version", str(self.emaphm_version))
+        object.__setattr__(self, "trace_sha256", tuple(str(x) for x in self.trace_sha256))
+        object.__setattr__(self, "digest", str(self.digest))
+
+    @property
+    def claimed(self) -> bool:
+        """Whether the block says the unit was calibrated (a date, sources or estimates)."""
+        return bool(self.date or self.sources or self.estimates)
+
+
+class CalibrationWarning(UserWarning):
+    """A parameter file's ``[calibration]`` block that ``emaphm calibrate`` did not write as
+    it stands: without provenance, or edited since (:func:`check_calibration`)."""
+
+
+#: The parameter values a calibration sets (:func:`emaphm.calibration.apply_deviations`),
+#: covered by the block's digest with the block itself.
+CALIBRATED_FIELDS: tuple[tuple[str, str], ...] = (
+    ("motor", "J_m"), ("motor", "c0"), ("motor", "R"), ("motor", "L"), ("motor", "C_m"),
+    ("transmission", "FSJ"), ("transmission", "FDJ"), ("load", "J_l"), ("load", "T_0"),
+    ("sensors", "gain"), ("sensors", "offset"))
+
+
+def calibration_digest(params: "ActuatorParams") -> str:
+    """``"sha256:..."`` of the ``[calibration]`` block of ``params`` (its digest left out)
+    and of the values of :data:`CALIBRATED_FIELDS`, as canonical JSON (every number a
+    float, written exactly): a file read back as written gives the same digest."""
+    import hashlib
+    import json
+
+    c = params.calibration
+    values = {}
+    for sec, name in CALIBRATED_FIELDS:
+        v = getattr(getattr(params, sec), name)
+        values[f"{sec}.{name}"] = [float(x) for x in v] if isinstance(v, tuple) else float(v)
+    content = {"calibration": {"date": c.date, "sources": list(c.sources),
+                               "estimates": [[n, float(v), float(se)] for n, v, se in c.estimates],
+                               "fixed": list(c.fixed), "emaphm_version": c.emaphm_version,
+                               "trace_sha256": list(c.trace_sha256)},
+               "values": values}
+    text = json.dumps(content, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return "sha256:" + hashlib.sha256(text.encode()).hexdigest()
+
+
+def check_calibration(params: "ActuatorParams", source: str = "parameters") -> None:
+    """Warn (:class:`CalibrationWarning`, one line) when the ``[calibration]`` block of
+    ``params`` claims a calibration without its provenance (no digest: written by hand
+    or by an older emaphm), or when its digest does not match the block and the
+    calibrated values (:func:`calibration_digest`: edited after ``emaphm calibrate``
+    wrote them). A data sheet (an empty block) says nothing."""
+    import warnings
+
+    c = params.calibration
+    if not c.claimed and not c.digest:
+        return
+    if not c.digest:
+        warnings.warn(f"{source}: its [calibration] block has no provenance (no digest of what "
+                      "emaphm calibrate wrote): its estimates are taken on trust; run emaphm "
+                      "calibrate on the unit's healthy traces to write them, or remove the block "
+                      "to use the values as a data sheet", CalibrationWarning, stacklevel=3)
+    elif c.digest != calibration_digest(params):
+        warnings.warn(f"{source}: its [calibration] block does not match its digest: the "
+                      "estimates or the calibrated parameters (motor, friction, load, sensors) "
+                      "were edited after emaphm calibrate wrote them; calibrate the unit again, "
+                      "or remove the block to use the values as a data sheet",
+                      CalibrationWarning, stacklevel=3)
 
 
 @dataclass(frozen=True)
@@ -478,7 +561,8 @@ _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
 _OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
 _OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
                     "transmission": {"K_c", "D_c"},
-                    "sensors": {"aa_order", "aa_cutoff", "delay"}}
+                    "sensors": {"aa_order", "aa_cutoff", "delay"},
+                    "calibration": {"emaphm_version", "trace_sha256", "digest"}}
 
 
 @dataclass(frozen=True)
@@ -704,8 +788,10 @@ def load_params(path: str | os.PathLike[str], *, partial: bool = False) -> Actua
     """
     p = Path(path)
     data = read_toml(p, "parameter file", ParameterError)
-    return ActuatorParams.from_dict(data, source=str(p),
-                                    defaults=siemens_1fk7060() if partial else None)
+    params = ActuatorParams.from_dict(data, source=str(p),
+                                      defaults=siemens_1fk7060() if partial else None)
+    check_calibration(params, source=str(p))
+    return params
 
 
 def _with_units(lines: list[str]) -> list[str]:

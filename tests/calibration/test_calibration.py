@@ -167,3 +167,126 @@ def test_an_estimate_the_others_predict_together_is_kept_at_the_data_sheet():
     # the old rule alone (no multiple-correlation limit) estimates the flux, far off
     loose = calibrate(traces, NOMINAL, multiple_limit=1.0)
     assert "flux" in loose.estimates and loose.estimates["flux"]["value"] > 0.1
+
+
+# ----------------------------------------------------------------------------- provenance
+def _file_of(params, tmp_path, name="unit.toml"):
+    from emaphm.params import save_params
+
+    return save_params(params, tmp_path / name)
+
+
+def test_a_calibration_records_its_provenance(twin_result):
+    from emaphm import __version__
+    from emaphm.calibration import trace_digest
+    from emaphm.params import calibration_digest
+
+    cal = twin_result.params.calibration
+    assert cal.emaphm_version == __version__ and cal.date
+    assert cal.trace_sha256 == tuple(trace_digest(t) for t in _unit_traces([1, 2]))
+    assert len(set(cal.trace_sha256)) == 2 and all(len(d) == 64 for d in cal.trace_sha256)
+    assert cal.digest == calibration_digest(twin_result.params) and cal.digest.startswith("sha256:")
+
+
+def test_the_trace_digest_is_the_historys_fingerprint():
+    from emaphm.calibration import trace_digest
+    from emaphm.prognosis.history import trace_fingerprint
+
+    tr = _unit_traces([7])[0]
+    assert trace_digest(tr) == trace_fingerprint(tr)
+
+
+def test_a_calibrate_written_file_loads_silently(twin_result, tmp_path):
+    import warnings
+
+    path = _file_of(twin_result.params, tmp_path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        back = load_params(path)
+        load_params(path, partial=True)
+        load_params(_file_of(NOMINAL, tmp_path, "sheet.toml"))      # a data sheet: nothing
+    assert back.calibration == twin_result.params.calibration
+
+
+def _edited(path, old, new):
+    text = path.read_text()
+    assert text.count(old) == 1, old
+    path.write_text(text.replace(old, new))
+    return path
+
+
+def test_an_edited_estimate_or_calibrated_value_warns_in_one_line(twin_result, tmp_path):
+    import tomllib
+
+    from emaphm.params import CalibrationWarning
+
+    path = _file_of(twin_result.params, tmp_path)
+    data = tomllib.loads(path.read_text())
+    name, value, _ = data["calibration"]["estimates"][0]
+    # an estimate changed by hand
+    est = _edited(_file_of(twin_result.params, tmp_path, "est.toml"), repr(value),
+                  repr(value + 0.1))
+    # a calibrated value changed by hand (the friction)
+    fsj = data["transmission"]["FSJ"]
+    val = _edited(_file_of(twin_result.params, tmp_path, "val.toml"), f"FSJ = {fsj!r}",
+                  f"FSJ = {fsj * 1.5!r}")
+    for p in (est, val):
+        with pytest.warns(CalibrationWarning, match=r"does not match its digest: the estimates or "
+                                                    r"the calibrated parameters .* were edited "
+                                                    r"after emaphm calibrate") as rec:
+            load_params(p)
+        assert len(rec) == 1 and "\n" not in str(rec[0].message) and str(p) in str(rec[0].message)
+    # what the calibration did not set is not its business (the drive's tuning, the name)
+    kp = data["controller"]["Kp"]
+    other = _edited(_file_of(twin_result.params, tmp_path, "other.toml"), f"Kp = {kp!r}",
+                    f"Kp = {kp * 2!r}")
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        load_params(other)
+
+
+def test_a_calibration_block_without_provenance_warns(tmp_path):
+    from emaphm.params import Calibration, CalibrationWarning
+
+    by_hand = replace(NOMINAL, calibration=Calibration(date="2026-01-01", sources=("h1.csv",),
+                                                       estimates=(("J", 0.05, 0.01),)))
+    path = _file_of(by_hand, tmp_path)
+    with pytest.warns(CalibrationWarning, match=r"has no provenance \(no digest of what emaphm "
+                                                r"calibrate wrote\)"):
+        p = load_params(path)
+    assert p.calibration.date == "2026-01-01"        # still read: a warning, not a refusal
+    # a file of an older emaphm, without the provenance fields at all
+    text = "\n".join(ln for ln in path.read_text().splitlines()
+                     if not ln.startswith(("digest", "emaphm_version", "trace_sha256", "# digest",
+                                           "# emaphm_version", "# trace_sha256")))
+    old = tmp_path / "old.toml"
+    old.write_text(text)
+    with pytest.warns(CalibrationWarning, match="no provenance"):
+        load_params(old)
+
+
+def test_the_command_line_says_the_warning_in_one_line(twin_result, tmp_path, capsys):
+    data = twin_result.params.calibration.estimates[0][1]
+    path = _edited(_file_of(twin_result.params, tmp_path), repr(data), repr(data + 0.1))
+    assert main(["simulate", "--scenario", "nominal", "--model", "monitoring", "--params",
+                 str(path), "--out", str(tmp_path / "x.csv")]) == 0
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if "warning" in ln]
+    assert lines == [f"emaphm simulate: warning: {path}: its [calibration] block does not match "
+                     f"its digest: the estimates or the calibrated parameters (motor, friction, "
+                     f"load, sensors) were edited after emaphm calibrate wrote them; calibrate "
+                     f"the unit again, or remove the block to use the values as a data sheet"]
+
+
+def test_the_digest_covers_every_value_a_calibration_sets():
+    """apply_deviations changes only CALIBRATED_FIELDS: a value the calibration sets that
+    the digest missed could be edited unnoticed."""
+    from emaphm.params import CALIBRATED_FIELDS
+
+    moved = apply_deviations(NOMINAL, {n: 0.1 for n in PARAMETERS})
+    a, b = NOMINAL.to_dict(), moved.to_dict()
+    changed = {(sec, k) for sec in a if isinstance(a[sec], dict)
+               for k in a[sec] if a[sec][k] != b[sec][k]}
+    assert changed == set(CALIBRATED_FIELDS)
