@@ -639,6 +639,27 @@ def test_speed_and_position_units(trace, change, match):
         validate(replace(trace, **change(trace)))
 
 
+def test_degrees_under_a_noisy_speed_are_found_by_the_integral():
+    """Positions in degrees beside a speed in rad/s whose noise hides it from the derivative
+    (a tachometer's noise, omega_m vs d theta_m/dt correlated only 0.7, and no speed beyond
+    2000 rad/s): the change of theta_m is 57.3 times the integral of omega_m."""
+    tr = synthetic(noise=0.02)
+    rng = np.random.default_rng(1)
+    noisy = tr.omega_m + rng.normal(0.0, np.std(tr.omega_m), tr.n)
+    degrees = replace(tr, theta_m=np.degrees(tr.theta_m), theta_ref=np.degrees(tr.theta_ref),
+                      omega_m=noisy)
+    assert np.max(np.abs(noisy)) < 2000.0
+    with pytest.raises(TraceError, match=r"^theta_m does not match the integral of omega_m: its "
+                                         r"change is 5\d\.\d+ times .*positions look like degrees: "
+                                         r"multiply theta_m and theta_ref by pi/180"):
+        validate(degrees)
+    validate(replace(tr, omega_m=noisy))                 # the same noise in rad: accepted
+    revs = replace(tr, theta_m=tr.theta_m / (2 * np.pi), theta_ref=tr.theta_ref / (2 * np.pi),
+                   omega_m=noisy)
+    with pytest.raises(TraceError, match=r"theta_m looks like revolutions"):
+        validate(revs, min_rotation=0)
+
+
 def test_speed_check_survives_encoder_quantisation(trace):
     counts = 2 * np.pi / 4096
     quantised = np.round(trace.theta_m / counts) * counts

@@ -145,7 +145,10 @@ def _check_speed_scale(trace: Trace) -> None:
     swd = float(np.dot(omega, d_theta))
     cosine = swd / math.sqrt(sdd * sww)
     if abs(cosine) < _MIN_SPEED_CORRELATION:
-        return  # too noisy (or too little motion) to judge the units
+        # the derivative is too noisy (or the motion too small) to judge the units: the
+        # integral of the speed averages the noise out
+        _check_position_scale(trace)
+        return
     ratio = swd / sdd  # least squares: omega_m ~ ratio * d(theta_m)/dt
     lead = (
         f"omega_m does not match the time derivative of theta_m: the least-squares "
@@ -178,6 +181,41 @@ def _check_speed_scale(trace: Trace) -> None:
             f"{lead}. Check that theta_m and omega_m are both motor-side (not load-side "
             "through the gear ratio), in rad and rad/s, and come from the same run"
         )
+
+
+#: The integral of omega_m and the change of theta_m must be this collinear for
+#: :func:`_check_position_scale` to judge their scales.
+_MIN_INTEGRAL_CORRELATION = 0.99
+
+
+def _check_position_scale(trace: Trace) -> None:
+    """The change of ``theta_m`` against the integral of ``omega_m`` dt, where the derivative
+    of a noisy or coarsely quantised position cannot judge it (:func:`_check_speed_scale`):
+    a least-squares ratio at a known factor is a units error (57.3: positions in degrees
+    with the speed in rad/s). Other ratios are left alone: an integral drifts with a
+    speed sensor's offset."""
+    theta = trace.theta_m - trace.theta_m[0]
+    omega = trace.omega_m
+    integral = np.concatenate(([0.0], np.cumsum(0.5 * (omega[1:] + omega[:-1]) * np.diff(trace.t))))
+    sii, stt = float(np.dot(integral, integral)), float(np.dot(theta, theta))
+    if not (sii > 0.0 and stt > 0.0 and math.isfinite(sii) and math.isfinite(stt)):
+        return
+    sit = float(np.dot(integral, theta))
+    if sit / math.sqrt(sii * stt) < _MIN_INTEGRAL_CORRELATION:
+        return
+    ratio = sit / sii  # theta_m - theta_m[0] ~ ratio * integral of omega_m dt
+    if abs(math.log(ratio)) < math.log1p(_RATIO_TOLERANCE):
+        return
+    lead = (f"theta_m does not match the integral of omega_m: its change is {ratio:.4g} times "
+            "the integral of omega_m dt, expected 1")
+    if abs(math.log(ratio * math.pi / 180)) < math.log1p(_RATIO_TOLERANCE):
+        raise TraceError(f"{lead}; positions look like degrees: multiply theta_m and theta_ref "
+                         "by pi/180 to get rad (or import the export with its units: `emaphm "
+                         "import FILE --inspect`)")
+    hits = [text for factor, text in _SPEED_FACTORS
+            if abs(math.log(ratio * factor)) < math.log1p(_RATIO_TOLERANCE)]
+    if hits:
+        raise TraceError(f"{lead}, a units error; " + "; or ".join(hits))
 
 
 def _clock(seconds: float) -> str:
@@ -343,7 +381,8 @@ def validate(
     seconds (step <= 0.01 s and duration <= 1000 s) and uniform (relative spread of the
     steps <= ``rtol_dt``); currents in A (|i| <= 1000 A); ``omega_m`` consistent with
     the derivative of ``theta_m`` (catches rpm, deg/s, degrees, revolutions and sign
-    errors when there is clear motion) and below 2000 rad/s (degrees and deg/s together); rotation range ``max(theta_m) - min(theta_m) >=
+    errors when there is clear motion; where the speed is too noisy for the
+    derivative, its integral against the change of theta_m catches positions in degrees) and below 2000 rad/s (degrees and deg/s together); rotation range ``max(theta_m) - min(theta_m) >=
     min_rotation`` (rad, 0 disables); phase currents summing to about zero (star
     connection).
 
