@@ -529,7 +529,7 @@ def _(d, b):
     return ["demo-degradation", "--scenario", "w" * 100_000, "--synthetic"]
 
 
-@case("history-without-a-subcommand", "required: {register,calibrate,add,show,list}",
+@case("history-without-a-subcommand", "required: {register,calibrate,add,remove,show,list}",
       "see emaphm history --help")
 def _(d, b):
     return ["history"]
@@ -761,6 +761,17 @@ def _(d, b):
     return ["report", str(_fifo(d / "s.sqlite")), "--out", str(d / "report")]
 
 
+@case("history-db-is-a-fifo", "health history", "h.sqlite " + FIFO, timeout=30)
+def _(d, b):
+    return ["history", "show", "EMA-1", "--db", str(_fifo(d / "h.sqlite"))]
+
+
+@case("history-db-links-to-dev-zero", "h.sqlite " + ZERO, timeout=30)
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--db", str(_link("/dev/zero", d / "h.sqlite"))]
+
+
 @case("trace-is-a-link-loop", "trace file", "t.csv " + LOOP, "point the link at a file")
 def _(d, b):
     return ["diagnose", str(_link(d / "t.csv", d / "t.csv"))]
@@ -780,17 +791,100 @@ def _(d, b):
             "--db", str(_copy(b.history, d / "h.sqlite"))]
 
 
+@case("history-db-is-a-link-loop", "h.sqlite " + LOOP)
+def _(d, b):
+    return ["history", "list", "--db", str(_link(d / "h.sqlite", d / "h.sqlite"))]
+
+
 @case("trace-is-a-dangling-link", "t.csv is a link to", "gone.csv, which does not exist")
 def _(d, b):
     return ["diagnose", str(_link(d / "gone.csv", d / "t.csv"))]
 
 
 # issue 25 item 3 and 12: stores that cannot be written, and names that are no store ----------
+@case("history-add-to-a-read-only-history", "cannot write the health history",
+      "h.sqlite: the file is read-only (Permission denied)", "it was not changed",
+      unprivileged=True)
+def _(d, b):
+    db = _read_only_file(_copy(b.history, d / "h.sqlite"))
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--db", str(db)]
+
+
+@case("history-register-in-a-read-only-history", "cannot write the health history",
+      "the file is read-only (Permission denied)", unprivileged=True)
+def _(d, b):
+    return ["history", "register", "EMA-2",
+            "--db", str(_read_only_file(_copy(b.history, d / "h.sqlite")))]
+
+
+@case("history-add-in-a-read-only-folder", "cannot write the health history",
+      "its folder", "is not writable (Permission denied)", unprivileged=True)
+def _(d, b):
+    ro = d / "ro"
+    ro.mkdir()
+    _copy(b.history, ro / "h.sqlite")
+    ro.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--db", str(ro / "h.sqlite")]
+
+
+@case("history-register-new-in-a-read-only-folder", "cannot create the health history",
+      "cannot write in the folder", "Permission denied", unprivileged=True)
+def _(d, b):
+    return ["history", "register", "EMA-2", "--db", str(_read_only_folder(d / "ro") / "h.sqlite")]
+
+
+@case("fleet-demo-db-in-a-read-only-folder", "--db: cannot write in the folder",
+      "Permission denied", unprivileged=True)
+def _(d, b):
+    return ["fleet", "demo", "--synthetic", "--actuators", "2",
+            "--db", str(_read_only_folder(d / "ro") / "f.sqlite")]
+
+
+@case("fleet-report-out-in-a-read-only-folder", "--out: cannot write in the folder",
+      "Permission denied", unprivileged=True)
+def _(d, b):
+    return ["fleet", "report", "--db", str(_copy(b.history, d / "h.sqlite")),
+            "--out", str(_read_only_folder(d / "ro") / "site")]
+
+
 @case("campaign-in-a-read-only-store", "cannot write the campaign store",
       "the file is read-only (Permission denied)", unprivileged=True)
 def _(d, b):
     return ["campaign", "--store", str(_read_only_file(_copy(b.store, d / "store.sqlite"))),
             "--workers", "0"]
+
+
+@case("history-db-in-memory", "--db ':memory:' names SQLite's in-memory database",
+      "give the path of a health history file")
+def _(d, b):
+    return ["history", "register", "EMA-1", "--db", ":memory:"]
+
+
+@case("history-db-empty-name", "--db '' is empty", "give the path of a health history file")
+def _(d, b):
+    return ["history", "list", "--db", ""]
+
+
+@case("history-add-db-empty-name", "--db '' is empty")
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1", "--db", ""]
+
+
+@case("fleet-demo-db-in-memory", "--db ':memory:' names SQLite's in-memory database")
+def _(d, b):
+    return ["fleet", "demo", "--synthetic", "--db", ":memory:"]
+
+
+@case("fleet-report-db-empty-name", "--db '' is empty")
+def _(d, b):
+    return ["fleet", "report", "--db", "", "--out", str(d / "site")]
+
+
+@case("demo-degradation-db-in-memory", "--db ':memory:' names SQLite's in-memory database")
+def _(d, b):
+    return ["demo-degradation", "--synthetic", "--db", ":memory:"]
 
 
 @case("campaign-store-in-memory", "--store ':memory:' names SQLite's in-memory database")
@@ -806,6 +900,94 @@ def _(d, b):
 @case("report-of-an-empty-store-name", "--store '' is empty")
 def _(d, b):
     return ["report", "", "--out", str(d / "report")]
+
+
+def _empty(path: Path) -> Path:
+    path.write_bytes(b"")
+    return path
+
+
+@case("history-show-of-an-empty-file", "h.sqlite is an empty file, not a health history",
+      "it was not changed")
+def _(d, b):
+    return ["history", "show", "EMA-1", "--db", str(_empty(d / "h.sqlite"))]
+
+
+@case("history-list-of-an-empty-file", "is an empty file, not a health history")
+def _(d, b):
+    return ["history", "list", "--db", str(_empty(d / "h.sqlite"))]
+
+
+@case("prognose-of-an-empty-file", "is an empty file, not a health history")
+def _(d, b):
+    return ["prognose", "EMA-1", "--db", str(_empty(d / "h.sqlite"))]
+
+
+@case("fleet-report-of-an-empty-file", "is an empty file, not a health history")
+def _(d, b):
+    return ["fleet", "report", "--db", str(_empty(d / "h.sqlite")), "--out", str(d / "site")]
+
+
+@case("history-add-to-an-empty-file", "is an empty file, not a health history")
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1",
+            "--db", str(_empty(d / "h.sqlite"))]
+
+
+@case("history-show-of-a-missing-file", "no health history at", "register an actuator first")
+def _(d, b):
+    return ["history", "show", "EMA-1", "--db", str(d / "h.sqlite")]
+
+
+@case("fleet-report-of-a-missing-file", "no health history at")
+def _(d, b):
+    return ["fleet", "report", "--db", str(d / "h.sqlite"), "--out", str(d / "site")]
+
+
+@case("prognose-of-an-empty-sqlite-database", "is an empty SQLite database, not a health "
+                                              "history")
+def _(d, b):
+    import sqlite3
+
+    sqlite3.connect(d / "h.sqlite").execute("PRAGMA user_version = 0").close()
+    con = sqlite3.connect(d / "h.sqlite")
+    con.execute("VACUUM")                          # a valid, table-less SQLite file
+    con.close()
+    return ["prognose", "EMA-1", "--db", str(d / "h.sqlite")]
+
+
+# issue 25 item 4: times a history holds, and taking an inspection back --------------------
+@case("history-add-at-1e308", "inspection time 1e+308 h is beyond the 1e+06 flight hours a "
+                              "history holds")
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1e308",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("history-calibrate-at-1e308", "calibration time 1e+308 h is beyond")
+def _(d, b):
+    return ["history", "calibrate", "EMA-1", str(_copy(b.csv, d / "t.csv")), "--at", "1e308",
+            "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("prognose-at-1e308", "--at 1e+308 h is beyond the 1e+06 flight hours")
+def _(d, b):
+    return ["prognose", "EMA-1", "--at", "1e308", "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("history-remove-what-is-not-there", "EMA-1 has no inspection at 7 h; nothing was removed")
+def _(d, b):
+    return ["history", "remove", "EMA-1", "--at", "7", "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("history-remove-without-saying-which", "one of the arguments --at --id is required")
+def _(d, b):
+    return ["history", "remove", "EMA-1", "--db", str(_copy(b.history, d / "h.sqlite"))]
+
+
+@case("history-remove-at-infinity", "--at: time must be a finite number")
+def _(d, b):
+    return ["history", "remove", "EMA-1", "--at", "inf", "--db", str(_copy(b.history, d / "h.sqlite"))]
 
 
 # ----------------------------------------------------------------------------- the test

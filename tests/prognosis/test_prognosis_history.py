@@ -464,3 +464,233 @@ def test_history_plot_of_the_components_that_moved(tmp_path):
     assert tuple(plot_history(data).get_size_inches()) == pytest.approx((11, 9))
     with pytest.raises(ValueError, match="indices of k in 0..7"):
         plot_history(data, components=[8])
+
+
+# ----------------------------------------------------------------------------- issue 25 items 3, 4, 12
+def _files(folder):
+    """Every file in ``folder`` with the SHA-256 of its bytes (journal files included)."""
+    import hashlib
+
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+def _history(path, times=(10.0, 20.0, 30.0, 40.0)):
+    """A closed history of EMA-R with a growing friction, one inspection per time."""
+    with HealthHistory(path) as h:
+        h.register("EMA-R", description="ro")
+        for i, t in enumerate(times):
+            h.add("EMA-R", t, K1 + [0.05 * i, 0, 0, 0, 0, 0, 0, 0],
+                  diagnosis={"healthy": True, "verdict": "healthy", "faults": []})
+    return path
+
+
+def test_reading_commands_leave_the_history_byte_identical(tmp_path, capsys):
+    folder = tmp_path / "db"
+    folder.mkdir()
+    db = str(_history(folder / "h.sqlite"))
+    before = _files(folder)
+    assert set(before) == {"h.sqlite"}
+    for argv in (["history", "show", "EMA-R", "--plot", str(tmp_path / "h.png")],
+                 ["history", "show", "EMA-R", "--json"], ["history", "list"],
+                 ["prognose", "EMA-R"], ["prognose", "EMA-R", "--json"],
+                 ["fleet", "report", "--out", str(tmp_path / "site"), "--workers", "0",
+                  "--quiet"]):
+        rc, out, err = _run(argv + ["--db", db], capsys)
+        assert rc == 0, (argv, err)
+        assert _files(folder) == before, argv           # no byte changed, no -wal/-shm left
+    with HealthHistory(db, readonly=True) as h:         # and a reading handle cannot write
+        assert h.journal_mode == "wal" and h.data("EMA-R").n == 4
+        with pytest.raises(HistoryError, match="opened read-only"):
+            h.register("EMA-S")
+    assert _files(folder) == before
+
+
+def test_a_read_only_open_refuses_what_is_not_a_history_and_creates_nothing(tmp_path):
+    with pytest.raises(HistoryError, match="no health history at"):
+        HealthHistory(tmp_path / "missing.sqlite", readonly=True)
+    (tmp_path / "empty.sqlite").write_bytes(b"")
+    for kw in ({"readonly": True}, {"create": False}):
+        with pytest.raises(HistoryError, match="is an empty file, not a health history; it was "
+                                               "not changed"):
+            HealthHistory(tmp_path / "empty.sqlite", **kw)
+    with HealthHistory(tmp_path / "empty.sqlite") as h:      # register turns it into one
+        h.register("EMA-1")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["empty.sqlite"]
+    for name in ("", ":memory:"):
+        with pytest.raises(HistoryError, match="give the path of a health history file"):
+            HealthHistory(name)
+
+
+def test_a_version_1_history_is_read_as_it_is(tmp_path):
+    import sqlite3
+
+    old = _history(tmp_path / "old.sqlite")
+    con = sqlite3.connect(old)
+    con.execute("DROP TABLE calibrations")
+    con.execute("PRAGMA user_version = 1")
+    con.commit()
+    con.close()
+    before = _files(tmp_path)
+    with HealthHistory(old, readonly=True) as h:
+        assert h.data("EMA-R").n == 4
+        assert h.calibration("EMA-R") is None and h.calibrations("EMA-R") == []
+    assert _files(tmp_path) == before                   # read, not migrated
+    with HealthHistory(old) as h:                       # a writing open migrates it
+        assert h.calibrations("EMA-R") == []
+    assert sqlite3.connect(old).execute("PRAGMA user_version").fetchone()[0] == hist.SCHEMA_VERSION
+
+
+def test_sqlite_refusing_a_write_is_reported_with_the_file_and_the_permission(tmp_path):
+    """As root no permission bites (the CLI corpus runs that case without the capability
+    that overrides them): here SQLite's own refusal, from a read-only connection."""
+    import sqlite3
+    import urllib.parse
+
+    db = _history(tmp_path / "h.sqlite")
+    with HealthHistory(db) as h:
+        h._con.close()
+        h._con = sqlite3.connect(f"file:{urllib.parse.quote(str(db))}?mode=ro", uri=True,
+                                 isolation_level=None)
+        with pytest.raises(hist.ReadOnlyHistoryError,
+                           match=r"cannot write the health history .*h\.sqlite: attempt to write "
+                                 r"a readonly database; it was not changed\. Make it writable"):
+            h.add("EMA-R", 50.0, K1)
+
+
+def test_a_read_only_file_is_refused_before_any_work(tmp_path, monkeypatch):
+    db = _history(tmp_path / "h.sqlite")
+    monkeypatch.setattr(hist, "write_problem", lambda p: "the file is read-only (Permission denied)")
+    with pytest.raises(hist.ReadOnlyHistoryError, match=r"cannot write the health history .*h\.sqlite: "
+                                                        r"the file is read-only \(Permission denied\)"):
+        HealthHistory(db, create=False)
+    with HealthHistory(db, readonly=True) as h:          # reading it is fine
+        assert h.data("EMA-R").n == 4
+
+
+@pytest.mark.parametrize("unit, ok, bad", [("h", 1e6, 1.0000001e6), ("cycles", 1e9, 2e9)])
+def test_times_are_bounded_by_the_unit(tmp_path, unit, ok, bad):
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-T", time_unit=unit)
+        for t in (bad, 1e308, float("inf")):
+            with pytest.raises(HistoryError, match="beyond|finite number"):
+                h.add("EMA-T", t, K1)
+            with pytest.raises(HistoryError, match="beyond|finite number"):
+                h.calibrate("EMA-T", t, None)
+        assert h.actuator("EMA-T").n_inspections == 0
+        h.add("EMA-T", ok, K1)
+        assert h.data("EMA-T").times.tolist() == [ok]
+    assert hist.MAX_TIME == {"h": 1e6, "cycles": 1e9}
+
+
+def _raw(db, **columns):
+    """An inspection row written as another program (or an older emaphm) could have."""
+    import sqlite3
+
+    row = {"actuator": "EMA-R", "k": "[0.1,0,0,0,0,0,0.5,0.5]", "k_lo": "[0.1,0,0,0,0,0,0.5,0.5]",
+           "k_hi": "[0.1,0,0,0,0,0,0.5,0.5]", "recorded_utc": "2020-01-01T00:00:00", **columns}
+    con = sqlite3.connect(db)
+    con.execute("DROP TRIGGER inspections_time_forward")
+    con.execute(f"INSERT INTO inspections ({', '.join(row)}) VALUES ({', '.join('?' * len(row))})",
+                tuple(row.values()))
+    con.commit()
+    con.close()
+
+
+BAD_RECORDS = {
+    "time 1e308": dict(time=1e308),
+    "time infinite": dict(time=float("inf")),
+    "time as text": dict(time="abc"),
+    "k NaN": dict(time=25.0, k="[NaN,0,0,0,0,0,0.5,0.5]"),
+    "k 1e308": dict(time=25.0, k="[1e308,0,0,0,0,0,0.5,0.5]"),
+    "k of 3": dict(time=25.0, k="[0.1,0,0]"),
+    "k not JSON": dict(time=25.0, k="[0.1,"),
+    "diagnosis a list": dict(time=25.0, diagnosis="[1, 2]"),
+    "faults not objects": dict(time=25.0, diagnosis='{"healthy": false, "faults": ["x"]}'),
+    "extra a string": dict(time=25.0, extra='"x"'),
+}
+
+
+@pytest.mark.parametrize("name", list(BAD_RECORDS))
+def test_any_stored_record_is_left_out_with_one_warning_not_a_crash(tmp_path, capsys, name):
+    db = _history(tmp_path / "h.sqlite")
+    _raw(db, **BAD_RECORDS[name])
+    with HealthHistory(db, readonly=True) as h:
+        data = h.data("EMA-R")
+        assert data.n == 4 and len(data.skipped) == 1 and data.times.tolist() == [10, 20, 30, 40]
+        assert len(h.inspections("EMA-R")) == 4 and h.actuators()[0].n_inspections == 5
+        bad_id = data.skipped[0].id
+    for argv in (["history", "show", "EMA-R", "--plot", str(tmp_path / "h.png")],
+                 ["history", "list"], ["prognose", "EMA-R", "--plot", str(tmp_path / "p.png")],
+                 ["fleet", "report", "--out", str(tmp_path / "site"), "--workers", "0"]):
+        rc, out, err = _run(argv + ["--db", str(db)], capsys)
+        assert rc == 0, (argv, err)
+        assert "Traceback" not in err
+        warnings = [ln for ln in err.splitlines() if ": warning: " in ln]
+        if argv[1] != "list":
+            assert len(warnings) == 1, err
+            assert f"left out 1 stored inspection of EMA-R that cannot be used (id {bad_id} " \
+                   in warnings[0]
+            assert f"emaphm history remove EMA-R --id {bad_id}" in warnings[0]
+    # and it can be taken back
+    rc, out, err = _run(["history", "remove", "EMA-R", "--id", str(bad_id), "--db", str(db)], capsys)
+    assert rc == 0 and out.startswith(f"removed inspection {bad_id} of EMA-R at "), err
+    with HealthHistory(db, readonly=True) as h:
+        assert h.data("EMA-R").skipped == () and h.actuators()[0].n_inspections == 4
+
+
+def test_an_inspection_is_taken_back_by_its_time_or_its_id(tmp_path, capsys):
+    db = _history(tmp_path / "h.sqlite")
+    _raw(db, time=1e308, source="typo.csv")
+    with HealthHistory(db) as h:
+        with pytest.raises(TimeOrderError, match=r"take that inspection back with emaphm history "
+                                                 r"remove EMA-R --at 1e\+308"):
+            h.add("EMA-R", 50.0, K1)
+        before = _snapshot(h)
+        with pytest.raises(HistoryError, match=r"EMA-R has no inspection at 15 h; nothing was "
+                                               r"removed \(its inspections: id 1 at 10, id 2 at 20"):
+            h.remove("EMA-R", at=15.0)
+        with pytest.raises(HistoryError, match="no inspection with id 99"):
+            h.remove("EMA-R", inspection_id=99)
+        with pytest.raises(HistoryError, match="its time .* or its id"):
+            h.remove("EMA-R")
+        with pytest.raises(UnknownActuatorError):
+            h.remove("EMA-X", at=10.0)
+        assert _snapshot(h) == before
+    rc, out, err = _run(["history", "remove", "EMA-R", "--at", "1e308", "--db", str(db)], capsys)
+    assert rc == 0, err
+    assert out == "removed inspection 5 of EMA-R at 1e+308 h, recorded 2020-01-01 00:00:00 UTC " \
+                  "from typo.csv\n"
+    with HealthHistory(db) as h:
+        gone = h.remove("EMA-R", inspection_id=2)
+        assert (gone.id, gone.time, gone.verdict) == (2, 20.0, "healthy")
+        assert h.data("EMA-R").times.tolist() == [10.0, 30.0, 40.0]
+        h.add("EMA-R", 50.0, K1)                          # the record goes on
+    rc, out, _ = _run(["history", "remove", "EMA-R", "--at", "50", "--json", "--db", str(db)], capsys)
+    import json
+
+    assert rc == 0 and json.loads(out)["time"] == 50.0
+
+
+def test_history_add_quiet_prints_the_record_in_one_line(tmp_path, capsys, mm_trace, monkeypatch):
+    """--quiet: no progress and no k table, the record in one line on stdout (as fleet demo
+    and the other commands' --quiet keep only their result line)."""
+    import emaphm.prognosis.workflow as wf
+    from emaphm.prognosis.uncertainty import KInterval
+
+    def fake_inspect(h, actuator, trace, t, **kw):
+        diag = {"healthy": False, "verdict": "faulty", "faults": [{"mode": "friction",
+                                                                   "reading": "k1 0.3"}]}
+        ins = h.add(actuator, t, K1, diagnosis=diag)
+        interval = KInterval(k=K1, lo=K1, hi=K1, method="population", level=0.9, n=1)
+        return ins, type("A", (), {"interval": interval, "evaluations": 7, "elapsed_s": 0.1})()
+
+    monkeypatch.setattr(wf, "inspect", fake_inspect)
+    db = str(_history(tmp_path / "h.sqlite"))
+    trace = str(write_trace(mm_trace, tmp_path / "t.csv"))
+    rc, out, err = _run(["history", "add", "EMA-R", trace, "--at", "50", "--quiet", "--db", db],
+                        capsys)
+    assert rc == 0 and err == ""
+    assert out == "recorded inspection of EMA-R at 50 h: FAULTY (friction)\n"
+    rc, out, _ = _run(["history", "add", "EMA-R", trace + "", "--at", "60", "--db", db], capsys)
+    assert rc == 0 and out.count("\n") > 3 and "friction" in out       # the table without it

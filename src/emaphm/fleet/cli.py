@@ -11,12 +11,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from .._cli_common import UsageError, arg_type, budget_option
+from .._cli_common import UsageError, arg_type, budget_option, writable_folder
 from .._cli_common import seed as _seed
 
 __all__ = ["register"]
@@ -26,19 +27,37 @@ def _usage(msg: str) -> Exception:
     return UsageError(msg)
 
 
-def cmd_report(args: argparse.Namespace) -> int:
-    from ..prognosis.cli import _db, _thresholds
-    from ..prognosis.history import HealthHistory
-    from .site import build_site
-
-    thresholds = _thresholds(args.threshold)
-    if not 0 < args.level < 1:
-        raise _usage(f"--level must be in (0, 1), e.g. 0.9, got {args.level}")
-    out = Path(args.out)
+def _site_folder(text: str) -> Path:
+    """The ``--out`` folder of the site: a folder this process can write in, or one it can
+    create (its nearest existing parent writable); else a :class:`UsageError` before any
+    work is done or announced."""
+    out = Path(text)
+    if not text.strip():
+        raise _usage("--out is empty; give a folder for the site, e.g. --out fleet-site/")
     if out.exists() and not out.is_dir():
         raise _usage(f"--out {out} is a file, not a folder; give a folder for the site")
-    db = _db(args)
-    with HealthHistory(db, create=False) as h:          # bad input fails before any drawing
+    existing = out
+    while not existing.exists():
+        if existing.parent == existing:
+            break
+        existing = existing.parent
+    if existing.exists() and not existing.is_dir():
+        raise _usage(f"--out {out}: {existing} is a file, not a folder; give a folder for the site")
+    writable_folder(existing, "--out")
+    return out
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from ..prognosis.cli import db_path, threshold_option, warn
+    from ..prognosis.history import HealthHistory, skipped_note
+    from .site import build_site
+
+    thresholds = threshold_option(args.threshold)
+    if not 0 < args.level < 1:
+        raise _usage(f"--level must be in (0, 1), e.g. 0.9, got {args.level}")
+    out = _site_folder(args.out)
+    db = db_path(args)
+    with HealthHistory(db, readonly=True) as h:          # bad input fails before any drawing
         for actuator in args.actuator or ():
             h.actuator(actuator)
         n = len(set(args.actuator or ())) or len(h.actuators())
@@ -58,6 +77,13 @@ def cmd_report(args: argparse.Namespace) -> int:
                               progress=lambda text: line.show(text))
         finally:
             line.close()
+    skipped = [s for s in site.statuses if s.data.skipped]
+    if skipped:                                  # one line for the whole fleet
+        first = skipped_note(skipped[0].actuator, skipped[0].data.skipped)
+        others = sum(len(s.data.skipped) for s in skipped[1:])
+        warn("fleet report", first + (f"; and {others} more of {len(skipped) - 1} other "
+                                      "actuator(s) (emaphm history show ID names them)"
+                                      if others else ""))
     if args.json:
         print(json.dumps({"index": str(site.index), "actuators": len(site.statuses),
                           "elapsed_s": site.elapsed_s, "workers": site.workers,
@@ -84,12 +110,15 @@ def cmd_demo(args: argparse.Namespace) -> int:
     if not 1 <= args.actuators <= MAX_ACTUATORS:
         raise _usage(f"--actuators must be 1 to {MAX_ACTUATORS}, got {args.actuators}")
     budget = budget_option(args.budget)
-    db = Path(args.db)
-    if db.exists():
+    from ..prognosis.cli import db_path
+
+    db = db_path(args)
+    if os.path.lexists(db):
         raise _usage(f"--db {db} exists; the fleet demo writes a new health history: give a new "
                      "path or delete that file")
     if not db.parent.exists():
         raise _usage(f"--db {db}: folder {db.parent} does not exist; create it first")
+    writable_folder(db.parent, "--db")
     units = demo_fleet(args.actuators, seed=args.seed)
     n_ins = sum(len(u.times) for u in units)
     quiet = args.quiet or args.json

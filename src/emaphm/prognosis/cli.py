@@ -2,13 +2,15 @@
 
     emaphm history register ID [--unit h|cycles] [--description TEXT]
     emaphm history add ID TRACE --at TIME          diagnose a trace and record it
+    emaphm history remove ID --at TIME | --id N    take a recorded inspection back
     emaphm history show ID [--plot FILE.png]       the inspections as a table (and figure)
     emaphm history list                            the registered actuators
     emaphm prognose ID [--threshold MODE=VALUE ...] [--plot FILE.png]
     emaphm demo-degradation [--scenario NAME] [--synthetic]
 
 The store is ``--db PATH``, else ``$EMAPHM_HISTORY``, else ``emaphm-history.sqlite``
-in the working folder.
+in the working folder (:func:`db_path`). The commands that only read (``history show``,
+``history list``, ``prognose``, and ``fleet report``) open it read-only and change nothing.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ from .._cli_common import (UsageError, actuator_id, arg_type, budget_option,
                            identification_seconds, plot_path, shown, warn_if_long)
 from .._cli_common import seed as _seed
 
-__all__ = ["register"]
+__all__ = ["register", "db_path", "threshold_option", "warn"]
 
 #: Identifications per inspection for the seeds and bootstrap spreads, and inspections of
 #: a degradation demo, at most (each is a whole identification).
@@ -40,10 +42,38 @@ def _usage(msg: str) -> Exception:
     return UsageError(msg)
 
 
-def _db(args: argparse.Namespace) -> Path:
+def db_path(args: argparse.Namespace) -> Path:
+    """The health history a command works on: ``--db``, else ``$EMAPHM_HISTORY`` (when
+    set and not empty), else :data:`~emaphm.prognosis.history.DEFAULT_DB`. An empty
+    ``--db`` or ``:memory:`` is refused (a :class:`UsageError`): what was recorded there
+    would be gone when the command ends. Shared with ``emaphm fleet``."""
+    from .._sqlite import store_name_problem
     from .history import DEFAULT_DB
 
-    return Path(args.db or os.environ.get("EMAPHM_HISTORY") or DEFAULT_DB)
+    if args.db is not None:
+        problem = store_name_problem(args.db)
+        if problem is not None:
+            raise UsageError(f"--db {shown(args.db)} {problem}; give the path of a health "
+                             "history file, e.g. --db fleet.sqlite")
+        return Path(args.db)
+    return Path(os.environ.get("EMAPHM_HISTORY") or DEFAULT_DB)
+
+
+def warn(command: str, text: str | None) -> None:
+    """``text`` as one warning line on stderr (``emaphm COMMAND: warning: ...``), if any."""
+    if text:
+        from .._text import one_line
+
+        print(f"emaphm {command}: warning: {one_line(text, 600)}", file=sys.stderr)
+
+
+def _trace_path(name: str) -> Path:
+    """A trace file argument: a regular file (a :class:`UsageError` naming what it is
+    instead: missing, a folder, a FIFO, a device, a link loop)."""
+    from .._files import regular_file
+
+    return regular_file(name, "trace file", give="a trace file (.csv or .parquet)",
+                        error=UsageError, missing=UsageError)
 
 
 def _plot_path(value: str | None) -> Path | None:
@@ -60,9 +90,10 @@ def _fmt_time(x: float, unit: str) -> str:
 def cmd_register(args: argparse.Namespace) -> int:
     from .history import HealthHistory
 
-    with HealthHistory(_db(args)) as h:
+    db = db_path(args)
+    with HealthHistory(db) as h:
         a = h.register(args.actuator, description=args.description, time_unit=args.unit)
-    print(f"registered {a.id} (time in {a.time_unit}) in {_db(args)}", file=sys.stderr)
+    print(f"registered {a.id} (time in {a.time_unit}) in {db}", file=sys.stderr)
     return 0
 
 
@@ -75,13 +106,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from .history import HealthHistory
 
     base = load_params(args.params, partial=True) if args.params else siemens_1fk7060()
-    with HealthHistory(_db(args), create=False) as h:
-        h.actuator(args.actuator)                     # cheap checks before the fit
-        traces = []
-        for name in args.traces:
-            if not Path(name).exists():
-                raise _usage(f"trace file {name} does not exist")
-            traces.append(read_trace(name))
+    with HealthHistory(db_path(args), create=False) as h:
+        h.check_time(args.actuator, args.at, "calibration time")   # cheap checks before the fit
+        traces = [read_trace(_trace_path(name)) for name in args.traces]
         progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs")
         if not args.quiet:
             warn_if_long("emaphm history calibrate",
@@ -109,7 +136,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_list(args: argparse.Namespace) -> int:
     from .history import HealthHistory
 
-    with HealthHistory(_db(args), create=False) as h:
+    with HealthHistory(db_path(args), readonly=True) as h:
         acts = h.actuators()
     if args.json:
         print(json.dumps([a.to_dict() for a in acts]))
@@ -139,11 +166,9 @@ def cmd_add(args: argparse.Namespace) -> int:
                               header=f"diagnosing {trace_path} for {args.actuator} at {args.at:g} "
                                      f"({args.algorithm.upper()}, seed {args.seed}, spread: "
                                      f"{args.spread})")
-    with HealthHistory(_db(args), create=False) as h:
+    with HealthHistory(db_path(args), create=False) as h:
         h.check_next(args.actuator, args.at)          # cheap checks before reading the trace
-        if not trace_path.exists():
-            raise _usage(f"trace file {trace_path} does not exist")
-        trace = read_trace(trace_path)
+        trace = read_trace(_trace_path(args.trace))
         if not args.quiet:
             if params is None:
                 from ..params import siemens_1fk7060
@@ -173,12 +198,34 @@ def cmd_add(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(ins.to_dict()))
         return 0
-    print(a.interval.table())
     verdict = "HEALTHY" if ins.healthy else "FAULTY"
+    faults = (ins.diagnosis or {}).get("faults", [])
+    if args.quiet:                                # the record in one line, as fleet demo's
+        modes = sorted({str(f.get("mode")) for f in faults})
+        print(f"recorded inspection of {args.actuator} at {ins.time:g} {unit}: {verdict}"
+              + (f" ({', '.join(modes)})" if modes else ""))
+        return 0
+    print(a.interval.table())
     print(f"\nrecorded inspection of {args.actuator} at {ins.time:g} {unit}: {verdict}"
           f" ({a.evaluations} evaluations, {a.elapsed_s:.1f} s)")
-    for f in (ins.diagnosis or {}).get("faults", []):
+    for f in faults:
         print(f"  - {f['mode']}: {f['reading']}")
+    return 0
+
+
+def cmd_remove(args: argparse.Namespace) -> int:
+    from .history import HealthHistory
+
+    with HealthHistory(db_path(args), create=False) as h:
+        gone = h.remove(args.actuator, at=args.at, inspection_id=args.id)
+        unit = h.actuator(args.actuator).time_unit
+    if args.json:
+        print(json.dumps(gone.to_dict()))
+        return 0
+    print(f"removed inspection {gone.id} of {gone.actuator} at {gone.time:g} {unit}"
+          + (f" ({gone.verdict})" if gone.verdict else "")
+          + (f", recorded {gone.recorded_utc[:19].replace('T', ' ')} UTC" if gone.recorded_utc else "")
+          + (f" from {gone.source}" if gone.source else ""))
     return 0
 
 
@@ -204,11 +251,13 @@ def cmd_show(args: argparse.Namespace) -> int:
     from .plots import plot_history
 
     plot = _plot_path(args.plot)
-    with HealthHistory(_db(args), create=False) as h:
+    with HealthHistory(db_path(args), readonly=True) as h:
         data = h.data(args.actuator)
+    warn("history show", data.skipped_note())
     if args.json:
         print(json.dumps({"actuator": data.actuator.to_dict(),
-                          "inspections": [i.to_dict() for i in data.inspections]}))
+                          "inspections": [i.to_dict() for i in data.inspections],
+                          "skipped": [x.to_dict() for x in data.skipped]}))
     else:
         a = data.actuator
         print(f"{a.id}{' (' + a.description + ')' if a.description else ''}: "
@@ -222,7 +271,9 @@ def cmd_show(args: argparse.Namespace) -> int:
 
 
 # ----------------------------------------------------------------------------- prognose
-def _thresholds(items: list[str] | None):
+def threshold_option(items: list[str] | None):
+    """The failure thresholds of the repeatable ``--threshold MODE=VALUE`` option (the
+    defaults when none), or a :class:`UsageError`. Shared with ``emaphm fleet report``."""
     from .thresholds import DEFAULT_FAILURE_THRESHOLDS, parse_threshold
 
     if not items:
@@ -274,11 +325,14 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     from .trends import MIN_INSPECTIONS, prognose
 
     plot = _plot_path(args.plot)
-    thresholds = _thresholds(args.threshold)
+    thresholds = threshold_option(args.threshold)
     if not 0 < args.level < 1:
         raise _usage(f"--level must be in (0, 1), e.g. 0.9, got {args.level}")
-    with HealthHistory(_db(args), create=False) as h:
+    with HealthHistory(db_path(args), readonly=True) as h:
         data = h.data(args.actuator)
+        if args.at is not None:
+            h.check_time(args.actuator, args.at, "--at")
+    warn("prognose", data.skipped_note())
     if data.n < MIN_INSPECTIONS:
         raise _usage(f"{args.actuator} has {data.n} inspection(s); a trend needs at least "
                      f"{MIN_INSPECTIONS}: record more with emaphm history add")
@@ -307,6 +361,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
                          f"{', '.join(DEGRADATION_SCENARIOS)} or all")
     if args.inspections < 3:
         raise _usage("--inspections must be at least 3 (a trend needs three points)")
+    if args.db is not None:
+        db_path(args)                        # an empty name or :memory: is refused
     plot_dir = Path(args.plot_dir) if args.plot_dir else None
     if plot_dir is not None:                 # created where missing, as report --out is
         if plot_dir.exists() and not plot_dir.is_dir():
@@ -336,6 +392,11 @@ def cmd_demo(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------- wiring
 _time = arg_type(float, lambda t: math.isfinite(t) and t >= 0,
                  "time must be a finite number >= 0 (flight hours or cycles)")
+#: ``history remove --at``: any finite time, so that a record stored beyond the range a
+#: history holds (an older version took --at 1e308) can be named and taken back.
+_any_time = arg_type(float, math.isfinite, "time must be a finite number, e.g. 1250")
+_inspection_id = arg_type(int, lambda n: n >= 1, "expected an inspection id, an integer >= 1 "
+                          "(emaphm history show ID --json lists them)")
 _spread_runs = arg_type(int, lambda n: 2 <= n <= MAX_SPREAD_RUNS,
                         f"expected an integer from 2 to {MAX_SPREAD_RUNS} (identifications of "
                         "one inspection)")
@@ -353,19 +414,23 @@ def _db_arg(p: argparse.ArgumentParser) -> None:
 
 def register(subparsers: Any) -> None:
     """Add ``history``, ``prognose`` and ``demo-degradation`` to the ``emaphm`` parser."""
-    from .simulator import DEGRADATION_SCENARIOS
-    from .thresholds import INDICATORS
-    from .choices import SELECTION_RULES, SPREAD_METHODS
+    _register_history(subparsers)
+    _register_prognose(subparsers)
+    _register_demo(subparsers)
 
-    hp = subparsers.add_parser("history", help="health history of actuators: register, add, show")
+
+def _register_history(subparsers: Any) -> None:
+    hp = subparsers.add_parser("history", help="health history of actuators: register, add, "
+                                               "remove, show")
     hs = hp.add_subparsers(dest="history_command", required=True,
-                           metavar="{register,calibrate,add,show,list}")
+                           metavar="{register,calibrate,add,remove,show,list}")
 
     r = hs.add_parser("register", help="register an actuator before its first inspection")
     r.add_argument("actuator", type=actuator_id, help="actuator id, e.g. EMA-0042")
     r.add_argument("--description", default="", help="free text, e.g. 'left aileron, A320 MSN 1234'")
     r.add_argument("--unit", choices=("h", "cycles"), default="h",
-                   help="time unit of its inspections: flight hours (default) or cycles")
+                   help="time unit of its inspections: flight hours (default, 0 to 1e6) or "
+                        "cycles (0 to 1e9)")
     _db_arg(r)
     r.set_defaults(func=cmd_register)
 
@@ -382,11 +447,42 @@ def register(subparsers: Any) -> None:
     _db_arg(c)
     c.set_defaults(func=cmd_calibrate)
 
+    _register_add(hs)
+
+    rm = hs.add_parser("remove", help="take a recorded inspection back (a wrong time, a wrong trace)",
+                       description="Remove one inspection of an actuator, named by its time or "
+                                   "its id (emaphm history show --json lists both), and print "
+                                   "what was removed.")
+    rm.add_argument("actuator", type=actuator_id)
+    which = rm.add_mutually_exclusive_group(required=True)
+    which.add_argument("--at", type=_any_time, help="the time of the inspection to remove")
+    which.add_argument("--id", type=_inspection_id, help="the id of the inspection to remove")
+    rm.add_argument("--json", action="store_true")
+    _db_arg(rm)
+    rm.set_defaults(func=cmd_remove)
+
+    s = hs.add_parser("show", help="the inspections of an actuator (table, optional figure)")
+    s.add_argument("actuator", type=actuator_id)
+    s.add_argument("--plot", help="write each k component over time (.png/.svg/.pdf)")
+    s.add_argument("--json", action="store_true")
+    _db_arg(s)
+    s.set_defaults(func=cmd_show)
+
+    ls = hs.add_parser("list", help="the registered actuators")
+    ls.add_argument("--json", action="store_true")
+    _db_arg(ls)
+    ls.set_defaults(func=cmd_list)
+
+
+def _register_add(hs: Any) -> None:
+    from .choices import SPREAD_METHODS
+
     a = hs.add_parser("add", help="diagnose a trace and record it as an inspection")
     a.add_argument("actuator", type=actuator_id)
     a.add_argument("trace", help="trace file (.csv or .parquet)")
     a.add_argument("--at", type=_time, required=True,
-                   help="time of the inspection (flight hours or cycles), after the last one")
+                   help="time of the inspection (flight hours, 0 to 1e6, or cycles, 0 to 1e9), "
+                        "after the last one")
     a.add_argument("--algorithm", default="lsq", choices=("lsq", "pso", "de", "gwo", "scipy-de", "cmaes"),
                    help="lsq (default: least squares, warm-started from the last inspection), "
                         "the paper's pso, de, gwo, or the baselines")
@@ -402,21 +498,15 @@ def register(subparsers: Any) -> None:
     a.add_argument("--params", help="actuator parameters TOML (default: the actuator's latest "
                                     "calibration at that time, else the preset)")
     a.add_argument("--json", action="store_true")
-    a.add_argument("--quiet", action="store_true")
+    a.add_argument("--quiet", action="store_true",
+                   help="no progress and no table: the record in one line")
     _db_arg(a)
     a.set_defaults(func=cmd_add)
 
-    s = hs.add_parser("show", help="the inspections of an actuator (table, optional figure)")
-    s.add_argument("actuator", type=actuator_id)
-    s.add_argument("--plot", help="write each k component over time (.png/.svg/.pdf)")
-    s.add_argument("--json", action="store_true")
-    _db_arg(s)
-    s.set_defaults(func=cmd_show)
 
-    ls = hs.add_parser("list", help="the registered actuators")
-    ls.add_argument("--json", action="store_true")
-    _db_arg(ls)
-    ls.set_defaults(func=cmd_list)
+def _register_prognose(subparsers: Any) -> None:
+    from .choices import SELECTION_RULES
+    from .thresholds import INDICATORS
 
     p = subparsers.add_parser("prognose", help="fault trends and remaining useful life of an actuator")
     p.add_argument("actuator", type=actuator_id)
@@ -435,6 +525,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("--json", action="store_true")
     _db_arg(p)
     p.set_defaults(func=cmd_prognose)
+
+
+def _register_demo(subparsers: Any) -> None:
+    from .simulator import DEGRADATION_SCENARIOS
 
     d = subparsers.add_parser("demo-degradation",
                               help="simulate a growing fault, diagnose, record and predict, end to end")

@@ -19,7 +19,16 @@ Durability and integrity:
 
 Errors are :class:`HistoryError` (a ``ValueError``) with a message that says
 what to do: an unknown actuator (register it first: ``emaphm history register
-ID``), a time that does not move forward, a trace already recorded.
+ID``), a time that does not move forward or lies outside :data:`MAX_TIME`, a trace
+already recorded, a store that cannot be written (a read-only file or folder).
+
+Reading: ``readonly=True`` opens the file with SQLite's ``mode=ro`` and changes nothing
+(no byte of the file, no journal file left behind), also on a read-only file or in a
+read-only folder; :meth:`HealthHistory.data` gives the analyses (trends, figures, the
+fleet site) only the inspections they can use and names the others
+(:class:`SkippedInspection`): a record written by an older version with a time such as
+1e308, a non-finite k or a malformed field is skipped, not a crash, and can be taken back
+with :meth:`HealthHistory.remove`.
 
 Schema (``PRAGMA user_version = 2``; a version-1 store gains the calibrations table
 when opened)::
@@ -52,16 +61,28 @@ from typing import Any, Iterator, Sequence
 
 import numpy as np
 
-from .._sqlite import enable_wal, journal_files, remove_journal_files
+from .._files import folder_problem, regular_file
+from .._sqlite import (SQLITE_HEADER, connect_readonly, enable_wal, journal_files,
+                       remove_journal_files, store_name_problem, write_problem)
 from .._text import shown
 from ..faults import as_k
 
-__all__ = ["SCHEMA_VERSION", "TIME_UNITS", "HistoryError", "UnknownActuatorError",
-           "TimeOrderError", "DuplicateInspectionError", "Actuator", "Inspection", "HistoryData",
+__all__ = ["SCHEMA_VERSION", "TIME_UNITS", "MAX_TIME", "HistoryError", "UnknownActuatorError",
+           "TimeOrderError", "DuplicateInspectionError", "ReadOnlyHistoryError", "Actuator",
+           "Inspection", "HistoryData", "SkippedInspection", "RemovedInspection",
            "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB"]
 
 SCHEMA_VERSION = 2
 TIME_UNITS = ("h", "cycles")
+
+#: Latest time a history holds, per time unit (times start at 0, entry into service).
+#: 1e6 flight hours is 114 years without a stop, ten times the longest airframe design
+#: life (about 1e5 h); 1e9 cycles is one cycle a second for 30 years, above any
+#: actuator's rated cycle life. A time beyond it is a typing error (1e308), and every
+#: time within it keeps the trends' arithmetic well inside double precision.
+MAX_TIME = {"h": 1e6, "cycles": 1e9}
+
+_UNIT_WORDS = {"h": "flight hours", "cycles": "cycles"}
 
 #: Database used by the CLI when neither ``--db`` nor ``$EMAPHM_HISTORY`` names one.
 DEFAULT_DB = "emaphm-history.sqlite"
@@ -141,6 +162,15 @@ class DuplicateInspectionError(HistoryError):
     """The same trace is already recorded for this actuator."""
 
 
+class ReadOnlyHistoryError(HistoryError):
+    """The store cannot be written (a read-only file or folder); it was not changed."""
+
+
+#: The latest time of an actuator's inspections, numbers only (a time stored as text by
+#: another program is not a time).
+_LAST_TIME = "max(CASE WHEN typeof(i.time) IN ('real', 'integer') THEN i.time END)"
+
+
 def _now() -> str:
     return _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="microseconds")
 
@@ -207,8 +237,45 @@ class Inspection:
 
 
 @dataclass(frozen=True)
+class SkippedInspection:
+    """A stored inspection the analyses cannot use: its ``id``, ``time`` (NaN where it is
+    unreadable), when it was recorded and the ``reason``. :meth:`HealthHistory.remove`
+    takes it back by id."""
+
+    id: int
+    actuator: str
+    time: float
+    recorded_utc: str | None
+    reason: str
+
+    def to_dict(self) -> dict[str, Any]:
+        d = dict(self.__dict__)
+        d["time"] = self.time if math.isfinite(self.time) else str(self.time)
+        return d
+
+
+@dataclass(frozen=True)
+class RemovedInspection:
+    """What :meth:`HealthHistory.remove` took out of the store, as it was stored."""
+
+    id: int
+    actuator: str
+    time: float
+    recorded_utc: str | None
+    verdict: str | None
+    source: str | None
+
+    def to_dict(self) -> dict[str, Any]:
+        d = dict(self.__dict__)
+        d["time"] = self.time if math.isfinite(self.time) else str(self.time)
+        return d
+
+
+@dataclass(frozen=True)
 class HistoryData:
-    """An actuator's k history as arrays: ``times`` (n,), ``K``, ``K_lo``, ``K_hi`` (n, 8)."""
+    """An actuator's k history as arrays: ``times`` (n,), ``K``, ``K_lo``, ``K_hi`` (n, 8),
+    of the inspections the analyses can use; ``skipped`` names the others
+    (:class:`SkippedInspection`)."""
 
     actuator: Actuator
     times: np.ndarray
@@ -216,10 +283,34 @@ class HistoryData:
     K_lo: np.ndarray
     K_hi: np.ndarray
     inspections: tuple
+    skipped: tuple = ()
 
     @property
     def n(self) -> int:
         return int(self.times.size)
+
+    def skipped_note(self) -> str | None:
+        """One sentence on the inspections left out of the analyses (None when none was):
+        how many, the first ones by id and time, why, and how to take them back."""
+        return skipped_note(self.actuator, self.skipped)
+
+
+def skipped_note(actuator: Actuator, skipped: Sequence[SkippedInspection]) -> str | None:
+    """:meth:`HistoryData.skipped_note` (also for several actuators' records at once)."""
+    if not skipped:
+        return None
+    shown_ = "; ".join(f"id {s.id} at {_fmt(s.time)} {actuator.time_unit}: {s.reason}"
+                       for s in skipped[:3])
+    more = f"; and {len(skipped) - 3} more" if len(skipped) > 3 else ""
+    n = len(skipped)
+    how = (f"--id {skipped[0].id}" if n == 1 else f"--id ID, one at a time (e.g. --id {skipped[0].id})")
+    return (f"left out {n} stored inspection{'s' if n != 1 else ''} of {actuator.id} that "
+            f"cannot be used ({shown_}{more}); take {'them' if n != 1 else 'it'} back with "
+            f"emaphm history remove {actuator.id} {how}")
+
+
+def _fmt(t: float) -> str:
+    return f"{t:g}" if isinstance(t, (int, float)) else repr(t)
 
 
 @dataclass(frozen=True)
@@ -269,65 +360,145 @@ def _json_default(o: Any) -> Any:
 class HealthHistory:
     """An SQLite health-history store (module docstring). Use as a context manager.
 
-    ``create=False`` opens an existing database only (for reading commands):
-    a missing file raises :class:`HistoryError` instead of creating one.
+    ``create=False`` opens an existing database only (for commands that record into a
+    registered actuator): a missing or empty file raises :class:`HistoryError` instead of
+    becoming a database. ``readonly=True`` (for commands that only read) opens an existing
+    history with SQLite's ``mode=ro``: nothing is written, migrated or left behind, and a
+    read-only file or folder is fine. A history that cannot be written is refused up front
+    by a writing open (:class:`ReadOnlyHistoryError`), before any work.
     """
 
     def __init__(self, path: str | os.PathLike[str], *, create: bool = True,
-                 timeout_s: float = 30.0) -> None:
+                 readonly: bool = False, timeout_s: float = 30.0) -> None:
+        problem = store_name_problem(path)
+        if problem is not None:
+            raise HistoryError(f"--db {shown(os.fspath(path))} {problem}; give the path of a "
+                               "health history file, e.g. --db fleet.sqlite")
         self.path = Path(path)
-        if not create and not self.path.exists():
+        self.readonly = bool(readonly)
+        create = create and not readonly
+        exists = os.path.lexists(self.path)        # a link loop or a dangling link is there
+        if exists:
+            regular_file(self.path, "health history", error=HistoryError, missing=HistoryError,
+                         give="the path of a health history file")
+        elif not create:
             raise HistoryError(f"no health history at {self.path}; register an actuator first "
                                f"(emaphm history register ID --db {self.path})")
-        if create and not self.path.parent.exists():
-            raise HistoryError(f"cannot create the health history {self.path}: folder "
-                               f"{self.path.parent} does not exist; create it first")
-        created = journal_files(self.path) if self.path.exists() else []
+        else:
+            if not self.path.parent.exists():
+                raise HistoryError(f"cannot create the health history {self.path}: folder "
+                                   f"{self.path.parent} does not exist; create it first")
+            problem = folder_problem(self.path.parent)
+            if problem is not None:
+                raise ReadOnlyHistoryError(
+                    f"cannot create the health history {self.path}: cannot write in the folder "
+                    f"{self.path.parent} ({problem}); give a --db in a folder you can write to")
+        if exists and not create:
+            self._check_file()
+        if exists and not self.readonly:
+            problem = write_problem(self.path)
+            if problem is not None:
+                raise ReadOnlyHistoryError(self._readonly_message(problem))
+        self._has_calibrations = True
+        created = journal_files(self.path) if exists else []
         try:
-            self._con = sqlite3.connect(str(self.path), timeout=timeout_s, isolation_level=None)
+            self._open(create, timeout_s)
+        except BaseException:
+            remove_journal_files(created)          # a refused file is left as it was found
+            raise
+        self._created = created if self.readonly else []
+
+    def _check_file(self) -> None:
+        """An existing file that a reading open takes for a history: not empty, SQLite."""
+        with open(self.path, "rb") as fh:
+            header = fh.read(len(SQLITE_HEADER))
+        if not header:
+            raise HistoryError(f"{self.path} is an empty file, not a health history; it was "
+                               "not changed. Register an actuator to start one (emaphm history "
+                               f"register ID --db {self.path}) or give another --db path")
+        if header != SQLITE_HEADER:
+            raise HistoryError(f"{self.path} is not an emaphm health history (not an SQLite "
+                               "database); it was not changed. Give another --db path")
+
+    def _readonly_message(self, problem: str) -> str:
+        return (f"cannot write the health history {self.path}: {problem}; it was not changed. "
+                "Make it writable (e.g. chmod u+w) or work on a copy you can write (--db COPY); "
+                "history show, list, prognose and fleet report read it as it is")
+
+    def _open(self, create: bool, timeout_s: float) -> None:
+        try:
+            self._con = (connect_readonly(self.path, timeout_s) if self.readonly else
+                         sqlite3.connect(str(self.path), timeout=timeout_s, isolation_level=None))
         except sqlite3.DatabaseError as exc:
-            raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
-                               "give another --db path") from None
+            raise HistoryError(self._foreign(exc)) from None
         try:
+            version, tables = self._version()
+            if version > 0:          # an existing history: refuse a damaged file up front
+                self._quick_check()
+            if version > SCHEMA_VERSION:
+                raise HistoryError(f"{self.path} has schema version {version}, newer than this "
+                                   f"emaphm understands ({SCHEMA_VERSION}); upgrade emaphm")
+            if version == 0 and tables:
+                raise HistoryError(f"{self.path} is an SQLite database but not an emaphm health "
+                                   "history; it was not changed. Give another --db path")
+            if version == 0 and not create:
+                raise HistoryError(f"{self.path} is an empty SQLite database, not a health "
+                                   "history; it was not changed. Register an actuator to start "
+                                   f"one (emaphm history register ID --db {self.path})")
+            if self.readonly:
+                self.journal_mode = str(self._con.execute("PRAGMA journal_mode").fetchone()[0])
+                self._has_calibrations = version >= 2
+                return
             self._con.execute("PRAGMA foreign_keys = ON")
-            mode = enable_wal(self._con, timeout_s)
+            self.journal_mode = enable_wal(self._con, timeout_s)
             self._con.execute("PRAGMA synchronous = FULL")
-            version = self._con.execute("PRAGMA user_version").fetchone()[0]
+            self._migrate(version)
+        except sqlite3.OperationalError as exc:
+            self._con.close()
+            if "readonly" in str(exc):
+                raise ReadOnlyHistoryError(self._readonly_message(str(exc))) from None
+            raise HistoryError(self._foreign(exc)) from None
         except sqlite3.DatabaseError as exc:
             self._con.close()
-            remove_journal_files(created)       # a refused file is left as it was found
-            if "malformed" in str(exc):         # an SQLite file, cut or overwritten in part
-                raise HistoryError(f"{self.path} is damaged ({exc}); it was not changed. "
-                                   "Restore it from a backup; nothing is read from or added "
-                                   "to a damaged history") from None
-            raise HistoryError(f"{self.path} is not an emaphm health history ({exc}); "
-                               "give another --db path") from None
-        self.journal_mode = str(mode)
-        if version > 0:                # an existing history: refuse a damaged file up front
-            try:
-                check = str(self._con.execute("PRAGMA quick_check").fetchone()[0])
-            except sqlite3.DatabaseError as exc:
-                check = str(exc)
-            if check != "ok":
-                self._con.close()
-                remove_journal_files(created)
-                raise HistoryError(f"{self.path} is damaged (SQLite quick_check: {check[:200]}); "
-                                   "it was not changed. Restore it from a backup; nothing is read "
-                                   "from or added to a damaged history")
+            raise HistoryError(self._foreign(exc)) from None
+        except BaseException:
+            self._con.close()
+            raise
+
+    def _foreign(self, exc: Exception) -> str:
+        if "malformed" in str(exc):             # an SQLite file, cut or overwritten in part
+            return (f"{self.path} is damaged ({exc}); it was not changed. Restore it from a "
+                    "backup; nothing is read from or added to a damaged history")
+        return f"{self.path} is not an emaphm health history ({exc}); give another --db path"
+
+    def _version(self) -> tuple[int, int]:
+        version = int(self._con.execute("PRAGMA user_version").fetchone()[0])
+        tables = int(self._con.execute("SELECT count(*) FROM sqlite_master").fetchone()[0])
+        return version, tables
+
+    def _quick_check(self) -> None:
+        try:
+            check = str(self._con.execute("PRAGMA quick_check").fetchone()[0])
+        except sqlite3.DatabaseError as exc:
+            check = str(exc)
+        if check != "ok":
+            raise HistoryError(f"{self.path} is damaged (SQLite quick_check: {check[:200]}); "
+                               "it was not changed. Restore it from a backup; nothing is read "
+                               "from or added to a damaged history")
+
+    def _migrate(self, version: int) -> None:
+        """Create the schema in a new file, or bring an older one to :data:`SCHEMA_VERSION`
+        (each step in one transaction, re-read inside it: another process may have won)."""
         if version == 0:
-            try:
-                with self._transaction() as con:     # re-read: another process may have won
-                    if con.execute("PRAGMA user_version").fetchone()[0] == 0:
-                        if con.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]:
-                            raise HistoryError(
-                                f"{self.path} is an SQLite database but not an emaphm health "
-                                "history; give another --db path")
-                        for statement in _statements(_SCHEMA):
-                            con.execute(statement)
-                        con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
-            except HistoryError:
-                self._con.close()
-                raise
+            with self._transaction() as con:
+                if con.execute("PRAGMA user_version").fetchone()[0] == 0:
+                    if con.execute("SELECT count(*) FROM sqlite_master").fetchone()[0]:
+                        raise HistoryError(
+                            f"{self.path} is an SQLite database but not an emaphm health "
+                            "history; give another --db path")
+                    for statement in _statements(_SCHEMA):
+                        con.execute(statement)
+                    con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
         elif version == 1:                           # before calibrations were recorded
             with self._transaction() as con:
                 if con.execute("PRAGMA user_version").fetchone()[0] == 1:
@@ -335,14 +506,12 @@ class HealthHistory:
                         if statement.startswith("CREATE TABLE calibrations"):
                             con.execute(statement)
                     con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
-        elif version > SCHEMA_VERSION:
-            self._con.close()
-            raise HistoryError(f"{self.path} has schema version {version}, newer than this "
-                               f"emaphm understands ({SCHEMA_VERSION}); upgrade emaphm")
 
     # ------------------------------------------------------------------ plumbing
     def close(self) -> None:
         self._con.close()
+        remove_journal_files(self._created)     # a read-only open leaves nothing behind
+        self._created = []
 
     def __enter__(self) -> "HealthHistory":
         return self
@@ -351,21 +520,42 @@ class HealthHistory:
         self.close()
 
     class _Tx:
-        def __init__(self, con: sqlite3.Connection) -> None:
-            self.con = con
+        def __init__(self, history: "HealthHistory") -> None:
+            self.con = history._con
+            self.history = history
 
         def __enter__(self) -> sqlite3.Connection:
-            self.con.execute("BEGIN IMMEDIATE")
+            if self.history.readonly:
+                raise HistoryError(f"{self.history.path} was opened read-only; open it with "
+                                   "readonly=False to record")
+            try:
+                self.con.execute("BEGIN IMMEDIATE")
+            except sqlite3.OperationalError as exc:
+                self._readonly(exc)
+                raise
             return self.con
 
         def __exit__(self, exc_type: Any, exc: Any, tb: Any) -> None:
             if exc_type is None:
-                self.con.execute("COMMIT")
+                try:
+                    self.con.execute("COMMIT")
+                except sqlite3.OperationalError as err:
+                    self.con.execute("ROLLBACK")
+                    self._readonly(err)
+                    raise
             else:
                 self.con.execute("ROLLBACK")
+                if isinstance(exc, sqlite3.OperationalError):
+                    self._readonly(exc)
+
+        def _readonly(self, exc: Exception) -> None:
+            """SQLite refused to write (a file or folder made read-only while open, a
+            read-only connection): the file and the permission, in the history's words."""
+            if "readonly" in str(exc):
+                raise ReadOnlyHistoryError(self.history._readonly_message(str(exc))) from None
 
     def _transaction(self) -> "HealthHistory._Tx":
-        return HealthHistory._Tx(self._con)
+        return HealthHistory._Tx(self)
 
     def integrity_check(self) -> str:
         """SQLite's ``PRAGMA integrity_check`` (``"ok"`` when sound)."""
@@ -377,10 +567,7 @@ class HealthHistory:
         """Record that ``actuator_id`` was (re)calibrated at ``time`` to ``params``
         (:class:`emaphm.params.ActuatorParams`, e.g. from :func:`emaphm.calibration.calibrate`);
         its inspections from then on are diagnosed with them by default."""
-        self.actuator(actuator_id)
-        t = float(time)
-        if not (math.isfinite(t) and t >= 0):
-            raise HistoryError(f"calibration time must be a finite number >= 0, got {time!r}")
+        t = float(self.check_time(actuator_id, time, "calibration time"))
         with self._transaction() as con:
             con.execute("INSERT INTO calibrations (actuator, time, params, sources, recorded_utc) "
                         "VALUES (?, ?, ?, ?, ?)",
@@ -393,6 +580,8 @@ class HealthHistory:
         from ..params import ActuatorParams
 
         self.actuator(actuator_id)
+        if not self._has_calibrations:                 # a version-1 store, read as it is
+            return None
         q = "SELECT time, params FROM calibrations WHERE actuator = ?"
         args: list[Any] = [actuator_id]
         if at is not None:
@@ -409,6 +598,8 @@ class HealthHistory:
         from ..params import ActuatorParams
 
         self.actuator(actuator_id)
+        if not self._has_calibrations:
+            return []
         rows = self._con.execute("SELECT time, params, sources, recorded_utc FROM calibrations "
                                  "WHERE actuator = ? ORDER BY time, id", (actuator_id,)).fetchall()
         return [CalibrationRecord(actuator=actuator_id, time=float(t),
@@ -441,7 +632,7 @@ class HealthHistory:
     def actuators(self) -> list[Actuator]:
         """Every registered actuator, by id."""
         rows = self._con.execute(
-            "SELECT a.id, a.description, a.time_unit, a.created_utc, count(i.id), max(i.time) "
+            "SELECT a.id, a.description, a.time_unit, a.created_utc, count(i.id), " + _LAST_TIME + " "
             "FROM actuators a LEFT JOIN inspections i ON i.actuator = a.id "
             "GROUP BY a.id ORDER BY a.id").fetchall()
         return [Actuator(*r) for r in rows]
@@ -449,7 +640,7 @@ class HealthHistory:
     def actuator(self, actuator_id: str) -> Actuator:
         """The registered actuator ``actuator_id`` (or :class:`UnknownActuatorError`)."""
         row = self._con.execute(
-            "SELECT a.id, a.description, a.time_unit, a.created_utc, count(i.id), max(i.time) "
+            "SELECT a.id, a.description, a.time_unit, a.created_utc, count(i.id), " + _LAST_TIME + " "
             "FROM actuators a LEFT JOIN inspections i ON i.actuator = a.id WHERE a.id = ? "
             "GROUP BY a.id", (actuator_id,)).fetchone()
         if row is None:
@@ -469,18 +660,36 @@ class HealthHistory:
         (cheap: run it before an identification)."""
         return self._check(self._con, actuator_id, time, fingerprint)
 
-    def _check(self, con: sqlite3.Connection, actuator_id: str, time: Any,
-               fingerprint: str | None) -> Actuator:
+    def check_time(self, actuator_id: str, time: Any, what: str = "inspection time") -> float:
+        """``time`` as a float if it is a time ``actuator_id``'s history can hold: a finite
+        number from 0 to :data:`MAX_TIME` of its time unit (else :class:`HistoryError`)."""
         if isinstance(time, bool) or not isinstance(time, (int, float, np.integer, np.floating)) \
                 or not math.isfinite(time) or time < 0:
-            raise HistoryError(f"inspection time must be a finite number >= 0 (flight hours or "
+            raise HistoryError(f"{what} must be a finite number >= 0 (flight hours or "
                                f"cycles), got {time!r}")
+        unit = self.actuator(actuator_id).time_unit
+        limit = MAX_TIME.get(unit, MAX_TIME["h"])
+        if time > limit:
+            raise HistoryError(
+                f"{what} {float(time):g} {unit} is beyond the {limit:g} {_UNIT_WORDS.get(unit, unit)} "
+                f"a history holds; give the actuator's {_UNIT_WORDS.get(unit, unit)} since it "
+                "entered service, e.g. --at 1250")
+        return float(time)
+
+    def _check(self, con: sqlite3.Connection, actuator_id: str, time: Any,
+               fingerprint: str | None) -> Actuator:
+        self.check_time(actuator_id, time)
         act = self.actuator(actuator_id)
         if act.last_time is not None and not float(time) > act.last_time:
+            limit = MAX_TIME.get(act.time_unit, MAX_TIME["h"])
+            hint = ("(give the time of this inspection with --at)" if act.last_time <= limit else
+                    f"(its last time is beyond the {limit:g} {act.time_unit} a history holds: "
+                    f"take that inspection back with emaphm history remove {actuator_id} --at "
+                    f"{act.last_time!r})")
             raise TimeOrderError(
                 f"inspection time {float(time):g} {act.time_unit} of {actuator_id!r} is not after "
                 f"its last inspection at {act.last_time:g} {act.time_unit}; times must increase "
-                "(give the time of this inspection with --at)")
+                + hint)
         if fingerprint is not None:
             row = con.execute("SELECT time FROM inspections WHERE actuator = ? AND fingerprint = ?",
                               (actuator_id, fingerprint)).fetchone()
@@ -555,10 +764,62 @@ class HealthHistory:
         r = self._con.execute(f"SELECT {self._COLS} FROM inspections WHERE id = ?", (row_id,)).fetchone()
         return self._row(r)
 
+    def _read(self, actuator_id: str) -> tuple[list[Inspection], list[SkippedInspection]]:
+        """The actuator's inspections in time order that the analyses can use, and the
+        others with the reason (:func:`_unusable`)."""
+        unit = self.actuator(actuator_id).time_unit
+        good: list[Inspection] = []
+        skipped: list[SkippedInspection] = []
+        for r in self._iter(actuator_id):
+            try:
+                ins = self._row(r)
+            except (TypeError, ValueError, OverflowError, RecursionError) as exc:
+                why = f"unreadable record ({type(exc).__name__}: {str(exc)[:80]})"
+                skipped.append(SkippedInspection(int(r[0]), actuator_id, _as_time(r[2]),
+                                                 _as_text(r[16]), why))
+                continue
+            why = _unusable(ins, unit)
+            if why is None:
+                good.append(ins)
+            else:
+                skipped.append(SkippedInspection(ins.id, actuator_id, ins.time, _as_text(r[16]), why))
+        return good, skipped
+
     def inspections(self, actuator_id: str) -> list[Inspection]:
-        """The inspections of ``actuator_id`` in time order."""
-        self.actuator(actuator_id)
-        return [self._row(r) for r in self._iter(actuator_id)]
+        """The inspections of ``actuator_id`` in time order (those the analyses can use:
+        :meth:`data` names the others)."""
+        return self._read(actuator_id)[0]
+
+    def remove(self, actuator_id: str, *, at: float | None = None,
+               inspection_id: int | None = None) -> RemovedInspection:
+        """Take back one recorded inspection of ``actuator_id``: the one at time ``at`` or
+        the one with id ``inspection_id`` (give one of the two), in one transaction; return
+        what was removed. A :class:`HistoryError` when none matches (nothing changes)."""
+        if (at is None) == (inspection_id is None):
+            raise HistoryError("say which inspection to remove: its time (--at T) or its id (--id N)")
+        act = self.actuator(actuator_id)
+        if at is not None:
+            where, arg, which = "time = ?", float(at), f"at {float(at):g} {act.time_unit}"
+        else:
+            where, arg, which = "id = ?", int(inspection_id), f"with id {inspection_id}"
+        with self._transaction() as con:
+            row = con.execute("SELECT id, time, recorded_utc, healthy, diagnosis, source FROM "
+                              f"inspections WHERE actuator = ? AND {where}",
+                              (actuator_id, arg)).fetchone()
+            if row is None:
+                known = con.execute("SELECT id, time FROM inspections WHERE actuator = ? ORDER BY "
+                                    "time LIMIT 8", (actuator_id,)).fetchall()
+                listed = ", ".join(f"id {i} at {_fmt(_as_time(t))}" for i, t in known)
+                raise HistoryError(
+                    f"{actuator_id} has no inspection {which}; nothing was removed"
+                    + (f" (its inspections: {listed}{', ...' if len(known) == 8 else ''}; "
+                       f"emaphm history show {actuator_id} lists them)" if known else
+                       " (it has no inspections)"))
+            con.execute("DELETE FROM inspections WHERE id = ?", (row[0],))
+            self._touch(con, actuator_id)
+        return RemovedInspection(id=int(row[0]), actuator=actuator_id, time=_as_time(row[1]),
+                                 recorded_utc=_as_text(row[2]), verdict=_verdict_of(row[3], row[4]),
+                                 source=_as_text(row[5]))
 
     def _iter(self, actuator_id: str) -> Iterator[Sequence[Any]]:
         return iter(self._con.execute(
@@ -597,9 +858,12 @@ class HealthHistory:
         return df
 
     def data(self, actuator_id: str) -> HistoryData:
-        """The k history of ``actuator_id`` as arrays (:class:`HistoryData`)."""
+        """The k history of ``actuator_id`` as arrays (:class:`HistoryData`): the
+        inspections the analyses can use, and in ``skipped`` the others (a time outside
+        0 to :data:`MAX_TIME`, a k that is not 8 finite numbers in [0, 1], a malformed
+        field), which the trends, figures and the fleet site leave out."""
         act = self.actuator(actuator_id)
-        ins = self.inspections(actuator_id)
+        ins, skipped = self._read(actuator_id)
         if ins:
             K = np.stack([i.k for i in ins])
             lo = np.stack([i.k_lo for i in ins])
@@ -607,7 +871,50 @@ class HealthHistory:
         else:
             K = lo = hi = np.empty((0, 8))
         return HistoryData(actuator=act, times=np.array([i.time for i in ins], dtype=float),
-                           K=K, K_lo=lo, K_hi=hi, inspections=tuple(ins))
+                           K=K, K_lo=lo, K_hi=hi, inspections=tuple(ins), skipped=tuple(skipped))
+
+
+def _as_time(x: Any) -> float:
+    try:
+        return float(x)
+    except (TypeError, ValueError, OverflowError):
+        return math.nan
+
+
+def _as_text(x: Any) -> str | None:
+    return None if x is None else str(x)
+
+
+def _verdict_of(healthy: Any, diagnosis: Any) -> str | None:
+    try:
+        verdict = json.loads(diagnosis).get("verdict") if diagnosis else None
+    except (TypeError, ValueError, AttributeError, RecursionError):
+        verdict = None
+    if isinstance(verdict, str):
+        return verdict
+    return None if healthy is None else ("healthy" if healthy else "faulty")
+
+
+def _unusable(ins: Inspection, unit: str) -> str | None:
+    """Why the analyses cannot use a stored inspection, or None: its time outside 0 to
+    :data:`MAX_TIME` of the unit, k and its interval not 8 finite numbers (k in [0, 1]),
+    a diagnosis that is not an object with a list of fault objects, extra not an object."""
+    limit = MAX_TIME.get(unit, MAX_TIME["h"])
+    if not (math.isfinite(ins.time) and 0.0 <= ins.time <= limit):
+        return f"time outside 0 to {limit:g} {unit}"
+    for name in ("k", "k_lo", "k_hi"):
+        v = getattr(ins, name)
+        if v.shape != (8,) or v.dtype.kind not in "biuf" or not np.all(np.isfinite(v)):
+            return f"{name} is not 8 finite numbers"
+    if np.any((ins.k < 0.0) | (ins.k > 1.0)):
+        return "k outside [0, 1]"
+    diag = ins.diagnosis
+    if diag is not None and (not isinstance(diag, dict) or not isinstance(diag.get("faults", []), list)
+                             or not all(isinstance(f, dict) for f in diag.get("faults", []))):
+        return "malformed diagnosis"
+    if not isinstance(ins.extra, dict):
+        return "malformed extra field"
+    return None
 
 
 def __getattr__(name: str):
