@@ -496,3 +496,37 @@ def test_a_site_rebuilt_from_another_history_drops_the_pages_it_no_longer_has(tm
     assert not [n for n in left if n.startswith(gone)]
     manifest = json.loads((out / "actuators" / ".figures.json").read_text())
     assert set(manifest) == {page_stem("A")}
+
+
+def test_a_site_is_built_around_a_stored_record_it_cannot_use(tmp_path, capsys):
+    """A record an older emaphm let through (--at 1e308) made the whole report fail
+    ('SVD did not converge'): the site leaves it out, and the command says so in one
+    warning line; the history is read, never written (its bytes are the same)."""
+    import hashlib
+
+    from emaphm.fleet.site import build_site
+
+    db = tmp_path / "fleet.sqlite"
+    t = np.linspace(0.0, 600.0, 5)
+    with HealthHistory(db) as h:
+        h.register("EMA-TYPO")
+        _add_series(h, "EMA-TYPO", t, [_k(friction=0.05 + 0.0007 * x) for x in t])
+        h.register("EMA-OK")
+        _add_series(h, "EMA-OK", t, [_k(backlash=0.01) for _ in t])
+        h._con.execute("DROP TRIGGER inspections_time_forward")
+        h._con.execute("INSERT INTO inspections (actuator, time, k, k_lo, k_hi, recorded_utc) "
+                       "SELECT actuator, 1e308, k, k_lo, k_hi, recorded_utc FROM inspections "
+                       "WHERE actuator = 'EMA-TYPO' AND time = 600")
+    before = hashlib.sha256(db.read_bytes()).hexdigest()
+    site = build_site(db, tmp_path / "site", workers=0)
+    typo = next(s for s in site.statuses if s.id == "EMA-TYPO")
+    assert typo.n_inspections == 5 and typo.last_time == 600.0 and typo.prognosis is not None
+    assert [x.time for x in typo.data.skipped] == [1e308]
+    assert main(["fleet", "report", "--db", str(db), "--out", str(tmp_path / "site"),
+                 "--workers", "0", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("emaphm fleet report: warning: left out 1 "
+                                                   "stored inspection of EMA-TYPO")
+    assert "emaphm history remove EMA-TYPO --id 11" in err
+    assert hashlib.sha256(db.read_bytes()).hexdigest() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fleet.sqlite", "site"]

@@ -667,7 +667,7 @@ def _read(history: Any, actuators: Sequence[str] | None) -> tuple[list, dict, st
     from ..prognosis.history import HealthHistory
 
     own = not isinstance(history, HealthHistory)
-    h = HealthHistory(history, create=False) if own else history
+    h = HealthHistory(history, readonly=True) if own else history
     try:
         ids = list(actuators) if actuators else [a.id for a in h.actuators()]
         if not ids:
