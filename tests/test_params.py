@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 
 import pytest
 
@@ -313,3 +314,59 @@ def test_a_file_from_before_0_3_with_the_contact_under_plant_reads_it_into_trans
     assert (q.plant.omega_s, q.transmission.K_c, q.transmission.D_c) == (2.0, 3000.0, 0.7)
     path.write_text("[plant]\nK_c = 3000.0\n[transmission]\nK_c = 3500.0\n")
     assert load_params(path, partial=True).transmission.K_c == 3500.0
+
+
+# ----------------------------------------------------------------------------- [thresholds]
+
+def test_an_actuators_own_thresholds_round_trip_through_its_file(tmp_path):
+    from emaphm.modes import THRESHOLDS_BY_FAULT_MODEL, thresholds_for
+
+    own = dataclasses.replace(siemens_1fk7060(), thresholds=(("short_circuit", 0.011),
+                                                             ("friction", 0.06)))
+    path = save_params(own, tmp_path / "own.toml")
+    assert "[thresholds]" in path.read_text()
+    back = load_params(path)
+    assert back.thresholds == (("friction", 0.06), ("short_circuit", 0.011))
+    t = thresholds_for("physical", back)
+    assert (t.friction, t.short_circuit) == (0.06, 0.011)
+    assert t.backlash == THRESHOLDS_BY_FAULT_MODEL["physical"].backlash
+    # the paper's turn removal keeps its own thresholds; a data sheet without the table too
+    assert thresholds_for("paper", back) == THRESHOLDS_BY_FAULT_MODEL["paper"]
+    assert thresholds_for("physical", siemens_1fk7060()) == THRESHOLDS_BY_FAULT_MODEL["physical"]
+    # a file without the table writes none
+    assert "[thresholds]" not in save_params(siemens_1fk7060(), tmp_path / "p.toml").read_text()
+
+
+@pytest.mark.parametrize("table,message", [
+    ("frictio = 0.1", "unknown threshold 'frictio'; known: backlash"),
+    ("friction = 1.5", "friction = 1.5 must be a number in (0, 1)"),
+    ("friction = 'high'", "must be a number in (0, 1)"),
+])
+def test_a_bad_thresholds_table_is_refused_with_the_file_and_the_fix(tmp_path, table, message):
+    path = save_params(siemens_1fk7060(), tmp_path / "p.toml")
+    path.write_text(path.read_text() + f"\n[thresholds]\n{table}\n")
+    with pytest.raises(ParameterError, match=re.escape(f"{path}: [thresholds] ") + ".*"
+                       + re.escape(message)):
+        load_params(path)
+
+
+def test_a_diagnosis_and_a_calibration_keep_the_actuators_thresholds():
+    from emaphm.diagnosis import diagnose
+    from support import k_with
+
+    own = dataclasses.replace(siemens_1fk7060(), thresholds=(("friction", 0.05),))
+    k = k_with(k1=0.07)
+    assert [f.mode for f in diagnose(k, params=own, fault_model="physical").faults] == ["friction"]
+    assert not diagnose(k, params=siemens_1fk7060(), fault_model="physical").faults
+    # explicit thresholds still win
+    from emaphm.modes import DEFAULT_THRESHOLDS
+
+    assert not diagnose(k, params=own, fault_model="physical", thresholds=DEFAULT_THRESHOLDS).faults
+    # emaphm calibrate writes the unit with the thresholds of the file it was given
+    from emaphm.calibration import calibrate
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+
+    traces = [simulate(model="monitoring", params=own, sensors=DEFAULT_SENSORS, seed=s)
+              for s in (1, 2)]
+    unit = calibrate(traces, own).params
+    assert unit.calibration.date and unit.thresholds == own.thresholds

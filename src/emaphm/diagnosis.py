@@ -32,7 +32,7 @@ import numpy as np
 from .faults import as_k, check_fault_model
 from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
 from .modes import (DEFAULT_THRESHOLDS, FAULT_MODES, THRESHOLDS_BY_FAULT_MODEL, Fault, Reading,
-                    Thresholds)
+                    Thresholds, thresholds_for)
 from .modes import read_faults as _read_modes
 from .params import ActuatorParams, siemens_1fk7060
 from .search import nuisance_text
@@ -195,7 +195,7 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
         fault_model = "paper"
     check_fault_model(fault_model)
     if thresholds is None:
-        thresholds = THRESHOLDS_BY_FAULT_MODEL[fault_model]
+        thresholds = thresholds_for(fault_model, params)
     p = params if params is not None else siemens_1fk7060()
     faults = read_faults(k, thresholds, p, fault_model, extra, findings)
     unexplained = None

@@ -578,20 +578,28 @@ class ActuatorParams:
     sensors: CurrentSensors = field(default_factory=CurrentSensors)
     calibration: Calibration = field(default_factory=Calibration)
     name: str = "custom"
+    #: This actuator's detection thresholds, ``(name, value)`` pairs of the fields of
+    #: :class:`emaphm.modes.Thresholds` in place of the defaults (the file's
+    #: ``[thresholds]`` table, written by ``emaphm assess``); empty: the defaults. They
+    #: apply to the ``physical`` fault model (:func:`emaphm.modes.thresholds_for`).
+    thresholds: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         for sec, cls in _SECTIONS.items():
             if not isinstance(getattr(self, sec), cls):
                 raise ParameterError(f"ActuatorParams.{sec} must be a {cls.__name__}, "
                                      f"got {type(getattr(self, sec)).__name__}")
+        object.__setattr__(self, "thresholds", _check_thresholds(self.thresholds))
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dict (JSON/TOML serialisable)."""
+        """Plain nested dict (JSON/TOML serialisable); ``thresholds`` only where set."""
         d: dict[str, Any] = {"name": self.name}
         for sec in _SECTIONS:
             sub = asdict(getattr(self, sec))
             d[sec] = {k: ([list(x) if isinstance(x, tuple) else x for x in v]
                           if isinstance(v, tuple) else v) for k, v in sub.items()}
+        if self.thresholds:
+            d["thresholds"] = dict(self.thresholds)
         return d
 
     @classmethod
@@ -601,7 +609,7 @@ class ActuatorParams:
         unless ``defaults`` is given, which then fills them."""
         if not isinstance(data, dict):
             raise ParameterError(f"{source}: expected a table of sections, got {type(data).__name__}")
-        unknown = set(data) - set(_SECTIONS) - {"name"}
+        unknown = set(data) - set(_SECTIONS) - {"name", "thresholds"}
         if unknown:
             raise ParameterError(
                 f"{source}: unknown section(s) {sorted(unknown)}; expected "
@@ -639,9 +647,42 @@ class ActuatorParams:
             except ParameterError as exc:        # name the file and the section
                 raise ParameterError(f"{source}: {exc}") from None
         name = data.get("name", defaults.name if defaults is not None else "custom")
-        params = cls(name=str(name), **parts)
+        limits = data.get("thresholds", defaults.thresholds if defaults is not None else ())
+        if isinstance(limits, dict):
+            limits = tuple(limits.items())
+        elif limits and not isinstance(limits, tuple):
+            raise ParameterError(f"{source}: [thresholds] must be a table of name = value, "
+                                 f"got {limits!r}")
+        try:
+            params = cls(name=str(name), thresholds=limits, **parts)
+        except ParameterError as exc:
+            raise ParameterError(f"{source}: {exc}") from None
         check_plausible(params, source=source)
         return params
+
+
+def _check_thresholds(items: Any) -> tuple[tuple[str, float], ...]:
+    """``[thresholds]`` as sorted ``(name, value)`` pairs, each a field of
+    :class:`emaphm.modes.Thresholds` with a value in (0, 1)."""
+    if not items:
+        return ()
+    from .modes import Thresholds       # local: the modes read these parameters
+
+    known = {f.name for f in fields(Thresholds)}
+    out = {}
+    try:
+        pairs = list(dict(items).items())
+    except (TypeError, ValueError):
+        raise ParameterError(f"[thresholds] must be a table of name = value, got {items!r}") from None
+    for name, value in pairs:
+        if name not in known:
+            raise ParameterError(f"[thresholds] has an unknown threshold {name!r}; known: "
+                                 + ", ".join(sorted(known)))
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value) or not 0.0 < value < 1.0:
+            raise ParameterError(f"[thresholds] {name} = {value!r} must be a number in (0, 1)")
+        out[str(name)] = float(value)
+    return tuple(sorted(out.items()))
 
 
 def _moved_contact(data: dict[str, Any]) -> dict[str, Any]:

@@ -34,7 +34,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .diagnosis import Diagnosis, MismatchFit, Refit, Thresholds, diagnose, fit_ratio_of
-from .modes import MODES, THRESHOLDS_BY_FAULT_MODEL
+from .modes import MODES, thresholds_for
 from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit,
                       misfit_p_value)
 from .params import ActuatorParams
@@ -221,7 +221,8 @@ def _with_bridge(params: ActuatorParams, j: int, decades: float) -> ActuatorPara
 def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
                             params: ActuatorParams | None = None,
                             thresholds: Thresholds | None = None, k: Any = None,
-                            check: bool = True, findings: dict | None = None) -> Diagnosis:
+                            check: bool = True, findings: dict | None = None,
+                            loops: bool = True) -> Diagnosis:
     """The verdict of an identification (:func:`emaphm.identify.identify`) of a trace.
 
     :func:`diagnose` of ``k`` (default ``ident.k``) with the identification's fault model,
@@ -234,7 +235,9 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     range of the current over the fault resistances that fit as well), and, where the
     verdict names a fault and the parameters are a data sheet
     (:func:`needs_mismatch_check`), the mismatch check (:func:`mismatch_fit`, seeded by
-    ``ident.seed``). ``trace`` may be the identification's problem (its parameters,
+    ``ident.seed``). ``loops=False`` leaves out the fault loops' report (their current,
+    power and ampere-turns: readings, not part of the verdict; profiling the valley of a
+    short costs a few refits). ``trace`` may be the identification's problem (its parameters,
     sub-steps and fitness mode are then the checks'; ``params`` must not be given beside
     it), or the trace with the ``params`` it was identified with.
     """
@@ -260,9 +263,9 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
         k, extra = refit.k, dict(refit.nuisance)
         ratio = None if noiseless else refit.fit_ratio
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
-    loops = _fault_loops(problem, k, extra, diag, seed)
-    if loops is not None:
-        findings["fault_loops"] = loops
+    report = _fault_loops(problem, k, extra, diag, seed) if loops else None
+    if report is not None:
+        findings["fault_loops"] = report
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
     if diag.verdict == "faulty" and needs_mismatch_check(params):
         names = tuple(("demag" if n == "flux" and "demag" in extra else n)
@@ -286,7 +289,8 @@ class Examination:
 
 
 def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any = None,
-            seed: int = 0, callback: Any = None, thresholds: Thresholds | None = None) -> Examination:
+            seed: int = 0, callback: Any = None, thresholds: Thresholds | None = None,
+            loops: bool = True) -> Examination:
     """Fault detection and identification of one trace, as ``emaphm diagnose`` makes it.
 
     1. The current sensors, judged from the sum of the three measured currents
@@ -296,7 +300,8 @@ def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any =
        currents sensor faults are not observable, and the verdict says so.
     2. The identification (:func:`emaphm.identify.identify` with ``config``, default the
        least-squares solver's settings; ``params`` the actuator, default the preset).
-    3. The verdict with its checks (:func:`diagnose_identification`).
+    3. The verdict with its checks (:func:`diagnose_identification`; ``loops``: with the
+       report of a short's fault loop).
     """
     from .fitness import trace_fault_model
     from .identify import IdentificationConfig, identify
@@ -304,13 +309,13 @@ def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any =
 
     config = IdentificationConfig() if config is None else config
     fault_model = config.fault_model or trace_fault_model(trace)
-    limits = thresholds if thresholds is not None else THRESHOLDS_BY_FAULT_MODEL[fault_model]
+    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
     run = lambda t: identify(t, config, seed=seed, params=params, callback=callback)  # noqa: E731
     finding, work, ident = resolve(trace, screen(trace, params, limits), run)
     if ident is None:
         ident = run(work)
     diag = diagnose_identification(work, ident, params=params, thresholds=thresholds,
-                                   findings={"current_sensor": finding})
+                                   findings={"current_sensor": finding}, loops=loops)
     if not finding.observable:
         diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
     return Examination(ident, diag, work, finding)

@@ -29,10 +29,10 @@ import math
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from .base import PHASES, Fault, FaultMode, Injection, Reading
+from .base import PHASES, Fault, FaultMode, Grid, Injection, Reading
 
 __all__ = ["MODES", "FAULT_MODES", "PAPER_MODES", "Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL",
-           "mode", "read_faults", "parse_fault", "fault_specs", "Fault", "FaultMode", "Injection", "Reading",
+           "thresholds_for", "mode", "read_faults", "parse_fault", "fault_specs", "Fault", "FaultMode", "Grid", "Injection", "Reading",
            "PHASES"]
 
 #: The modules of the modes, in the order a verdict lists their faults.
@@ -94,6 +94,19 @@ DEFAULT_THRESHOLDS = Thresholds()
 THRESHOLDS_BY_FAULT_MODEL = MappingProxyType({
     fm: Thresholds(**{name: v for m in MODES.values() for name, v in m.fields(fm).items()})
     for fm in ("paper", "physical")})
+
+
+def thresholds_for(fault_model: str, params: Any = None) -> Any:
+    """The detection thresholds of a diagnosis under ``fault_model``: the defaults
+    (:data:`THRESHOLDS_BY_FAULT_MODEL`), with the actuator's own ``[thresholds]``
+    (:attr:`emaphm.params.ActuatorParams.thresholds`, tuned by ``emaphm assess``) in place
+    under the ``physical`` fault model, the one they were tuned on (the ``paper``'s turn
+    removal keeps its own)."""
+    base = THRESHOLDS_BY_FAULT_MODEL[fault_model]
+    own = getattr(params, "thresholds", ())
+    if fault_model != "physical" or not own:
+        return base
+    return dataclasses.replace(base, **dict(own))
 
 
 def read_faults(reading: Reading) -> list[Fault]:

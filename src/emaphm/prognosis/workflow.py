@@ -52,7 +52,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     """
     from ..fitness import trace_fault_model
     from ..identify import DEFAULT_ALGORITHM, IdentificationConfig, identify
-    from ..modes import THRESHOLDS_BY_FAULT_MODEL
+    from ..modes import thresholds_for
     from ..modes.current_sensor import UNOBSERVABLE_NOTE, resolve, screen
     from ..traces import validate
     from ..verdict import diagnose_identification
@@ -76,7 +76,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
             start = previous[-1].k
     # the current sensors judged from the sum of the currents; the machine identified on
     # the corrected trace (emaphm.verdict.examine does the same for one diagnosis)
-    limits = thresholds if thresholds is not None else THRESHOLDS_BY_FAULT_MODEL[fault_model]
+    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
     finding, work, _ = resolve(trace, screen(trace, params, limits),
                                lambda t: identify(t, config, seed=seed, params=params))
     a = identify_with_spread(work, config, seed=seed, method=method, level=level, n_runs=n_runs,
