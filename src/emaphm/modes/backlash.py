@@ -23,6 +23,10 @@ def inject(severity: float, phase: str | None = None) -> Injection:
     return Injection(k={1: (severity - 1.0) / 99.0})
 
 
+def measure(r: Reading) -> dict[str, float]:
+    return {"backlash": float(r.k[1])}
+
+
 MODE = FaultMode("backlash", "backlash", threshold=0.034, read=read, inject=inject,
                  severity_unit="x nominal backlash", grid=(5.0, 10.0, 25.0, 50.0),
-                 k_components=(1,))
+                 k_components=(1,), measure=measure, magnitude=lambda s: abs(s - 1.0))

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..params import ActuatorParams
 
-__all__ = ["Fault", "Reading", "Injection", "FaultMode", "PHASES"]
+__all__ = ["Fault", "Reading", "Injection", "FaultMode", "Grid", "PHASES"]
 
 #: The phases, as faults name them.
 PHASES = ("A", "B", "C")
@@ -72,6 +72,31 @@ class Injection:
 
 
 @dataclass(frozen=True)
+class Grid:
+    """Severities an assessment (:mod:`emaphm.assessment`) simulates a mode at.
+
+    ``name`` labels its rows (the mode's name, or ``mode:variant`` where a mode is assessed
+    more than one way, a current sensor's gain and offset); ``severities`` in
+    ``severity_unit``, the unit a user reads; ``inject``: keywords of the mode's
+    ``inject`` beside severity and phase (``{"kind": "offset"}``); ``variants``: keywords
+    that alternate from one production unit to the next (a short's fault resistance), so
+    that a grid covers them without multiplying its runs. ``magnitude(severity)`` is the
+    size of the fault, 0 for a healthy actuator (``|g - 1|`` of a gain), on which the
+    probability of detection grows."""
+
+    name: str
+    severity_unit: str
+    severities: tuple[float, ...]
+    inject: Mapping[str, Any] = field(default_factory=dict)
+    variants: tuple[Mapping[str, Any], ...] = ()
+    magnitude: Callable[[float], float] = abs
+
+
+def _identity_measure(r: "Reading") -> dict[str, float]:
+    return {}
+
+
+@dataclass(frozen=True)
 class FaultMode:
     """A fault mode of the registry.
 
@@ -97,6 +122,14 @@ class FaultMode:
                         residual of an identification asks for the mode, the parameters
                         to search beside k in a refit (the verdict makes it,
                         :func:`emaphm.verdict.diagnose_identification`)
+    measure             ``measure(Reading) -> {threshold field: value}``: what ``read``
+                        compares with each of its thresholds (the largest over the
+                        phases), so that an assessment can set the thresholds from the
+                        readings of healthy units
+    magnitude           the size of a severity, 0 for healthy (default ``|severity|``;
+                        ``|s - 1|`` for a factor of nominal)
+    grids               the assessment's grids, where the mode has more than ``grid``
+                        (default: one :class:`Grid` of ``grid`` in ``severity_unit``)
     ==================  =================================================================
     """
 
@@ -114,6 +147,19 @@ class FaultMode:
     parse_fields: Callable[[list[str]], Injection] | None = None
     hypothesis: Callable[[Any, Any, Any], tuple[str, ...] | None] | None = None
     k_components: tuple[int, ...] = ()
+    measure: Callable[[Reading], dict[str, float]] = _identity_measure
+    magnitude: Callable[[float], float] = abs
+    extra_grids: tuple[Grid, ...] = ()
+
+    def grids(self) -> tuple[Grid, ...]:
+        """The grids an assessment runs this mode on (none where it cannot be simulated)."""
+        if self.inject is None:
+            return ()
+        if self.extra_grids:
+            return self.extra_grids
+        if not self.grid:
+            return ()
+        return (Grid(self.name, self.severity_unit, tuple(self.grid), magnitude=self.magnitude),)
 
     def threshold_for(self, fault_model: str) -> float:
         return float(self.thresholds_by_fm.get(fault_model, self.threshold))

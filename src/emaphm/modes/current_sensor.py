@@ -27,7 +27,7 @@ import numpy as np
 
 from ..traces import Trace
 from ..traces.zero_sum import SensorFit, best_fit, two_currents
-from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
+from .base import PHASES, Fault, FaultMode, Grid, Injection, Reading, _number
 
 __all__ = ["SensorFinding", "screen", "correct", "resolve", "tolerance", "MODE", "UNOBSERVABLE_NOTE"]
 
@@ -191,8 +191,28 @@ def parse(fields: list[str]) -> Injection:
 #: Thresholds: a gain 5 % off or an offset of 0.08 A, beyond the spread the production
 #: tolerances of the other sensors leave in a healthy unit's single-sensor fit (gains
 #: +-3 %, offsets +-20 mA each; see docs/fault-modes.md for how they were set).
+def measure(r: Reading) -> dict[str, float]:
+    """The single-sensor fit's gain and offset deviations beyond the unit's tolerance,
+    what the screen compares with its thresholds (0 where no single sensor explains the
+    sum, or with two measured currents)."""
+    f: SensorFinding | None = r.findings.get("current_sensor")
+    if f is None or f.fit is None or not f.fit.plausible:
+        return {"current_sensor_gain": 0.0, "current_sensor_offset": 0.0}
+    tol_gain, tol_offset = tolerance(r.params)
+    return {"current_sensor_gain": abs(f.fit.gain - 1.0) - tol_gain,
+            "current_sensor_offset": abs(f.fit.offset) - tol_offset}
+
+
+#: The assessment's sensors: a gain too low (and one too high), and an offset, each on the
+#: unit's own phase in turn.
+GRIDS = (Grid("current_sensor:gain", "sensor gain", (0.97, 0.95, 0.9, 0.8),
+              inject={"kind": "gain"}, magnitude=lambda s: abs(s - 1.0)),
+         Grid("current_sensor:offset", "sensor offset [A]", (0.05, 0.1, 0.2, 0.5),
+              inject={"kind": "offset"}))
+
 MODE = FaultMode("current_sensor", "faulty current sensor", threshold=0.05, read=read,
                  inject=inject, threshold_fields={"current_sensor_gain": 0.05,
                                                   "current_sensor_offset": 0.08},
                  severity_unit="sensor gain", grid=(0.97, 0.95, 0.9, 0.8), per_phase=True,
-                 spec="PHASE:gain:GAIN or PHASE:offset:AMPERES", parse_fields=parse)
+                 spec="PHASE:gain:GAIN or PHASE:offset:AMPERES", parse_fields=parse,
+                 measure=measure, extra_grids=GRIDS)

@@ -83,6 +83,13 @@ def inject(severity: float, phase: str | None = None) -> Injection:
 #: Threshold 8 % of flux lost, against the calibrated unit: above the drift of its magnets'
 #: temperature, which the identification searches as ``"flux"`` within +-6 % (see
 #: docs/fault-modes.md for how it was set); on a data sheet plus the production tolerance.
+def measure(r: Reading) -> dict[str, float]:
+    """The flux loss beyond the unit's tolerance, what ``read`` compares with its threshold."""
+    dev = r.extra.get("demag", r.extra.get("flux"))
+    loss = 0.0 if dev is None else -float(dev)
+    return {"demagnetization": loss - tolerance(r.params)}
+
+
 MODE = FaultMode("demagnetization", "demagnetized rotor", threshold=0.08, read=read,
                  inject=inject, severity_unit="fraction of the magnet flux lost",
-                 grid=(0.05, 0.1, 0.15, 0.25), hypothesis=hypothesis)
+                 grid=(0.05, 0.1, 0.15, 0.25), hypothesis=hypothesis, measure=measure)

@@ -24,7 +24,11 @@ def inject(severity: float, phase: str | None = None) -> Injection:
     return Injection(k={5: severity, 6: 0.5})
 
 
+def measure(r: Reading) -> dict[str, float]:
+    return {"eccentricity": float(r.k[5])}
+
+
 MODE = FaultMode("eccentricity", "static eccentricity", threshold=0.015, read=read,
                  inject=inject, severity_unit="fraction of the air gap",
                  grid=(0.02, 0.05, 0.1, 0.25),
-                 k_components=(5, 6))
+                 k_components=(5, 6), measure=measure)

@@ -24,6 +24,10 @@ def inject(severity: float, phase: str | None = None) -> Injection:
     return Injection(k={0: (severity - 1.0) / 2.0})
 
 
+def measure(r: Reading) -> dict[str, float]:
+    return {"friction": float(r.k[0])}
+
+
 MODE = FaultMode("friction", "dry friction", threshold=0.100, read=read, inject=inject,
                  severity_unit="x nominal friction", grid=(1.25, 1.5, 2.0, 2.5),
-                 k_components=(0,))
+                 k_components=(0,), measure=measure, magnitude=lambda s: abs(s - 1.0))

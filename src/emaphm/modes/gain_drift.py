@@ -25,7 +25,11 @@ def inject(severity: float, phase: str | None = None) -> Injection:
     return Injection(k={7: severity - 0.5})
 
 
+def measure(r: Reading) -> dict[str, float]:
+    return {"gain_drift": abs(float(r.k[7]) - float(K_NOMINAL[7]))}
+
+
 MODE = FaultMode("gain_drift", "proportional gain drift", threshold=0.015, read=read,
                  inject=inject, severity_unit="x nominal proportional gain",
                  grid=(0.9, 0.95, 1.05, 1.1),
-                 k_components=(7,))
+                 k_components=(7,), measure=measure, magnitude=lambda s: abs(s - 1.0))

@@ -11,7 +11,7 @@ from dataclasses import replace
 from typing import Any
 
 from ..faults import shorted_fraction
-from .base import PHASES, Fault, FaultMode, Injection, Reading, _number
+from .base import PHASES, Fault, FaultMode, Grid, Injection, Reading, _number
 
 
 def read(r: Reading) -> list[Fault]:
@@ -93,9 +93,19 @@ def parse(fields: list[str]) -> Injection:
     return inject(_number(fields[1], "short_circuit"), fields[0].upper(), R_f)
 
 
+def measure(r: Reading) -> dict[str, float]:
+    return {"short_circuit": float(max(r.k[2:5]))}
+
+
+#: The assessment's shorts: the shorted fractions of ``grid``, through a fault bridge that
+#: alternates from unit to unit between a severe 0.05 ohm, the parameters' own ``R_f``
+#: and a mild 0.5 ohm (each unit's short on its own phase in turn).
+GRIDS = (Grid("short_circuit", "shorted fraction of the turns", (0.03, 0.05, 0.1, 0.2),
+              variants=({"R_f": 0.05}, {}, {"R_f": 0.5})),)
+
 MODE = FaultMode("short_circuit", "inter-turn short circuit", threshold=0.03,
                  thresholds_by_fm={"physical": 0.018}, read=read, inject=inject,
                  severity_unit="shorted fraction of the turns", grid=(0.03, 0.05, 0.1, 0.2),
                  per_phase=True, spec="PHASE:FRACTION[:R_F_OHM]", parse_fields=parse,
-                 hypothesis=hypothesis,
+                 hypothesis=hypothesis, measure=measure, extra_grids=GRIDS,
                  k_components=(2, 3, 4))
