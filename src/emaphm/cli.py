@@ -517,8 +517,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_params)
 
     # subcommands of the campaign, prognosis and fleet layers live beside their code
-    for module in ("emaphm.traces.importers.cli", "emaphm.campaign.cli", "emaphm.prognosis.cli",
-                   "emaphm.fleet.cli"):
+    for module in ("emaphm.traces.importers.cli", "emaphm.campaign.cli", "emaphm.assessment.cli",
+                   "emaphm.prognosis.cli", "emaphm.fleet.cli"):
         try:
             register = importlib.import_module(module).register
         except ModuleNotFoundError as exc:

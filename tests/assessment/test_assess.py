@@ -1,0 +1,200 @@
+"""``emaphm assess`` end to end on the reference plant (a few units, two grids): its files,
+the figures its JSON lets a reader recompute, resuming, the assessed parameters honoured by
+``diagnose``, the prediction checked on fresh units, and its refusals."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from emaphm.assessment import AssessmentSpec, assess
+from emaphm.assessment.stats import wilson
+from emaphm.cli import main
+from emaphm.params import load_params, siemens_1fk7060
+
+FAST = ["--units", "3", "--healthy", "2", "--healthy-datasheet", "1",
+        "--grids", "friction,short_circuit", "--severities", "friction=1.5",
+        "--severities", "short_circuit=0.1", "--workers", "0", "--quiet"]
+
+
+@pytest.fixture(scope="module")
+def assessed(tmp_path_factory):
+    out = tmp_path_factory.mktemp("assess") / "preset"
+    assert main(["assess", "--out", str(out), "--tune-units", "3", *FAST]) == 0
+    return out
+
+
+def test_it_writes_the_whole_assessment_and_nothing_beside(assessed):
+    names = sorted(os.listdir(assessed))
+    assert names == ["assessment.json", "params.toml", "pod_friction.png",
+                     "pod_short_circuit.png", "report.md", "units.sqlite"]
+    # the work folder of the resumable run is gone once the folder is written
+    assert sorted(os.listdir(assessed.parent)) == ["preset"]
+    for png in ("pod_friction.png", "pod_short_circuit.png"):
+        assert (assessed / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_every_figure_of_the_json_can_be_recomputed_from_its_runs(assessed):
+    a = json.loads((assessed / "assessment.json").read_text())
+    assert a["schema_version"] == 1 and a["emaphm_version"]
+    runs = a["runs"]
+    # 3 units: 2 healthy after calibration, 1 on the data sheet, 2 faults
+    assert len(runs) == 3 * (2 + 1 + 2)
+    for path in ("calibrated", "datasheet"):
+        fa = a["false_alarm"][path]
+        rs = [r for r in runs if r["case"] == "healthy" and r["path"] == path]
+        v = Counter(r["verdict"] for r in rs)
+        assert (fa["n"], fa["faulty"], fa["unexplained"], fa["healthy"]) == \
+            (len(rs), v["faulty"], v["unexplained"], v["healthy"])
+        assert fa["rate"] == v["faulty"] / len(rs)
+        assert (fa["lo"], fa["hi"]) == pytest.approx(wilson(v["faulty"], len(rs)))
+        assert fa["interval"] == "wilson"
+    for grid in ("friction", "short_circuit"):
+        (row,) = a["pod"][grid]
+        rs = [r for r in runs if r["case"] == grid and r["path"] == "calibrated"]
+        assert row["n"] == len(rs) == 3
+        assert row["pci"] == sum(r["right"] for r in rs) / 3
+        assert row["pod"] == sum(r["verdict"] == "faulty" for r in rs) / 3
+        assert (row["lo"], row["hi"]) == pytest.approx(wilson(round(3 * row["pci"]), 3))
+        # 3 units can never put the lower bound of a proportion at 0.9
+        assert a["min_detectable"][grid] is None
+    assert a["pod"]["friction"][0]["severity_unit"] == "x nominal friction"
+    assert sum(sum(row.values()) for row in a["confusion"].values()) == \
+        sum(r["path"] == "calibrated" for r in runs)
+    assert len(a["seeds"]["unit_seeds"]) == len(a["seeds"]["tune_unit_seeds"]) == 3
+    assert a["cpu_s"]["total"] > 0 and a["tracking"]["ratio"] < 0.15
+
+
+def test_the_short_and_the_friction_are_named_after_calibration(assessed):
+    a = json.loads((assessed / "assessment.json").read_text())
+    assert a["pod"]["short_circuit"][0]["pci"] == 1.0
+    assert a["pod"]["friction"][0]["pci"] == 1.0
+    assert a["false_alarm"]["calibrated"]["faulty"] == 0
+
+
+def test_the_assessed_parameters_carry_the_tuned_thresholds(assessed, tmp_path, capsys):
+    a = json.loads((assessed / "assessment.json").read_text())
+    params = load_params(assessed / "params.toml")
+    assert dict(params.thresholds) == pytest.approx(a["thresholds"]["values"])
+    assert a["thresholds"]["tuned"] and set(a["thresholds"]["tuning"]) == set(a["thresholds"]["values"])
+    # everything else is the data sheet's
+    assert params.to_dict() | {"thresholds": None} == siemens_1fk7060().to_dict() | {"thresholds": None}
+    # diagnose reads a k with them: a friction between the default and the tuned threshold
+    trace = tmp_path / "f.parquet"
+    t = params.thresholds
+    tuned = dict(t)["friction"]
+    assert tuned < 0.1
+    k1 = (tuned + 0.1) / 2
+    assert main(["simulate", "--k", f"{k1},0,0,0,0,0,0.5,0.5", "--model", "monitoring",
+                 "--out", str(trace)]) == 0
+    capsys.readouterr()
+    assert main(["diagnose", str(trace), "--json", "--quiet"]) == 0
+    default = json.loads(capsys.readouterr().out)
+    assert main(["diagnose", str(trace), "--params", str(assessed / "params.toml"), "--json",
+                 "--quiet"]) == 0
+    own = json.loads(capsys.readouterr().out)
+    assert default["thresholds"]["friction"] == 0.1 and own["thresholds"]["friction"] == tuned
+    assert [f["mode"] for f in own["faults"]] == ["friction"]
+    assert "friction" not in [f["mode"] for f in default["faults"]]
+
+
+def test_the_report_reads_in_words_with_its_figures(assessed):
+    md = (assessed / "report.md").read_text()
+    assert "## Conclusions" in md and "called faulty 0 times in 6" in md
+    assert "![friction](pod_friction.png)" in md
+    assert "A friction of 1.5 (x nominal friction) is named right 3 times in 3" in md
+
+
+def test_the_prediction_holds_on_fresh_units(assessed, tmp_path):
+    """The assessed parameters on units of another seed, thresholds kept: each rate lies in
+    the assessed interval, allowing for the fresh units' own sampling error."""
+    fresh = tmp_path / "fresh"
+    assert main(["assess", "--params", str(assessed / "params.toml"), "--no-tune", "--seed", "1",
+                 "--out", str(fresh), *FAST]) == 0
+    a = json.loads((assessed / "assessment.json").read_text())
+    b = json.loads((fresh / "assessment.json").read_text())
+    assert b["thresholds"]["values"] == pytest.approx(a["thresholds"]["values"])
+    assert not set(a["seeds"]["unit_seeds"]) & set(b["seeds"]["unit_seeds"])
+
+    def overlap(x, y):
+        return x[0] <= y[1] and y[0] <= x[1]
+
+    fa, fb = a["false_alarm"]["calibrated"], b["false_alarm"]["calibrated"]
+    assert overlap((fa["lo"], fa["hi"]), wilson(fb["faulty"], fb["n"]))
+    for grid in ("friction", "short_circuit"):
+        (ra,), (rb,) = a["pod"][grid], b["pod"][grid]
+        assert overlap((ra["lo"], ra["hi"]), wilson(rb["right"], rb["n"]))
+
+
+def test_an_interrupted_assessment_resumes_to_the_same_numbers(tmp_path):
+    spec = AssessmentSpec(siemens_1fk7060().to_dict(), units=2, tune_units=1, healthy=1,
+                          healthy_datasheet=0, tune_healthy=1, grids=("friction",),
+                          severities={"friction": (2.0,)})
+    whole = assess(spec, tmp_path / "whole")
+
+    class Interrupting:
+        """Runs one unit, then Ctrl-C."""
+        workers = 0
+
+        def map_unordered(self, fn, items):
+            for item in items:
+                yield item, fn(item)
+                raise KeyboardInterrupt
+
+    out = tmp_path / "resumed"
+    with pytest.raises(KeyboardInterrupt):
+        assess(spec, out, executor=Interrupting())
+    assert not out.exists() and (tmp_path / ".resumed.assessing" / "units.sqlite").exists()
+    resumed = assess(spec, out)
+    assert resumed.resumed == 1 and resumed.ran == 2
+    strip = lambda rs: [{k: v for k, v in r.items() if k != "cpu_s"} for r in rs]  # noqa: E731
+    assert strip(resumed.summary["runs"]) == strip(whole.summary["runs"])
+    assert resumed.summary["thresholds"] == whole.summary["thresholds"]
+    # another spec into the same work folder is refused, with the differences
+    (tmp_path / ".again.assessing").mkdir()
+    assess_other = AssessmentSpec(siemens_1fk7060().to_dict(), units=3, tune_units=1, healthy=1,
+                                  healthy_datasheet=0, tune_healthy=1, grids=("friction",),
+                                  severities={"friction": (2.0,)})
+    with pytest.raises(KeyboardInterrupt):
+        assess(spec, tmp_path / "again", executor=Interrupting())
+    with pytest.raises(ValueError, match="units: 3 here, 2 there"):
+        assess(assess_other, tmp_path / "again")
+
+
+def _fails(argv, capsys, match):
+    try:
+        rc = main(argv)
+    except SystemExit as exc:           # refused by the parser
+        rc = exc.code
+    assert rc == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "Traceback" not in err[0], err
+    assert match in err[0], err[0]
+
+
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys):
+    os.chdir(tmp_path)
+    Path("tol.toml").write_text("[tolerances]\nJJ = [0, 1]\n")
+    _fails(["assess", "--out", "o", "--tolerances", "tol.toml"], capsys, "unknown tolerance(s) ['JJ']")
+    _fails(["assess", "--out", "o", "--units", "0"], capsys, "--units")
+    _fails(["assess", "--out", "nowhere/o"], capsys, "does not exist")
+    Path("exists").mkdir()
+    _fails(["assess", "--out", "exists"], capsys, "exists; give a new folder")
+    Path("file").write_text("x")
+    _fails(["assess", "--out", "file/o"], capsys, "--out")
+    weak = siemens_1fk7060().to_dict()
+    weak["motor"]["T_max"] = 0.5
+    from emaphm.params import ActuatorParams, save_params
+
+    save_params(ActuatorParams.from_dict(weak), "weak.toml")
+    _fails(["assess", "--params", "weak.toml", "--out", "o"], capsys,
+           "does not track the diagnostic profile")
+    _fails(["assess", "--out", "o", "--grids", "friction,wear"], capsys, "unknown assessment grid")
+    _fails(["assess", "--out", "o", "--severities", "friction"], capsys, "GRID=S1,S2")
+    _fails(["assess", "--out", "o", "--target-far", "1"], capsys, "--target-far")
+    assert sorted(os.listdir(tmp_path)) == ["exists", "file", "tol.toml", "weak.toml"]
+    assert os.listdir("exists") == []
