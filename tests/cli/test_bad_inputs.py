@@ -1036,6 +1036,39 @@ def test_bad_input_is_one_line_exit_2_and_changes_nothing(name, base, tmp_path, 
             p.chmod(stat.S_IRWXU)
 
 
+def test_the_reading_commands_read_a_read_only_history_in_a_read_only_folder(tmp_path):
+    """history show, history list, prognose and fleet report on a history whose file and
+    folder this process cannot write (as root: without CAP_DAC_OVERRIDE): they work, and
+    leave the folder as it was, no -wal or -shm file included (SQLite's mode=ro needs the
+    -shm file, which a read-only folder cannot take: the file is opened immutable)."""
+    from emaphm.prognosis.history import HealthHistory
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    with HealthHistory(ro / "h.sqlite") as h:
+        h.register("EMA-R")
+        for i, t in enumerate((10.0, 20.0, 30.0, 40.0)):
+            h.add("EMA-R", t, [0.1 + 0.05 * i, 0, 0, 0, 0, 0, 0.5, 0.5])
+    _read_only_file(ro / "h.sqlite")
+    ro.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    before = _snapshot(ro)
+    assert list(before) == ["h.sqlite"]
+    db = ["--db", str(ro / "h.sqlite")]
+    try:
+        for argv in (["history", "show", "EMA-R"], ["history", "list"], ["prognose", "EMA-R"],
+                     ["fleet", "report", "--out", str(tmp_path / "site"), "--workers", "0"]):
+            rc, out, err = run_unprivileged(argv + db, tmp_path)
+            assert rc == 0, (argv, err)
+            assert "EMA-R" in out and "Traceback" not in err
+            assert _snapshot(ro) == before, argv
+        # a command that writes is refused in one line, before any work
+        rc, _, err = run_unprivileged(["history", "register", "EMA-S"] + db, tmp_path)
+        assert rc == 2 and err.count("\n") == 1 and "cannot write the health history" in err
+        assert _snapshot(ro) == before
+    finally:
+        ro.chmod(stat.S_IRWXU)
+
+
 def _warned(argv, capsys) -> str:
     """Run ``argv`` that succeeds with warnings; its stderr, which must be warning lines only."""
     assert main(argv) == 0
