@@ -713,6 +713,9 @@ def test_star_connection(trace, change, match):
 
 
 @pytest.mark.parametrize("change", [lambda i: i + [0.3, 0.0, 0.0],          # an offset on a
+                                    # an offset as large as the RMS current itself (was
+                                    # refused as a wiring error beyond half of it)
+                                    lambda i: i + [0.0, np.sqrt(np.mean(i * i)), 0.0],
                                     lambda i: i * [1.0, 0.8, 1.0],           # b reads 20 % low
                                     lambda i: i * [1.0, 1.0, 1.25] + [0, 0, -0.2]])
 def test_a_sum_one_faulty_sensor_explains_is_read_for_the_diagnosis(trace, change):
