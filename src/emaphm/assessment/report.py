@@ -38,7 +38,8 @@ def _false_alarm(runs: list[dict], path: str) -> dict[str, Any]:
     p = proportion(v["faulty"], len(rs))
     units = {r["unit"] for r in rs}
     return {"n": len(rs), "faulty": v["faulty"], "unexplained": v["unexplained"],
-            "healthy": v["healthy"], "rate": p.rate, "lo": p.lo, "hi": p.hi,
+            "healthy": v["healthy"], "refused": v["refused"], "rate": p.rate, "lo": p.lo,
+            "hi": p.hi,
             "interval": "wilson", "units": len(units),
             "units_with_false_alarm": len({r["unit"] for r in rs if r["verdict"] == "faulty"}),
             "named": dict(Counter(f[0] for r in rs if r["verdict"] == "faulty"
@@ -61,6 +62,7 @@ def _pod(spec: AssessmentSpec, runs: list[dict]) -> tuple[dict, dict, dict]:
             rows.append({"severity": s, "severity_unit": g.severity_unit,
                          "magnitude": g.magnitude(s), "n": n, "detected": det, "right": right,
                          "unexplained": sum(r["verdict"] == "unexplained" for r in at),
+                         "refused": sum(r["verdict"] == "refused" for r in at),
                          "pod": det / n if n else None, "pci": p.rate if n else None,
                          "lo": p.lo, "hi": p.hi})
         pod[name] = rows
@@ -73,8 +75,8 @@ def _pod(spec: AssessmentSpec, runs: list[dict]) -> tuple[dict, dict, dict]:
 
 def _confusion(spec: AssessmentSpec, runs: list[dict]) -> dict[str, dict[str, int]]:
     """True case (healthy, each grid) -> what the calibrated diagnosis said: ``healthy``,
-    ``unexplained``, the one mode it named (``mode`` or ``mode (wrong phase)``), or
-    ``several``."""
+    ``unexplained``, ``refused`` (the trace itself), the one mode it named (``mode`` or
+    ``mode (wrong phase)``), or ``several``."""
     out: dict[str, dict[str, int]] = {}
     for case in (HEALTHY, *(spec.grids or ())):
         c: Counter = Counter()

@@ -59,10 +59,17 @@ def _outcome(ex: Any, cpu_s: float, expected: tuple = ()) -> dict[str, Any]:
 
 
 def _examine(trace: Any, params: Any, config: Any, expected: tuple = ()) -> tuple[Any, dict]:
+    """The examination of ``trace`` and its outcome; a trace the diagnosis refuses (its
+    currents no sensor fault explains, say) is an outcome too, ``"refused"`` with the
+    reason, not the loss of the unit's other runs."""
     from ..verdict import examine
 
     t0 = time.process_time()
-    ex = examine(trace, params=params, config=config, seed=0, loops=False)
+    try:
+        ex = examine(trace, params=params, config=config, seed=0, loops=False)
+    except ValueError as exc:            # TraceError and its kin: what diagnose refuses
+        return None, {"verdict": "refused", "named": [], "right": False, "reason": str(exc),
+                      "fit_ratio": None, "cpu_s": time.process_time() - t0}
     return ex, _outcome(ex, time.process_time() - t0, expected)
 
 
@@ -128,7 +135,8 @@ def _tune(task: Task) -> dict[str, Any]:
     for j in range(spec.tune_healthy):
         seed = task.noise0 + FIRST_HEALTHY + j
         ex, res = _examine(_trace(unit, sheet, seed), cal.params, config)
-        readings.append({**res, "noise_seed": seed, "measures": measures_of(ex, cal.params)})
+        readings.append({**res, "noise_seed": seed,
+                         "measures": {} if ex is None else measures_of(ex, cal.params)})
     out["healthy"] = readings
     return out
 
