@@ -102,7 +102,10 @@ class Tolerances:
         if extra:
             raise ValueError(f"{source}: unknown tolerance(s) {sorted(extra)}; known: "
                              + ", ".join(sorted(known)))
-        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in data.items()})
+        try:
+            return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in data.items()})
+        except ValueError as exc:          # name the file
+            raise ValueError(f"{source}: {exc}") from None
 
 
 DEFAULT_TOLERANCES = Tolerances()
