@@ -198,3 +198,23 @@ def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys):
     _fails(["assess", "--out", "o", "--target-far", "1"], capsys, "--target-far")
     assert sorted(os.listdir(tmp_path)) == ["exists", "file", "tol.toml", "weak.toml"]
     assert os.listdir("exists") == []
+
+
+def test_a_dask_cluster_gives_the_serial_numbers(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    from emaphm.campaign.executors import DaskExecutor
+
+    spec = AssessmentSpec(siemens_1fk7060().to_dict(), units=1, tune_units=1, healthy=1,
+                          healthy_datasheet=0, tune_healthy=1, grids=("friction",),
+                          severities={"friction": (2.0,)}, seed=5)
+    here = assess(spec, tmp_path / "here").summary
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=40) as cluster:
+        there = assess(spec, tmp_path / "there",
+                       executor=DaskExecutor(cluster.scheduler_address)).summary
+    strip = lambda rs: [{k: v for k, v in r.items() if k != "cpu_s"} for r in rs]  # noqa: E731
+    assert strip(there["runs"]) == strip(here["runs"]) and len(here["runs"]) == 2
+    # a scheduler that does not answer: one line, exit 2, nothing written
+    _fails(["assess", "--out", str(tmp_path / "nowhere"), "--scheduler", "tcp://127.0.0.1:9",
+            "--units", "1"], capsys, "scheduler")
+    assert not (tmp_path / "nowhere").exists()
