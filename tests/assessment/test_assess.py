@@ -218,3 +218,26 @@ def test_a_dask_cluster_gives_the_serial_numbers(tmp_path, capsys):
     _fails(["assess", "--out", str(tmp_path / "nowhere"), "--scheduler", "tcp://127.0.0.1:9",
             "--units", "1"], capsys, "scheduler")
     assert not (tmp_path / "nowhere").exists()
+
+
+def test_a_lost_unit_is_retried_and_nothing_is_written_until_every_unit_is_in(tmp_path):
+    from emaphm.assessment.runner import AssessmentIncomplete
+
+    spec = AssessmentSpec(siemens_1fk7060().to_dict(), units=2, tune_units=0, healthy=1,
+                          healthy_datasheet=0, grids=("friction",), severities={"friction": (2.0,)})
+
+    class LosesUnitOne:
+        """A pool whose worker dies on the second unit."""
+        workers = 0
+
+        def map_unordered(self, fn, items):
+            for item in items:
+                yield item, (RuntimeError("worker lost") if item.index == 1 else fn(item))
+
+    out = tmp_path / "a"
+    with pytest.raises(AssessmentIncomplete, match=r"1 unit\(s\) failed .*assess/1.*worker lost"):
+        assess(spec, out, executor=LosesUnitOne())
+    assert not out.exists()
+    again = assess(spec, out)
+    assert again.ran == 1 and again.resumed == 1 and not again.summary["failures"]
+    assert sorted({r["unit"] for r in again.summary["runs"]}) == [0, 1]

@@ -5,8 +5,9 @@
                   [--grids friction,short_circuit] [--severities friction=1.25,1.5]
                   [--quiet]
 
-Exit status: 0 written; 2 bad input (nothing written); 130 interrupted (the units done are
-kept beside DIR; the same command resumes).
+Exit status: 0 written; 1 some units failed (DIR not written; the same command retries
+them); 2 bad input (nothing written); 130 interrupted (the units done are kept beside DIR;
+the same command resumes).
 """
 
 from __future__ import annotations
@@ -61,7 +62,7 @@ def build_spec(args: argparse.Namespace) -> Any:
 def cmd_assess(args: argparse.Namespace) -> int:
     from ..campaign.executors import make_executor, warm_up
     from ..progress import RunProgress, compile_notice
-    from .runner import assess, check_tracking, work_folder
+    from .runner import AssessmentIncomplete, assess, check_tracking, work_folder
 
     if args.workers is not None and args.scheduler is not None:
         raise UsageError("give either --workers (local pool) or --scheduler (Dask cluster), not both")
@@ -96,6 +97,9 @@ def cmd_assess(args: argparse.Namespace) -> int:
 
     try:
         outcome = assess(spec, out, executor=executor, progress=progress)
+    except AssessmentIncomplete as exc:
+        print(f"emaphm assess: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:
         print(f"emaphm assess: interrupted; the units done are kept in {work}. Run the same "
               "command again to resume.", file=sys.stderr)

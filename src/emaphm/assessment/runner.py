@@ -26,7 +26,8 @@ from .spec import AssessmentError, AssessmentSpec
 from .store import AssessmentStore
 from .tasks import run_task
 
-__all__ = ["assess", "check_tracking", "Outcome", "TRACKING_LIMIT", "work_folder"]
+__all__ = ["assess", "check_tracking", "Outcome", "AssessmentIncomplete", "TRACKING_LIMIT",
+           "work_folder"]
 
 #: The largest RMS position error of the healthy nominal actuator on the diagnostic
 #: profile, as a share of the profile's travel, of an actuator an assessment accepts.
@@ -61,6 +62,19 @@ def work_folder(out: Path) -> Path:
     return out.parent / f".{out.name}.assessing"
 
 
+class AssessmentIncomplete(RuntimeError):
+    """Units failed (their errors are stored beside the output); the outputs were not
+    written. Running the same assessment again retries them."""
+
+    def __init__(self, failed: list[dict[str, Any]], work: Path) -> None:
+        self.failed = failed
+        self.work = work
+        first = failed[0]["error"].strip().splitlines()[-1]
+        super().__init__(f"{len(failed)} unit(s) failed (the first, {failed[0]['key']}: "
+                         f"{first}); their results are kept in {work}: run the same command "
+                         "again to retry them")
+
+
 @dataclass(frozen=True)
 class Outcome:
     """What :func:`assess` did: the ``summary`` (the dict of ``assessment.json``), the
@@ -77,9 +91,11 @@ def _run_phase(tasks: list, store: AssessmentStore, executor: Any, progress: Any
     todo = [t for t in tasks if t.key not in done]
     if progress is not None:
         progress.start(len(tasks), len(tasks) - len(todo), len(todo))
-    for _, result in executor.map_unordered(run_task, todo):
-        if isinstance(result, BaseException):
-            raise result
+    for task, result in executor.map_unordered(run_task, todo):
+        if isinstance(result, BaseException):      # a lost worker, a broken pool: retried
+            result = {"key": task.key, "phase": task.phase, "index": task.index,
+                      "unit_seed": task.unit_seed, "cpu_s": 0.0,
+                      "error": f"{type(result).__name__}: {result}"}
         store.put(result)
         if progress is not None:
             progress.update(SimpleNamespace(ok="error" not in result))
@@ -145,6 +161,9 @@ def assess(spec: AssessmentSpec, out: str | os.PathLike[str], *, executor: Any =
                     bar.close()
             ran, resumed = ran + n_ran, resumed + n_old
         assessed = list(store.results("assess").values())
+        failed = [u for u in (*tune_results, *assessed) if "error" in u]
+    if failed:
+        raise AssessmentIncomplete(failed, work)
     summary = summarize(spec, tuned, values, tune_results, assessed,
                         wall_s=time.perf_counter() - t0, version=__version__, tracking=tracking)
     params = replace(spec.actuator(), thresholds=tuple(sorted(values.items())))
