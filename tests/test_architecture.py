@@ -20,15 +20,16 @@ def module_name(path: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def imports(path: Path) -> set[str]:
-    """The emaphm modules ``path`` imports anywhere in its code (``from .x import y`` counts
-    as ``x``, and as ``x.y`` where that is a module)."""
+def import_statements(path: Path):
+    """``(line, module, names)`` of every import anywhere in ``path``'s code, relative
+    imports resolved: ``import x`` gives ``names`` None, ``from .x import a, b`` the module
+    ``<package>.x`` and ``["a", "b"]``."""
     name = module_name(path)
-    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
-    found = set()
+    package = package_of(name, path)
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
         if isinstance(node, ast.Import):
-            found |= {a.name for a in node.names}
+            for a in node.names:
+                yield node.lineno, a.name, None
         elif isinstance(node, ast.ImportFrom):
             base = package.split(".")
             if node.level:
@@ -36,8 +37,16 @@ def imports(path: Path) -> set[str]:
                 target = ".".join(base + ([node.module] if node.module else []))
             else:
                 target = node.module or ""
-            found.add(target)
-            found |= {f"{target}.{a.name}" for a in node.names}
+            yield node.lineno, target, [a.name for a in node.names]
+
+
+def imports(path: Path) -> set[str]:
+    """The emaphm modules ``path`` imports anywhere in its code (``from .x import y`` counts
+    as ``x``, and as ``x.y`` where that is a module)."""
+    found = set()
+    for _, target, names in import_statements(path):
+        found.add(target)
+        found |= {f"{target}.{n}" for n in names or ()}
     return {m for m in found if m.startswith("emaphm")}
 
 
@@ -177,28 +186,18 @@ def test_the_length_rule_sees_methods_and_nested_functions():
 # shared infrastructure, private to the distribution, not to a folder: every package may
 # import their public names, never their private ones.
 
-def imported_names(path: Path, name: str, mods: dict[str, Path]):
-    """``(line, module, imported name or None)`` of every emaphm import of ``path`` (the
-    module ``name`` of ``mods``); ``module`` is the module the name comes from (the name
+def imported_names(path: Path, mods: dict[str, Path]):
+    """``(line, module, imported name or None)`` of every emaphm import of ``path`` (a
+    module of ``mods``); ``module`` is the module the name comes from (the name
     itself where it is a module)."""
-    package = package_of(name, path)
-    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if isinstance(node, ast.Import):
-            for a in node.names:
-                if a.name.startswith("emaphm"):
-                    yield node.lineno, a.name, None
-        elif isinstance(node, ast.ImportFrom):
-            base = package.split(".")
-            if node.level:
-                base = base[:len(base) - node.level + 1]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            if not target.startswith("emaphm"):
-                continue
-            for a in node.names:
-                full = f"{target}.{a.name}"
-                yield (node.lineno, full, None) if full in mods else (node.lineno, target, a.name)
+    for line, target, names in import_statements(path):
+        if not target.startswith("emaphm"):
+            continue
+        if names is None:
+            yield line, target, None
+        for a in names or ():
+            full = f"{target}.{a}"
+            yield (line, full, None) if full in mods else (line, target, a)
 
 
 def private_imports() -> list[str]:
@@ -206,7 +205,7 @@ def private_imports() -> list[str]:
     found = []
     for name, path in mods.items():
         here = package_of(name, path)
-        for line, module, imported in imported_names(path, name, mods):
+        for line, module, imported in imported_names(path, mods):
             owner = package_of(module, mods[module]) if module in mods else module
             parts = module.split(".")
             private_module = any(p.startswith("_") and not p.startswith("__") for p in parts)

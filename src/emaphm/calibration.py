@@ -53,7 +53,6 @@ whose calibration was written or edited by hand is told apart when it is read
 from __future__ import annotations
 
 import datetime as _dt
-import hashlib
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -67,7 +66,7 @@ from .fitness import (MIN_NOISE, aligned_currents, check_diagnosable, effective_
 from .params import (ActuatorParams, Calibration, CurrentSensors, calibration_digest,
                      siemens_1fk7060)
 from .profiles import Profile
-from .traces import Trace, TraceError, validate
+from .traces import Trace, TraceError, fingerprint, validate
 
 __all__ = ["PARAMETERS", "CORRELATION_LIMIT", "MULTIPLE_CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT",
            "CalibrationError", "CalibrationResult", "calibrate", "select_identifiable",
@@ -136,18 +135,9 @@ class CalibrationError(ValueError):
     """The traces cannot calibrate the unit (not healthy, too short, no motion)."""
 
 
-def trace_digest(trace: Trace) -> str:
-    """SHA-256 (hex) of a trace's signals (t, theta_ref, theta_m, omega_m, i_abc) as
-    little-endian float64: the same signals give the same digest whatever file format
-    held them (the recipe of :func:`emaphm.prognosis.history.trace_fingerprint`, with
-    which the health history recognises a trace it has seen)."""
-    h = hashlib.sha256(b"emaphm-trace-v1")
-    for name in ("t", "theta_ref", "theta_m", "omega_m", "i_abc"):
-        a = np.ascontiguousarray(np.asarray(getattr(trace, name), dtype="<f8"))
-        h.update(name.encode())
-        h.update(str(a.shape).encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
+#: SHA-256 of a trace's signals (:func:`emaphm.traces.fingerprint`): what a calibration
+#: records of each of its sources.
+trace_digest = fingerprint
 
 
 def apply_deviations(params: ActuatorParams, dev: dict[str, float]) -> ActuatorParams:

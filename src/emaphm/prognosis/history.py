@@ -49,7 +49,6 @@ when opened)::
 from __future__ import annotations
 
 import datetime as _dt
-import hashlib
 import json
 import math
 import os
@@ -66,6 +65,7 @@ from .._sqlite import (SQLITE_HEADER, connect_readonly, enable_wal, journal_file
                        remove_journal_files, store_name_problem, write_problem)
 from .._text import shown
 from ..faults import as_k
+from ..traces import fingerprint
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "MAX_TIME", "HistoryError", "UnknownActuatorError",
            "TimeOrderError", "DuplicateInspectionError", "ReadOnlyHistoryError", "Actuator",
@@ -325,17 +325,9 @@ class CalibrationRecord:
     recorded_utc: str
 
 
-def trace_fingerprint(trace: Any) -> str:
-    """SHA-256 (hex) of a trace's signals (t, theta_ref, theta_m, omega_m, i_abc), as
-    little-endian float64: the same signals give the same fingerprint whatever the file
-    format they were stored in."""
-    h = hashlib.sha256(b"emaphm-trace-v1")
-    for name in ("t", "theta_ref", "theta_m", "omega_m", "i_abc"):
-        a = np.ascontiguousarray(np.asarray(getattr(trace, name), dtype="<f8"))
-        h.update(name.encode())
-        h.update(str(a.shape).encode())
-        h.update(a.tobytes())
-    return h.hexdigest()
+#: SHA-256 of a trace's signals (:func:`emaphm.traces.fingerprint`): an inspection's trace
+#: recognised whatever file held it.
+trace_fingerprint = fingerprint
 
 
 def _vec(x: Any, name: str) -> np.ndarray:

@@ -40,7 +40,8 @@ Writes are atomic: the file is written to a temporary sibling and moved over the
 with :func:`os.replace`, so a failure never leaves a half-written file.
 """
 
-from .container import COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, TraceWarning, resample
+from .container import (COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, TraceWarning,
+                        fingerprint, resample)
 from .files import SUFFIXES, read_trace, write_trace
 from .limits import MAX_FILE_BYTES, MAX_SAMPLES
 from .metadata import FORMAT_VERSION
@@ -62,4 +63,5 @@ __all__ = [
     "write_trace",
     "read_trace",
     "resample",
+    "fingerprint",
 ]

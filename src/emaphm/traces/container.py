@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import enum
+import hashlib
 import json
 import math
 import os
@@ -15,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COLUMNS", "OPTIONAL_COLUMNS", "UNITS", "TraceError", "Trace", "resample"]
+__all__ = ["COLUMNS", "OPTIONAL_COLUMNS", "UNITS", "TraceError", "Trace", "resample", "fingerprint"]
 
 COLUMNS: tuple[str, ...] = ("t", "theta_ref", "theta_m", "omega_m", "i_a", "i_b", "i_c")
 OPTIONAL_COLUMNS: tuple[str, ...] = ("torque",)
@@ -375,6 +376,20 @@ def _require_columns(found: Any, source: str = "") -> None:
 # --------------------------------------------------------------------------------------
 # Resampling
 # --------------------------------------------------------------------------------------
+
+
+def fingerprint(trace: Any) -> str:
+    """SHA-256 (hex) of a trace's signals (t, theta_ref, theta_m, omega_m, i_abc) as
+    little-endian float64: the same signals give the same fingerprint whatever the file
+    format they were stored in (the health history recognises a trace it has seen by it;
+    a calibration records those of its sources)."""
+    h = hashlib.sha256(b"emaphm-trace-v1")
+    for name in ("t", "theta_ref", "theta_m", "omega_m", "i_abc"):
+        a = np.ascontiguousarray(np.asarray(getattr(trace, name), dtype="<f8"))
+        h.update(name.encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
 
 
 def resample(trace: Trace, t_new: Any) -> Trace:
