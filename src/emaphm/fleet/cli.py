@@ -1,6 +1,7 @@
 """``emaphm fleet``: the fleet health site (registered by :func:`emaphm.cli.build_parser`).
 
     emaphm fleet report --db fleet.sqlite --out site/ [--actuator ID ...] [--threshold MODE=V]
+                        [--workers N | --scheduler tcp://HOST:PORT]
     emaphm fleet demo --db demo.sqlite [--actuators 30] [--seed S] [--synthetic]
 
 The store is ``--db PATH``, else ``$EMAPHM_HISTORY``, else ``emaphm-history.sqlite``, as
@@ -56,6 +57,15 @@ def cmd_report(args: argparse.Namespace) -> int:
     if not 0 < args.level < 1:
         raise _usage(f"--level must be in (0, 1), e.g. 0.9, got {args.level}")
     out = _site_folder(args.out)
+    if args.workers is not None and args.scheduler is not None:
+        raise _usage("give either --workers (local processes) or --scheduler (Dask cluster), "
+                     "not both")
+    executor = None
+    if args.scheduler is not None:       # a wrong address fails before any work is announced
+        from ..campaign.executors import DaskExecutor
+
+        executor = DaskExecutor(args.scheduler, warm=False)
+        executor.check()
     db = db_path(args)
     with HealthHistory(db, readonly=True) as h:          # bad input fails before any drawing
         for actuator in args.actuator or ():
@@ -73,34 +83,34 @@ def cmd_report(args: argparse.Namespace) -> int:
         try:
             site = build_site(h, out, actuators=args.actuator, thresholds=thresholds,
                               seed=args.seed, level=args.level, workers=args.workers,
-                              title=args.title, redraw=args.redraw,
+                              title=args.title, redraw=args.redraw, executor=executor,
                               progress=lambda text: line.show(text))
         finally:
             line.close()
-    skipped = [s for s in site.statuses if s.data.skipped]
+    skipped = site.skipped
     if skipped:                                  # one line for the whole fleet
-        first = skipped_note(skipped[0].actuator, skipped[0].data.skipped)
-        others = sum(len(s.data.skipped) for s in skipped[1:])
+        first = skipped_note(*skipped[0])
+        others = sum(len(s) for _, s in skipped[1:])
         warn("fleet report", first + (f"; and {others} more of {len(skipped) - 1} other "
                                       "actuator(s) (emaphm history show ID names them)"
                                       if others else ""))
     if args.json:
-        print(json.dumps({"index": str(site.index), "actuators": len(site.statuses),
+        print(json.dumps({"index": str(site.index), "actuators": len(site.rows),
                           "elapsed_s": site.elapsed_s, "workers": site.workers,
-                          "drawn": site.drawn,
+                          "drawn": site.drawn, "written": site.written,
                           "pages": {k: str(v) for k, v in site.pages.items()}}))
     else:
-        past = sum(s.past_threshold for s in site.statuses)
-        predicted = sum(s.predicted and not s.past_threshold for s in site.statuses)
-        kept = len(site.statuses) - site.drawn
-        print(f"wrote {site.index} ({len(site.statuses)} actuators: {past} past a threshold, "
+        past = sum(r["rul_state"] == "past threshold" for r in site.rows)
+        predicted = sum(r["rul_state"] == "predicted" for r in site.rows)
+        kept = len(site.rows) - site.drawn
+        print(f"wrote {site.index} ({len(site.rows)} actuators: {past} past a threshold, "
               f"{predicted} with a predicted failure) in {site.elapsed_s:.1f} s"
-              + (f"; the figures of {kept} were up to date" if kept else ""))
-        for s in site.statuses[:3]:
-            if s.past_threshold or s.predicted:
-                rul = "past threshold" if s.past_threshold else \
-                    f"RUL median {s.rul_median:.0f} {s.actuator.time_unit}"
-                print(f"  {s.id}: {s.worst}, {rul}")
+              + (f"; the pages of {kept} were up to date" if kept else ""))
+        for r in site.rows[:3]:
+            if r["rul_state"] in ("past threshold", "predicted"):
+                rul = "past threshold" if r["rul_state"] == "past threshold" else \
+                    f"RUL median {r['rul_median']:.0f} {r['time_unit']}"
+                print(f"  {r['id']}: {r['worst']}, {rul}")
     return 0
 
 
@@ -175,11 +185,15 @@ def register(subparsers: Any) -> None:
     r.add_argument("--level", type=float, default=0.9,
                    help="probability of the RUL interval (default 0.9)")
     r.add_argument("--workers", type=_workers, default=None,
-                   help="processes drawing the figures (default: every core; 0: this process)")
+                   help="processes making the pages (default: every core; 0: this process)")
+    r.add_argument("--scheduler", help="make the pages on a Dask cluster: its scheduler's "
+                                       "address, tcp://HOST:PORT, HOST:PORT or tls://HOST:PORT "
+                                       "(needs emaphm[dask] there and here; connect only to a "
+                                       "scheduler you trust: Dask exchanges pickles)")
     r.add_argument("--title", default="Fleet health", help="title of the site")
     r.add_argument("--redraw", action="store_true",
-                   help="draw every figure again (default: keep those whose inputs did not "
-                        "change since the last build into --out)")
+                   help="make every page and figure again (default: keep those whose inputs "
+                        "did not change since the last build into --out)")
     r.add_argument("--json", action="store_true")
     r.add_argument("--quiet", action="store_true")
     r.set_defaults(func=cmd_report)

@@ -3,8 +3,10 @@
 :func:`build_site` writes, into a folder::
 
     index.html                  one row per actuator, units needing attention first,
-                                sortable and filterable (assets/fleet.js), the rows also
-                                inline as JSON for the script
+                                sortable and filterable (assets/fleet.js); the first
+                                :data:`PAGE_ROWS` rows are in the page itself, and every row
+                                is inline as JSON (with its table row as HTML), which the
+                                script sorts, filters and shows a page at a time
     fleet.json                  the same rows for programs
     assets/fleet.css, fleet.js  shipped with emaphm: no CDN, works offline and from file://
     actuators/STEM.html         a page per actuator: state, RUL per indicator, figures,
@@ -14,20 +16,33 @@
                                 inspections on)
 
 ``STEM`` is :func:`emaphm.fleet.markup.page_stem` of the id (a slug and a hash), safe for
-any id. Every value from the store is escaped (:mod:`emaphm.fleet.markup`); every file is
-written atomically (:mod:`emaphm._files`), the pages before the index, so an interrupted
-build never leaves an index that links to a missing page. The figures are only read
-from the history and its prognosis: nothing is identified or simulated again.
+any id. Every value from the store is escaped (:mod:`emaphm.fleet.markup`). The figures
+are only read from the history and its prognosis: nothing is identified or simulated again.
 
-The prognosis and the figures of each actuator are computed in ``workers`` processes
-(default: every core); the result does not depend on their number. Drawing is most of
-the cost (about a second of CPU per actuator), so a rebuild into the same folder draws
-again only the figures whose inputs changed: ``actuators/.figures.json`` keeps, per
-actuator, the SHA-256 of everything its figures are drawn from (its inspections, the
-thresholds, the seed and level of the prognosis, the versions of emaphm and matplotlib
-and the code of the plotting modules); ``redraw=True`` ignores it. A build of the whole
-history removes the pages and figures of actuators an earlier build into the folder
-wrote that the history no longer has; a build of some ``actuators`` keeps the others'.
+An actuator's page and figures depend on that actuator alone (its inspections,
+calibrations and registration) and on the build's settings (thresholds, seed, level,
+title, and the versions of emaphm and matplotlib and the code of the modules that shape a
+page): ``actuators/.figures.json`` keeps, per page stem, the SHA-256 of all of it, the
+sizes of the files it made, and its row of the index. A rebuild into the same folder
+reads the history, hashes each actuator and stats its files: one whose digest and files
+are unchanged costs nothing more; the others are assessed (the prognosis), drawn and
+written again. The index and ``fleet.json`` are written again only when a row, the order
+or the settings changed (``actuators/.index-key``); ``redraw=True`` makes every page again.
+A build of the whole history removes the pages and figures of actuators an earlier build
+into the folder wrote that the history no longer has; a build of some ``actuators`` keeps
+the others'.
+
+The pages are made in ``workers`` processes (default: every core), or on a Dask cluster
+(``executor``: :class:`emaphm.campaign.DaskExecutor`), a few actuators per task; a task
+returns the bytes of its files, which this process writes (a cluster need not share the
+folder). The result does not depend on where they were made. Pages and figures are
+written by a rename, each whole, and flushed to disk together once before the manifest,
+the index and ``fleet.json`` are written (atomically, :mod:`emaphm._files`), so an
+interrupted build never leaves an index that links to a missing page, nor a manifest that
+vouches for a file that is not on disk.
+
+Only the worker's part imports the prognosis (SciPy) and matplotlib: a rebuild in which
+nothing changed imports neither.
 """
 
 from __future__ import annotations
@@ -37,25 +52,37 @@ import hashlib
 import json
 import math
 import os
+import secrets
+import stat
 import time
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 
 from .._files import atomic_write, atomic_write_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
 from .markup import esc, page_stem, script_json
-from .status import VERDICTS, ActuatorStatus, assess, indicator_state, order_fleet
 
-__all__ = ["FleetSite", "build_site", "ASSETS", "FIGURE_DPI"]
+if TYPE_CHECKING:  # pragma: no cover - .status imports the prognosis (SciPy): see _render
+    from .status import ActuatorStatus
+
+__all__ = ["FleetSite", "build_site", "ASSETS", "FIGURE_DPI", "PAGE_ROWS"]
 
 #: The files shipped in ``emaphm/fleet/assets`` and copied to ``OUT/assets``.
 ASSETS = ("fleet.css", "fleet.js")
 
 #: Resolution of the figures on the pages (dots per inch of their matplotlib size).
 FIGURE_DPI = 100
+
+#: zlib level of the figures' PNG files: 1 of 9 saves a fifth of the time to save a figure
+#: against the default 6, for files about a quarter larger (``benchmarks/bench_fleet.py``).
+PNG_COMPRESSION = 1
+
+#: Rows of the index in one page of its table: those the page holds itself (the most
+#: urgent, for a browser without JavaScript) and those its script shows at a time.
+PAGE_ROWS = 100
 
 #: The pages load only their own files: no inline script (a value that escaped its escaping
 #: could not run), nothing from the network. ``file:`` beside ``'self'``: browsers differ in
@@ -76,9 +103,18 @@ _TREND = {1: ("\u2191", "rising"), 0: ("\u2192", "steady"), -1: ("\u2193", "fall
 @dataclass(frozen=True)
 class FleetSite:
     """What :func:`build_site` wrote: ``index`` and a page per actuator id (``pages``),
-    the statuses in the index's order, the wall-clock seconds it took, the worker
-    processes it used (0: none) and for how many actuators it drew figures (the others'
-    were still up to date)."""
+    the wall-clock seconds it took, the worker processes it started (0: none, the pages
+    were made in this process or on a Dask cluster), for how many actuators it made the
+    page and drew the figures (``drawn``; the others' were up to date) and how many files
+    it wrote (``written``: pages, figures, the index, ``fleet.json``, assets; 0 when
+    nothing changed).
+
+    ``rows`` are the index's rows in its order (as in ``fleet.json``); ``skipped`` the
+    ``(Actuator, SkippedInspection tuple)`` of each actuator with stored inspections the
+    analyses leave out. ``statuses`` holds the :class:`~emaphm.fleet.status.ActuatorStatus`
+    of the actuators assessed in this process (``workers=0``) in the index's order; pages
+    made by worker processes or a cluster return only their rows (a status with its
+    prognosis' draws is about half a megabyte)."""
 
     out: Path
     index: Path
@@ -87,6 +123,9 @@ class FleetSite:
     elapsed_s: float = 0.0
     workers: int = 0
     drawn: int = 0
+    rows: tuple = field(repr=False, default=())
+    skipped: tuple = field(repr=False, default=())
+    written: int = 0
 
 
 # ----------------------------------------------------------------------------- formatting
@@ -120,22 +159,33 @@ def _num(x: Any) -> float | None:
 # ----------------------------------------------------------------------------- work per actuator
 @dataclass(frozen=True)
 class _Job:
+    """Everything one actuator's page is made from, picklable: a worker process, or a Dask
+    worker on another machine, makes it without the history or the site folder."""
+
     data: Any
+    records: tuple
     thresholds: FailureThresholds
     seed: int
     level: float
-    folder: str
+    title: str
     stem: str
-    key: str = ""
-    reuse: Any = None          # the figures of an earlier build with the same key
+    key: str
 
 
-#: Remembers which inputs drew the figures in ``actuators/`` (module docstring).
+#: What an earlier build made, per page stem (module docstring).
 _MANIFEST = ".figures.json"
 
-#: The modules whose code shapes a figure: a change in any of them redraws every figure.
-_FIGURE_CODE = ("emaphm.plots", "emaphm.prognosis.plots", "emaphm.prognosis.trends",
-                "emaphm.prognosis.thresholds", "emaphm.fleet.status", "emaphm.fleet.site")
+#: The digest of everything the index was last written from.
+_INDEX_KEY = ".index-key"
+
+#: The modules whose code shapes a page or a figure: a change in any of them makes every
+#: page again.
+_PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.plots", "emaphm.prognosis.trends",
+              "emaphm.prognosis.thresholds", "emaphm.fleet.status", "emaphm.fleet.site",
+              "emaphm.fleet.markup")
+
+#: Most actuators in one task of a worker process or a Dask worker.
+_BATCH_MAX = 16
 
 
 def _code_fingerprint() -> str:
@@ -148,23 +198,34 @@ def _code_fingerprint() -> str:
         mpl = version("matplotlib")
     except PackageNotFoundError:                # pragma: no cover - a dependency
         mpl = "?"
-    h = hashlib.sha256(f"emaphm {__version__} matplotlib {mpl} dpi {FIGURE_DPI}".encode())
-    for name in _FIGURE_CODE:
+    h = hashlib.sha256(f"emaphm {__version__} matplotlib {mpl} dpi {FIGURE_DPI} png "
+                       f"{PNG_COMPRESSION}".encode())
+    for name in _PAGE_CODE:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin and os.path.exists(spec.origin):
             h.update(Path(spec.origin).read_bytes())
     return h.hexdigest()
 
 
-def _figure_key(data: Any, thresholds: FailureThresholds, seed: int, level: float,
-                code: str) -> str:
-    """SHA-256 of everything an actuator's figures are drawn from."""
-    a = data.actuator
-    payload = {"actuator": [a.id, a.description, a.time_unit],
-               "inspections": [i.to_dict() for i in data.inspections],
-               "thresholds": thresholds.to_dict(), "seed": seed, "level": level, "code": code}
-    text = json.dumps(payload, sort_keys=True, default=lambda o: getattr(o, "tolist", str)(o))
+def _plain(o: Any) -> Any:
+    return getattr(o, "tolist", str)(o)
+
+
+def _digest(obj: Any) -> str:
+    text = json.dumps(obj, sort_keys=True, default=_plain)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _actuator_key(data: Any, records: Sequence[Any], settings: str) -> str:
+    """SHA-256 of everything an actuator's page, figures and row are made from: its
+    registration, inspections (those left out too), calibrations, and the ``settings``
+    digest of the build."""
+    return _digest({
+        "settings": settings, "actuator": data.actuator.to_dict(),
+        "inspections": [i.to_dict() for i in data.inspections],
+        "skipped": [s.to_dict() for s in data.skipped],
+        "calibrations": [[r.time, list(r.sources), r.recorded_utc, r.params.to_dict()]
+                         for r in records]})
 
 
 def _read_manifest(folder: Path) -> dict:
@@ -177,59 +238,88 @@ def _read_manifest(folder: Path) -> dict:
     return data if isinstance(data, dict) else {}
 
 
-def _reusable(entry: Any, key: str, folder: Path) -> dict | None:
-    """The figures an earlier build drew from the same inputs, if they are all still there."""
+def _reusable(entry: Any, key: str, folder: Path) -> bool:
+    """Whether an earlier build made this actuator's page from the same inputs and its
+    files are all still there, as large as they were written (a stat each)."""
     if not isinstance(entry, dict) or entry.get("key") != key:
-        return None
-    figures = entry.get("figures")
-    if not isinstance(figures, dict):
-        return None
-    try:
-        out = {k: (str(v[0]), int(v[1]), int(v[2])) for k, v in figures.items()}
-    except (TypeError, ValueError, IndexError):
-        return None
-    if not all((folder / name).is_file() for name, _, _ in out.values()):
-        return None
-    return out
+        return False
+    files = entry.get("files")
+    if not (isinstance(files, dict) and files and isinstance(entry.get("row"), dict)
+            and isinstance(entry.get("cells"), dict) and isinstance(entry.get("order"), list)
+            and isinstance(entry.get("figures"), dict)):
+        return False
+    for name, size in files.items():
+        if not isinstance(name, str) or Path(name).name != name:
+            return False
+        try:
+            st = os.stat(folder / name)
+        except (OSError, ValueError):
+            return False
+        if not stat.S_ISREG(st.st_mode) or st.st_size != size:
+            return False
+    return True
 
 
-def _remove_others(folder: Path, known: dict, keep: set[str]) -> None:
+def _remove_others(folder: Path, known: dict, keep: set[str]) -> int:
     """Remove from ``folder`` (and from the manifest ``known``) the page and figures of
     every actuator an earlier build wrote that is not in ``keep``: a site rebuilt from a
     history without them must not keep serving their pages. Only the files a build
-    names after a manifest stem are removed."""
-    for stem in [s for s in known if s not in keep]:
+    names after a manifest stem are removed. Returns how many actuators were removed."""
+    gone = [s for s in known if s not in keep]
+    for stem in gone:
         del known[stem]
         if Path(stem).name != stem:             # a stem is a plain name (page_stem)
             continue
         for name in (f"{stem}.html", *_figure_names(stem)):
             (folder / name).unlink(missing_ok=True)
+    return len(gone)
 
 
 def _figure_names(stem: str) -> tuple[str, str]:
     return f"{stem}-history.png", f"{stem}-prognosis.png"
 
 
-def _assess_and_draw(job: _Job) -> tuple[ActuatorStatus, dict]:
-    """One actuator's status, and its figures written into ``job.folder``: name -> (width,
-    height) in pixels. Runs in a worker process."""
-    from ..plots import save_figure
+def _render(job: _Job, keep: bool = False) -> dict:
+    """One actuator's status, page, figures and index row: the whole task of a worker.
+    The files come back as bytes (name -> bytes) for the caller to write; ``keep`` keeps
+    the :class:`ActuatorStatus` too (in this process only: it is half a megabyte)."""
+    from .status import assess, attention_key
+
+    status = assess(job.data, thresholds=job.thresholds, seed=job.seed, level=job.level)
+    files, figures = _draw(status, job.data, job.thresholds, job.stem)
+    page = f"{job.stem}.html"
+    files[page] = _actuator_html(status, figures, job.records,
+                                 fleet_title=job.title).encode("utf-8")
+    return {"id": status.id, "stem": job.stem, "key": job.key,
+            "row": _row(status, 0, f"actuators/{page}"),
+            "cells": _cells(status, f"actuators/{page}"),
+            "order": list(attention_key(status)), "figures": figures, "files": files,
+            "status": status if keep else None}
+
+
+def _render_batch(jobs: Sequence[_Job]) -> list[dict]:
+    """:func:`_render` of a few actuators: one task of a worker process or a Dask worker."""
+    return [_render(job) for job in jobs]
+
+
+def _draw(status: "ActuatorStatus", data: Any, thresholds: FailureThresholds,
+          stem: str) -> tuple[dict, dict]:
+    """The figures of one actuator as PNG bytes (name -> bytes) and as the page shows them
+    (``history``/``prognosis`` -> (name, width, height) in pixels)."""
     from ..prognosis.plots import (interesting_indicators, moved_components, plot_history,
                                    plot_prognosis)
     from ..prognosis.thresholds import INDICATOR_COMPONENT
 
-    status = assess(job.data, thresholds=job.thresholds, seed=job.seed, level=job.level)
-    if job.reuse is not None:
-        return status, dict(job.reuse)
-    figures = {}
-    hist_name, prog_name = _figure_names(job.stem)
+    files: dict[str, bytes] = {}
+    figures: dict[str, tuple] = {}
+    hist_name, prog_name = _figure_names(stem)
     if status.n_inspections:
         # the components that moved (and the worst): a panel per flat line of a healthy
         # component cost most of a fresh site's drawing time
         always = [INDICATOR_COMPONENT[status.worst]] if status.worst in INDICATOR_COMPONENT else []
-        fig = plot_history(job.data, thresholds=job.thresholds,
-                           components=moved_components(job.data, job.thresholds, always))
-        save_figure(fig, Path(job.folder) / hist_name, dpi=FIGURE_DPI)
+        fig = plot_history(data, thresholds=thresholds,
+                           components=moved_components(data, thresholds, always))
+        files[hist_name] = _png(fig)
         figures["history"] = (hist_name, *_pixels(fig))
     prog = status.prognosis
     if prog is not None:                      # the worst, and up to two more that grow
@@ -237,9 +327,17 @@ def _assess_and_draw(job: _Job) -> tuple[ActuatorStatus, dict]:
         names = [status.worst] + [n for n in interesting_indicators(prog) if n != status.worst
                                   and not prog.predictions[n].no_growth(span)]
         fig = plot_prognosis(prog, indicators=names[:3])
-        save_figure(fig, Path(job.folder) / prog_name, dpi=FIGURE_DPI)
+        files[prog_name] = _png(fig)
         figures["prognosis"] = (prog_name, *_pixels(fig))
-    return status, figures
+    return files, figures
+
+
+def _png(fig: Any) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=FIGURE_DPI, pil_kwargs={"compress_level": PNG_COMPRESSION})
+    return buf.getvalue()
 
 
 def _pixels(fig: Any) -> tuple[int, int]:
@@ -247,33 +345,107 @@ def _pixels(fig: Any) -> tuple[int, int]:
     return int(round(w * FIGURE_DPI)), int(round(h * FIGURE_DPI))
 
 
-def _run(jobs: list[_Job], workers: int,
-         progress: Callable[[str], None] | None) -> list[tuple[ActuatorStatus, dict]]:
-    if workers <= 1 or sum(j.reuse is None for j in jobs) <= 1:
-        out = []
-        for i, job in enumerate(jobs):
-            out.append(_assess_and_draw(job))
-            if progress:
-                progress(f"{i + 1}/{len(jobs)} {job.data.actuator.id}")
-        return out
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
+class _LocalPool:
+    """Worker processes on this machine, spawned (they start clean, whatever this process
+    holds, as the campaign's do), with the ``map_unordered`` of
+    :mod:`emaphm.campaign.executors`. Unlike the campaign's pool they load no model
+    kernels: drawing needs none."""
 
-    # spawned workers start clean, whatever the parent holds (as the campaign's do); their
-    # imports run side by side, so a fork server's shared imports would save CPU, not time
-    with ProcessPoolExecutor(max_workers=min(workers, len(jobs)),
-                             mp_context=multiprocessing.get_context("spawn")) as pool:
-        out = []
-        for i, res in enumerate(pool.map(_assess_and_draw, jobs)):
-            out.append(res)
+    def __init__(self, workers: int) -> None:
+        self.workers = workers
+
+    def map_unordered(self, fn: Callable[[Any], Any],
+                      items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
+        import multiprocessing
+        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+
+        items = list(items)
+        if not items:
+            return
+        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
+                                   mp_context=multiprocessing.get_context("spawn"))
+        try:
+            running = {pool.submit(fn, item): item for item in items}
+            while running:
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                for fut in done:
+                    item = running.pop(fut)
+                    try:
+                        value = fut.result()
+                    except Exception as exc:        # noqa: BLE001 - yielded as a value
+                        value = exc
+                    yield item, value
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _batches(jobs: list[_Job], workers: int) -> list[list[_Job]]:
+    """The jobs in tasks of a few actuators: about four tasks per worker, at most
+    :data:`_BATCH_MAX` actuators each (a task per actuator would spend more on passing
+    work around than a fleet's worth of pages)."""
+    size = max(1, min(_BATCH_MAX, len(jobs) // (4 * max(workers, 1))))
+    return [jobs[i:i + size] for i in range(0, len(jobs), size)]
+
+
+def _run(jobs: list[_Job], executor: Any,
+         progress: Callable[[str], None] | None) -> Iterator[dict]:
+    """The :func:`_render` results of ``jobs`` as they are made: in this process without
+    an ``executor``, else in its tasks (``map_unordered``)."""
+    if executor is None:
+        for i, job in enumerate(jobs):
+            res = _render(job, keep=True)
             if progress:
-                progress(f"{i + 1}/{len(jobs)} {res[0].id}")
-        return out
+                progress(f"{i + 1}/{len(jobs)} {res['id']}")
+            yield res
+        return
+    done = 0
+    batches = _batches(jobs, getattr(executor, "workers", None) or 8)
+    for batch, value in executor.map_unordered(_render_batch, batches):
+        if isinstance(value, BaseException):
+            ids = ", ".join(j.data.actuator.id for j in batch[:3])
+            raise RuntimeError(f"the pages of {ids}{', ...' if len(batch) > 3 else ''} could "
+                               f"not be made ({type(value).__name__}: {value})") from value
+        for res in value:
+            done += 1
+            yield res
+        if progress and value:
+            progress(f"{done}/{len(jobs)} {value[-1]['id']}")
+
+
+def _replace(path: Path, payload: bytes) -> None:
+    """Write ``path`` whole by a rename of a temporary sibling; not flushed to disk here
+    (:func:`_sync` flushes the build's files together: one flush per file cost more than
+    drawing them)."""
+    tmp = path.parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    try:
+        with open(tmp, "xb") as fh:
+            fh.write(payload)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def _sync(paths: Sequence[Path]) -> None:
+    """Flush ``paths`` to disk: the whole system's buffers at once where the platform can
+    (``os.sync``), else each file."""
+    if hasattr(os, "sync"):
+        os.sync()
+        return
+    for path in paths:                          # pragma: no cover - Windows
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
 
 
 # ----------------------------------------------------------------------------- the rows
 def _row(s: ActuatorStatus, rank: int, page: str) -> dict:
-    """One actuator as the index's JSON row (also ``fleet.json``)."""
+    """One actuator as the index's JSON row (also ``fleet.json``). The workers make it
+    with rank 0; :func:`_ranked` puts it at its place in the build's order."""
+    from .status import VERDICTS
+
     a = s.actuator
     ratio = _num(s.ratio)
     tags = [s.rul_state, s.verdict]
@@ -296,6 +468,11 @@ def _row(s: ActuatorStatus, rank: int, page: str) -> dict:
         "text": " ".join([a.id, a.description, s.verdict, " ".join(s.faults),
                           s.worst or "", s.rul_state]).lower(),
     }
+
+
+def _ranked(row: dict, rank: int) -> dict:
+    """``row`` (:func:`_row`) at place ``rank`` of the order of attention."""
+    return {**row, "rank": rank, "sort": {**row["sort"], "rank": rank, "rul": rank}}
 
 
 # ----------------------------------------------------------------------------- HTML pieces
@@ -355,35 +532,44 @@ _COLUMNS = (  # key, heading, class (the less important ones are dropped on a ph
     ("trend", "Trend", "c-trend"), ("n", "Inspections", "c-n"))
 
 
-def _index_html(rows: list[dict], statuses: list[ActuatorStatus], *, title: str, source: str,
+def _cells(s: ActuatorStatus, page: str) -> dict:
+    """The HTML of one actuator's cells of the index (its page at ``page``), per column key
+    (:data:`_COLUMNS`), but the rank (:func:`_tr` adds it: it depends on the fleet)."""
+    unit = s.actuator.time_unit
+    last = "\u2013" if s.last_time is None else (
+        f"{esc(_fmt_time(s.last_time, unit))}<small>{esc(_date(s.last_recorded_utc))}</small>")
+    return {
+        "id": f"<a href=\"{esc(page)}\">{esc(s.id)}</a>",
+        "description": esc(s.actuator.description) or "<span class=\"muted\">\u2013</span>",
+        "last": last, "verdict": _verdict_badge(s.verdict, s.faults),
+        "worst": _worst_cell(s), "rul": _rul_cell(s), "trend": _trend_cell(s),
+        "n": str(s.n_inspections)}
+
+
+def _tr(row: dict, cells: dict) -> str:
+    """The index's table row of ``row`` (ranked) from its :func:`_cells`."""
+    cells = {**cells, "rank": str(row["rank"])}
+    state = str(row["rul_state"]).replace(" ", "-")
+    return (f"<tr data-i=\"{row['rank'] - 1}\" class=\"s-{esc(state)}\">" + "".join(
+        f"<td class=\"{cls}\" data-label=\"{esc(label)}\"><div>{cells[key]}</div></td>"
+        for key, label, cls in _COLUMNS) + "</tr>")
+
+
+def _index_html(rows: list[dict], trs: list[str], *, title: str, source: str,
                 thresholds: FailureThresholds, seed: int, level: float) -> str:
+    """The index of ``rows`` (ranked, in order), whose table rows are ``trs``."""
     from .. import __version__
 
     counts: dict[str, int] = {}
-    for s in statuses:
-        counts[s.rul_state] = counts.get(s.rul_state, 0) + 1
-    n_ins = sum(s.n_inspections for s in statuses)
+    for r in rows:
+        counts[r["rul_state"]] = counts.get(r["rul_state"], 0) + 1
+    n_ins = sum(r["n_inspections"] for r in rows)
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     head = "".join(
         f"<th scope=\"col\" class=\"{cls}\" data-key=\"{key}\">"
         f"<button type=\"button\" data-key=\"{key}\">{esc(label)}</button></th>"
         for key, label, cls in _COLUMNS)
-    body = []
-    for row, s in zip(rows, statuses):
-        unit = s.actuator.time_unit
-        last = "\u2013" if s.last_time is None else (
-            f"{esc(_fmt_time(s.last_time, unit))}<small>{esc(_date(s.last_recorded_utc))}</small>")
-        cells = {
-            "rank": str(row["rank"]),
-            "id": f"<a href=\"{esc(row['page'])}\">{esc(s.id)}</a>",
-            "description": esc(s.actuator.description) or "<span class=\"muted\">\u2013</span>",
-            "last": last, "verdict": _verdict_badge(s.verdict, s.faults),
-            "worst": _worst_cell(s), "rul": _rul_cell(s), "trend": _trend_cell(s),
-            "n": str(s.n_inspections)}
-        state = s.rul_state.replace(" ", "-")
-        body.append(f"<tr data-i=\"{row['rank'] - 1}\" class=\"s-{esc(state)}\">" + "".join(
-            f"<td class=\"{cls}\" data-label=\"{esc(label)}\"><div>{cells[key]}</div></td>"
-            for key, label, cls in _COLUMNS) + "</tr>")
+    body = trs[:PAGE_ROWS]
     summary = " \u00b7 ".join(f"<span class=\"count s-{esc(k.replace(' ', '-'))}\">"
                               f"{counts[k]} {esc(k)}</span>"
                               for k in ("past threshold", "predicted", "no growth", "no prediction")
@@ -397,12 +583,17 @@ def _index_html(rows: list[dict], statuses: list[ActuatorStatus], *, title: str,
     sort_options = "".join(f"<option value=\"{key}\">{esc(label)}</option>"
                            for key, label, _ in _COLUMNS if key != "rank")
     thr = ", ".join(f"{k.replace('_', ' ')} {v:g}" for k, v in thresholds.to_dict().items())
-    data = {"actuators": rows}
+    data = {"actuators": [{**r, "html": tr} for r, tr in zip(rows, trs)],
+            "page_rows": PAGE_ROWS}
+    more = (f"<p class=\"more\" id=\"more\">The first {len(body)} of {len(rows)} actuators, in "
+            "order of attention: the page's script (JavaScript) sorts, filters and pages through "
+            "all of them; <a href=\"fleet.json\">fleet.json</a> lists every one.</p>\n"
+            if len(rows) > len(body) else "")
     return (
         _head(title, "") +
         "<body class=\"index\">\n<header class=\"top\">\n"
         f"<h1>{esc(title)}</h1>\n"
-        f"<p class=\"meta\">{len(statuses)} actuators \u00b7 {n_ins} inspections \u00b7 "
+        f"<p class=\"meta\">{len(rows)} actuators \u00b7 {n_ins} inspections \u00b7 "
         f"history <code>{esc(source)}</code> \u00b7 built {esc(now)} by emaphm "
         f"{esc(__version__)}</p>\n"
         f"<p class=\"summary\">{summary}</p>\n</header>\n<main>\n"
@@ -412,13 +603,17 @@ def _index_html(rows: list[dict], statuses: list[ActuatorStatus], *, title: str,
         f"<label>Show <select id=\"show\">{options}</select></label>\n"
         f"<label>Sort <select id=\"sort\"><option value=\"rank\">attention (RUL)</option>"
         f"{sort_options}</select></label>\n"
-        f"<output id=\"shown\" aria-live=\"polite\">{len(rows)} of {len(rows)} shown</output>\n"
+        f"<output id=\"shown\" aria-live=\"polite\">{len(body)} of {len(rows)} shown</output>\n"
+        "<span class=\"pager\" id=\"pager\" hidden><button type=\"button\" id=\"prev\">"
+        "\u2039 previous</button> <output id=\"page\"></output> <button type=\"button\" "
+        "id=\"next\">next \u203a</button></span>\n"
         "</form>\n"
         "<table id=\"fleet\" class=\"fleet\">\n"
         f"<caption>Actuators needing attention first: past a failure threshold, then the "
         f"shortest median remaining useful life (RUL, {level:.0%} interval below it).</caption>\n"
         f"<thead><tr>{head}</tr></thead>\n<tbody>\n" + "\n".join(body) + "\n</tbody>\n</table>\n"
         "<p class=\"empty\" id=\"empty\" hidden>No actuator matches the filter.</p>\n"
+        + more +
         "<section class=\"notes\"><h2>How to read it</h2><ul>\n"
         "<li><b>Nearest its threshold</b>: the health indicator furthest past its failure "
         "threshold, else the one with the shortest RUL median among those growing, else the "
@@ -444,6 +639,8 @@ def _dl(items: Sequence[tuple[str, str]]) -> str:
 
 
 def _prognosis_table(s: ActuatorStatus) -> str:
+    from .status import indicator_state
+
     prog = s.prognosis
     if prog is None:
         n = s.n_inspections
@@ -611,8 +808,11 @@ def _figure_html(figures: dict, key: str, alt: str, caption: str) -> str:
             f"<figcaption>{esc(caption)}</figcaption></figure>")
 
 
-def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *, rank: int,
-                   total: int, fleet_title: str) -> str:
+def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *,
+                   fleet_title: str) -> str:
+    """The page of one actuator. It depends on that actuator alone (and the build's
+    settings), not on the rest of the fleet: its place in the order of attention is the
+    index's, so that a new inspection of one actuator writes one page."""
     a = s.actuator
     unit = a.time_unit
     facts = [
@@ -625,7 +825,6 @@ def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *, 
             f"{esc(_date(s.last_recorded_utc))} UTC</small>" if s.last_time is not None else "")),
         ("Time unit", "flight hours (h)" if unit == "h" else esc(unit)),
         ("Registered", esc(_date(a.created_utc)) + " UTC"),
-        ("Attention rank", f"{rank} of {total}"),
     ]
     desc = (f"<p class=\"desc\">{esc(a.description)}</p>" if a.description else "")
     figs = (_figure_html(figures, "history", f"health history of {a.id}: each component of k "
@@ -685,16 +884,18 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
                actuators: Sequence[str] | None = None,
                thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS, seed: int = 0,
                level: float = 0.9, workers: int | None = None, title: str = "Fleet health",
-               redraw: bool = False,
-               progress: Callable[[str], None] | None = None) -> FleetSite:
+               redraw: bool = False, progress: Callable[[str], None] | None = None,
+               executor: Any = None) -> FleetSite:
     """Write the fleet health site of ``history`` (a path or an open
     :class:`~emaphm.prognosis.HealthHistory`) into the folder ``out`` (created if missing).
 
     ``actuators`` limits it to those ids (default: all); ``thresholds``, ``seed`` and
-    ``level`` go to :func:`emaphm.prognosis.prognose`; ``workers`` processes draw the
-    figures (default every core, 0 or 1: in this process); figures still up to date in
-    ``out`` are kept unless ``redraw`` (module docstring); ``progress`` is called with a
-    short line per actuator done.
+    ``level`` go to :func:`emaphm.prognosis.prognose`; ``workers`` processes make the
+    pages (default every core, 0 or 1: in this process), or ``executor``, any object with
+    the ``map_unordered(fn, items)`` of :mod:`emaphm.campaign.executors` (a
+    :class:`~emaphm.campaign.DaskExecutor` spreads them over a Dask cluster); the pages
+    still up to date in ``out`` are kept unless ``redraw`` (module docstring);
+    ``progress`` is called with a short line as pages are made.
     """
     seed = check_seed(seed)
     if not 0.0 < level < 1.0:
@@ -702,50 +903,115 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
                                 or workers < 0):
         raise ValueError(f"workers must be a non-negative integer, got {workers!r}")
+    if executor is not None and not callable(getattr(executor, "map_unordered", None)):
+        raise ValueError("executor must have a map_unordered(fn, items) method, e.g. "
+                         "emaphm.campaign.DaskExecutor('tcp://HOST:8786')")
     t0 = time.perf_counter()
     datas, records, source = _read(history, actuators)
     folder = _out_folder(out)
+    figdir = folder / "actuators"
+    # every option that changes a page or a row of the index: in both
+    common = {"thresholds": thresholds, "seed": seed, "level": level, "title": title}
+    settings = {**common, "thresholds": thresholds.to_dict(), "code": _code_fingerprint()}
+    known = _read_manifest(figdir)             # kept for the actuators not built this time
+    stems, jobs, entries = _plan(datas, records, common, _digest(settings), known, figdir,
+                                 redraw)
+    n_workers = (os.cpu_count() or 1) if workers is None else workers
+    pool = executor is None and n_workers > 1 and len(jobs) > 1
+    made, statuses, written = _make(jobs, _LocalPool(n_workers) if pool else executor,
+                                    figdir, progress)
+    entries.update(made)
+    removed = 0 if actuators else _remove_others(figdir, known, set(stems.values()))
+    if made or removed or not (figdir / _MANIFEST).is_file():
+        known.update({stems[i]: e for i, e in made.items()})
+        atomic_write_text(figdir / _MANIFEST,
+                          json.dumps(known, sort_keys=True, separators=(",", ":")) + "\n")
+    order = sorted(entries, key=lambda i: tuple(entries[i]["order"]))   # status.attention_key
+    rows = [_ranked(entries[i]["row"], rank) for rank, i in enumerate(order, start=1)]
+    written += _write_assets(folder)
+    index = folder / "index.html"
+    meta = {"title": title, "history": source, "seed": seed, "level": level,
+            "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS)}
+    index_key = _digest({"settings": settings, "meta": meta, "page_rows": PAGE_ROWS,
+                         "rows": [[stems[i], entries[i]["key"]] for i in order]})
+    if _read_key(figdir / _INDEX_KEY) != index_key or not index.is_file() \
+            or not (folder / "fleet.json").is_file():
+        trs = [_tr(row, entries[i]["cells"]) for row, i in zip(rows, order)]
+        atomic_write_text(folder / "fleet.json", json.dumps(
+            {**meta, "actuators": rows}, indent=1, allow_nan=False) + "\n")
+        atomic_write_text(index, _index_html(rows, trs, title=title, source=source,
+                                             thresholds=thresholds, seed=seed, level=level))
+        atomic_write_text(figdir / _INDEX_KEY, index_key + "\n")
+        written += 2
+    return FleetSite(out=folder, index=index,
+                     pages={i: figdir / f"{stems[i]}.html" for i in order},
+                     statuses=tuple(statuses[i] for i in order if i in statuses),
+                     elapsed_s=time.perf_counter() - t0, drawn=len(jobs),
+                     workers=min(n_workers, len(jobs)) if pool else 0, rows=tuple(rows),
+                     skipped=tuple((d.actuator, d.skipped) for d in datas if d.skipped),
+                     written=written)
+
+
+def _plan(datas: list, records: dict, common: dict, digest: str, known: dict, figdir: Path,
+          redraw: bool) -> tuple[dict, list[_Job], dict]:
+    """Page stems, the jobs (with the options ``common``) of the actuators whose page must
+    be made, and the manifest entries of those whose page is up to date, by id; ``digest``
+    is that of the build's settings."""
     stems = {d.actuator.id: page_stem(d.actuator.id) for d in datas}
     if len(set(stems.values())) != len(stems):          # a 40-bit hash prefix collided
         stems = {i: page_stem(i, digits=64) for i in stems}
-    n_workers = (os.cpu_count() or 1) if workers is None else workers
-    figdir = folder / "actuators"
-    code = _code_fingerprint()
-    known = _read_manifest(figdir)             # kept for the actuators not built this time
-    manifest = {} if redraw else known
-    jobs = []
+    jobs, reused = [], {}
     for d in datas:
-        stem = stems[d.actuator.id]
-        key = _figure_key(d, thresholds, seed, level, code)
-        jobs.append(_Job(data=d, thresholds=thresholds, seed=seed, level=level,
-                         folder=str(figdir), stem=stem, key=key,
-                         reuse=_reusable(manifest.get(stem), key, figdir)))
-    results = _run(jobs, n_workers, progress)
-    figures = {s.id: f for s, f in results}
-    if not actuators:                 # the whole history: pages of others are not its own
-        _remove_others(figdir, known, {j.stem for j in jobs})
-    known.update({j.stem: {"key": j.key, "figures": figures[j.data.actuator.id]} for j in jobs})
-    atomic_write_text(figdir / _MANIFEST, json.dumps(known, indent=1, sort_keys=True) + "\n")
-    n_draw = sum(j.reuse is None for j in jobs)
-    statuses = order_fleet(s for s, _ in results)
+        aid = d.actuator.id
+        key = _actuator_key(d, records[aid], digest)
+        if not redraw and _reusable(known.get(stems[aid]), key, figdir):
+            reused[aid] = known[stems[aid]]
+        else:
+            jobs.append(_Job(data=d, records=tuple(records[aid]), stem=stems[aid], key=key,
+                             **common))
+    return stems, jobs, reused
+
+
+def _make(jobs: list[_Job], executor: Any, figdir: Path,
+          progress: Callable[[str], None] | None) -> tuple[dict, dict, int]:
+    """Make the pages of ``jobs`` and write their files as they come (flushed together at
+    the end); returns their manifest entries and kept statuses by id, and the files
+    written."""
+    made: dict[str, dict] = {}
+    statuses: dict[str, Any] = {}
+    paths: list[Path] = []
+    for res in _run(jobs, executor, progress):
+        for name, payload in res["files"].items():
+            _replace(figdir / name, payload)
+            paths.append(figdir / name)
+        made[res["id"]] = {"key": res["key"], "figures": res["figures"], "row": res["row"],
+                           "cells": res["cells"], "order": res["order"],
+                           "files": {n: len(b) for n, b in res["files"].items()}}
+        if res["status"] is not None:
+            statuses[res["id"]] = res["status"]
+    if paths:
+        _sync(paths)
+    return made, statuses, len(paths)
+
+
+def _write_assets(folder: Path) -> int:
+    """Copy the shipped assets where they differ from what is there; returns how many."""
+    n = 0
     for name in ASSETS:
         payload = resources.files("emaphm.fleet").joinpath("assets", name).read_bytes()
-        atomic_write(folder / "assets" / name, lambda fh, b=payload: fh.write(b))
-    pages = {}
-    for rank, s in enumerate(statuses, start=1):
-        page = folder / "actuators" / f"{stems[s.id]}.html"
-        atomic_write_text(page, _actuator_html(s, figures[s.id], records[s.id], rank=rank,
-                                               total=len(statuses), fleet_title=title))
-        pages[s.id] = page
-    rows = [_row(s, rank, f"actuators/{stems[s.id]}.html")
-            for rank, s in enumerate(statuses, start=1)]
-    meta = {"title": title, "history": source, "seed": seed, "level": level,
-            "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS)}
-    atomic_write_text(folder / "fleet.json",
-                      json.dumps({**meta, "actuators": rows}, indent=1, allow_nan=False) + "\n")
-    index = folder / "index.html"
-    atomic_write_text(index, _index_html(rows, statuses, title=title, source=source,
-                                         thresholds=thresholds, seed=seed, level=level))
-    return FleetSite(out=folder, index=index, pages=pages, statuses=tuple(statuses),
-                     elapsed_s=time.perf_counter() - t0, drawn=n_draw,
-                     workers=min(n_workers, len(jobs)) if n_workers > 1 and n_draw > 1 else 0)
+        path = folder / "assets" / name
+        try:
+            same = path.is_file() and path.read_bytes() == payload
+        except OSError:
+            same = False
+        if not same:
+            atomic_write(path, lambda fh, b=payload: fh.write(b))
+            n += 1
+    return n
+
+
+def _read_key(path: Path) -> str | None:
+    try:
+        return path.read_text(encoding="ascii").strip() if path.is_file() else None
+    except (OSError, ValueError):
+        return None

@@ -1,33 +1,55 @@
-/* emaphm fleet health site: sort and filter the index table. No dependencies, no network;
-   reads the rows from the inline JSON block #fleet-data (the table itself is complete
-   without this script, in attention order). */
+/* emaphm fleet health site: sort, filter and page the index table. No dependencies, no
+   network; reads the rows from the inline JSON block #fleet-data, each with its table row
+   as HTML (every value in it escaped when the site was built). The page itself holds the
+   first rows in the order of attention, so it reads without this script; with it, the
+   whole fleet is sorted and filtered here and shown a page (page_rows) at a time. */
 (function () {
   "use strict";
   var dataEl = document.getElementById("fleet-data");
   var table = document.getElementById("fleet");
   if (!dataEl || !table) { return; }
-  var rowsData = JSON.parse(dataEl.textContent).actuators;
+  var data = JSON.parse(dataEl.textContent);
+  var rowsData = data.actuators;
+  var pageRows = data.page_rows > 0 ? data.page_rows : Math.max(rowsData.length, 1);
   var tbody = table.tBodies[0];
-  var rows = Array.prototype.slice.call(tbody.rows);
   var filterEl = document.getElementById("filter");
   var showEl = document.getElementById("show");
   var sortEl = document.getElementById("sort");
   var shownEl = document.getElementById("shown");
   var emptyEl = document.getElementById("empty");
-  var state = { key: "rank", dir: 1 };
+  var pagerEl = document.getElementById("pager");
+  var pageEl = document.getElementById("page");
+  var prevEl = document.getElementById("prev");
+  var nextEl = document.getElementById("next");
+  var collator = window.Intl && Intl.Collator ? new Intl.Collator() : null;
+  var state = { key: "rank", dir: 1, page: 0 };
+  var order = null;          // row indices in the current sort, kept until the sort changes
 
-  function datum(row) { return rowsData[Number(row.getAttribute("data-i"))]; }
+  function compareText(u, v) { return collator ? collator.compare(u, v) : u.localeCompare(v); }
 
-  function compare(a, b) {
-    var x = datum(a), y = datum(b);
+  function compare(i, j) {
+    var x = rowsData[i], y = rowsData[j];
     var u = x.sort[state.key], v = y.sort[state.key];
     if (u !== v) {
       if (u === null || u === undefined) { return 1; }      // missing values last, both ways
       if (v === null || v === undefined) { return -1; }
-      if (typeof u === "string") { return state.dir * u.localeCompare(v); }
-      return state.dir * (u < v ? -1 : 1);
+      if (typeof u === "string") {
+        var c = compareText(u, v);
+        if (c) { return state.dir * c; }
+      } else {
+        return state.dir * (u < v ? -1 : 1);
+      }
     }
     return x.rank - y.rank;
+  }
+
+  function sorted() {
+    if (order === null) {
+      order = [];
+      for (var i = 0; i < rowsData.length; i++) { order.push(i); }
+      order.sort(compare);
+    }
+    return order;
   }
 
   function matches(d, words, show) {
@@ -39,18 +61,25 @@
   }
 
   function apply() {
-    var sorted = rows.slice().sort(compare);
-    sorted.forEach(function (row) { tbody.appendChild(row); });
     var words = (filterEl ? filterEl.value : "").toLowerCase().split(/\s+/).filter(Boolean);
     var show = showEl ? showEl.value : "";
-    var n = 0;
-    rows.forEach(function (row) {
-      var ok = matches(datum(row), words, show);
-      row.hidden = !ok;
-      if (ok) { n += 1; }
-    });
-    if (shownEl) { shownEl.textContent = n + " of " + rows.length + " shown"; }
+    var shown = sorted().filter(function (i) { return matches(rowsData[i], words, show); });
+    var n = shown.length;
+    var pages = Math.max(1, Math.ceil(n / pageRows));
+    state.page = Math.min(Math.max(state.page, 0), pages - 1);
+    var first = state.page * pageRows;
+    var html = [];
+    shown.slice(first, first + pageRows).forEach(function (i) { html.push(rowsData[i].html); });
+    tbody.innerHTML = html.join("");
+    if (shownEl) { shownEl.textContent = n + " of " + rowsData.length + " shown"; }
     if (emptyEl) { emptyEl.hidden = n > 0; }
+    if (pagerEl) {
+      pagerEl.hidden = pages < 2;
+      pageEl.textContent = "page " + (state.page + 1) + " of " + pages + " (" + (first + 1) +
+        "\u2013" + Math.min(first + pageRows, n) + ")";
+      prevEl.disabled = state.page === 0;
+      nextEl.disabled = state.page >= pages - 1;
+    }
     Array.prototype.forEach.call(table.tHead.rows[0].cells, function (th) {
       var key = th.getAttribute("data-key");
       if (key === state.key) {
@@ -62,23 +91,30 @@
     if (sortEl && sortEl.value !== state.key) { sortEl.value = state.key; }
   }
 
+  function resort(key, dir) {
+    state.key = key;
+    state.dir = dir;
+    state.page = 0;
+    order = null;
+    apply();
+  }
+
+  function refilter() {
+    state.page = 0;
+    apply();
+  }
+
   Array.prototype.forEach.call(table.tHead.querySelectorAll("button[data-key]"), function (b) {
     b.addEventListener("click", function () {
       var key = b.getAttribute("data-key");
-      state.dir = key === state.key ? -state.dir : 1;
-      state.key = key;
-      apply();
+      resort(key, key === state.key ? -state.dir : 1);
     });
   });
-  if (sortEl) {
-    sortEl.addEventListener("change", function () {
-      state.key = sortEl.value;
-      state.dir = 1;
-      apply();
-    });
-  }
-  if (filterEl) { filterEl.addEventListener("input", apply); }
-  if (showEl) { showEl.addEventListener("change", apply); }
+  if (sortEl) { sortEl.addEventListener("change", function () { resort(sortEl.value, 1); }); }
+  if (filterEl) { filterEl.addEventListener("input", refilter); }
+  if (showEl) { showEl.addEventListener("change", refilter); }
+  if (prevEl) { prevEl.addEventListener("click", function () { state.page -= 1; apply(); }); }
+  if (nextEl) { nextEl.addEventListener("click", function () { state.page += 1; apply(); }); }
   var form = document.getElementById("controls");
   if (form) { form.addEventListener("submit", function (e) { e.preventDefault(); }); }
   document.documentElement.className += " js";
