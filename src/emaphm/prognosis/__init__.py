@@ -12,6 +12,8 @@ failure threshold:
 * :mod:`.thresholds`: health indicators and failure thresholds per fault mode;
 * :mod:`.trends`: degradation trends and the RUL distribution
   (:func:`predict_rul`, :func:`prognose`);
+* :mod:`.inspection`: when to look next, the next inspection at a stated risk
+  (:func:`next_inspection`, :func:`plan_inspection`, :class:`InspectionPolicy`);
 * :mod:`.simulator`: growing faults seen at inspections, for tests and demos;
 * :mod:`.metrics`: offline prognostic metrics (Saxena et al. 2010);
 * :mod:`.plots`: history, prediction cone and alpha-lambda figures.
@@ -59,6 +61,10 @@ _EXPORTS = {
     "predict_rul": "trends",
     "prognose": "trends",
     "rul_track": "trends",
+    "InspectionPolicy": "inspection",
+    "NextInspection": "inspection",
+    "next_inspection": "inspection",
+    "plan_inspection": "inspection",
     "Assessment": "uncertainty",
     "KInterval": "uncertainty",
     "identify_with_spread": "uncertainty",
@@ -75,6 +81,7 @@ __all__ = [
     "FailureThresholds", "DEFAULT_FAILURE_THRESHOLDS", "INDICATORS",
     "TrendFit", "fit_trend", "predict_rul", "RULPrediction", "prognose", "Prognosis",
     "rul_track", "RULTrack",
+    "InspectionPolicy", "NextInspection", "next_inspection", "plan_inspection",
     "DegradationLaw", "DegradationScenario", "DEGRADATION_SCENARIOS", "degradation_scenario",
     "inspection_times", "synthetic_k_history", "simulate_degradation",
     "rul_error", "relative_accuracy", "cumulative_relative_accuracy", "alpha_lambda",

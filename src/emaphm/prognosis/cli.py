@@ -6,6 +6,7 @@
     emaphm history show ID [--plot FILE.png]       the inspections as a table (and figure)
     emaphm history list                            the registered actuators
     emaphm prognose ID [--threshold MODE=VALUE ...] [--plot FILE.png]
+                   [--risk 0.05 [--max-interval H] [--min-interval H]]   and when to look next
     emaphm demo-degradation [--scenario NAME] [--synthetic]
 
 The store is ``--db PATH``, else ``$EMAPHM_HISTORY``, else ``emaphm-history.sqlite``
@@ -30,7 +31,8 @@ from .._cli_common import (UsageError, actuator_id, arg_type, budget_option,
                            identification_seconds, plot_path, shown, warn_if_long)
 from .._cli_common import seed as _seed
 
-__all__ = ["register", "db_path", "threshold_option", "warn"]
+__all__ = ["register", "db_path", "threshold_option", "warn", "inspection_policy",
+           "planning_options", "option_words"]
 
 #: Identifications per inspection for the seeds and bootstrap spreads, and inspections of
 #: a degradation demo, at most (each is a whole identification).
@@ -318,36 +320,106 @@ def _prognosis_table(prog: Any) -> str:
     return "\n".join(lines)
 
 
+def inspection_policy(args: argparse.Namespace):
+    """The :class:`~emaphm.prognosis.inspection.InspectionPolicy` of ``--risk``,
+    ``--max-interval``, ``--min-interval`` and ``--default-interval`` (None without
+    ``--risk``; an interval without it is a :class:`UsageError`). Shared with ``emaphm
+    fleet``."""
+    from .inspection import InspectionPolicy
+
+    given = [f"--{n.replace('_', '-')}" for n in ("max_interval", "min_interval",
+                                                  "default_interval")
+             if getattr(args, n, None) is not None]
+    if args.risk is None:
+        if given:
+            raise _usage(f"{given[0]} plans the next inspection: give --risk too, e.g. --risk 0.05")
+        return None
+    try:
+        return InspectionPolicy(risk=args.risk, max_interval=args.max_interval,
+                                min_interval=args.min_interval,
+                                default_interval=args.default_interval)
+    except ValueError as exc:
+        raise _usage(f"{option_words(str(exc))}") from None
+
+
+def option_words(text: str) -> str:
+    """A policy's message in the words of the command line (--max-interval, not max_interval)."""
+    for name in ("max_interval", "min_interval", "default_interval"):
+        text = text.replace(name, "--" + name.replace("_", "-"))
+    return text
+
+
 def cmd_prognose(args: argparse.Namespace) -> int:
     from .history import HealthHistory
-    from .plots import plot_prognosis
     from .thresholds import INDICATORS
-    from .trends import MIN_INSPECTIONS, prognose
+    from .trends import MIN_INSPECTIONS
 
     plot = _plot_path(args.plot)
     thresholds = threshold_option(args.threshold)
     if not 0 < args.level < 1:
         raise _usage(f"--level must be in (0, 1), e.g. 0.9, got {args.level}")
+    policy = inspection_policy(args)
     with HealthHistory(db_path(args), readonly=True) as h:
         data = h.data(args.actuator)
         if args.at is not None:
             h.check_time(args.actuator, args.at, "--at")
     warn("prognose", data.skipped_note())
-    if data.n < MIN_INSPECTIONS:
+    if policy is not None:
+        try:
+            policy.intervals(data.actuator.time_unit)
+        except ValueError as exc:
+            raise _usage(option_words(str(exc))) from None
+    if data.n < MIN_INSPECTIONS and (policy is None or plot):
         raise _usage(f"{args.actuator} has {data.n} inspection(s); a trend needs at least "
                      f"{MIN_INSPECTIONS}: record more with emaphm history add")
     indicators = args.indicator or INDICATORS
-    prog = prognose(data.times, data.K, seed=args.seed, thresholds=thresholds,
-                    indicators=indicators, t_now=args.at, actuator=data.actuator.id,
-                    time_unit=data.actuator.time_unit, level=args.level, selection=args.selection)
+    prog, plan = _prognose_and_plan(data, args, thresholds, indicators, policy)
     if args.json:
-        print(json.dumps(prog.to_dict()))
+        out = prog.to_dict() if prog is not None else _no_trend_dict(data, args, thresholds)
+        if plan is not None:
+            out["next_inspection"] = plan.to_dict()
+        print(json.dumps(out))
     else:
-        print(_prognosis_table(prog))
+        if prog is not None:
+            print(_prognosis_table(prog))
+        if plan is not None:
+            print(plan.summary(data.actuator.id))
+            print(f"(risk {plan.target:g}; intervals: default {plan.intervals.default:g}, min "
+                  f"{plan.intervals.min:g}, max {plan.intervals.max:g} "
+                  f"{data.actuator.time_unit}: {plan.intervals.source})")
     if plot:
+        from .plots import plot_prognosis
+
         plot_prognosis(prog, path=plot, indicators=args.indicator)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
+
+
+def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, indicators: Any,
+                       policy: Any) -> tuple[Any, Any]:
+    """The prognosis (None under three inspections) and, with a policy, the next inspection."""
+    from .trends import MIN_INSPECTIONS, prognose
+
+    common = dict(seed=args.seed, thresholds=thresholds, indicators=indicators, t_now=args.at,
+                  actuator=data.actuator.id, time_unit=data.actuator.time_unit,
+                  level=args.level, selection=args.selection)
+    if policy is None:
+        return prognose(data.times, data.K, **common), None
+    from .inspection import n_samples_for, plan_inspection
+
+    prog = None
+    if data.n >= MIN_INSPECTIONS:
+        prog = prognose(data.times, data.K, n_samples=n_samples_for(policy.risk), **common)
+    t_now = args.at if args.at is not None else None
+    return prog, plan_inspection(data.times, prog, policy=policy, t_now=t_now,
+                                 time_unit=data.actuator.time_unit)
+
+
+def _no_trend_dict(data: Any, args: argparse.Namespace, thresholds: Any) -> dict:
+    """``prognose --json`` of an actuator with fewer than three inspections: no predictions."""
+    t_now = args.at if args.at is not None else (float(data.times[-1]) if data.n else 0.0)
+    return {"actuator": data.actuator.id, "t_now": t_now, "time_unit": data.actuator.time_unit,
+            "thresholds": thresholds.to_dict(), "n_inspections": data.n, "predictions": {}}
 
 
 # ----------------------------------------------------------------------------- demo
@@ -524,7 +596,39 @@ def _register_prognose(subparsers: Any) -> None:
     p.add_argument("--at", type=_time, help="count the RUL from this time (default: the last inspection)")
     p.add_argument("--json", action="store_true")
     _db_arg(p)
+    planning_options(p)
     p.set_defaults(func=cmd_prognose)
+
+
+_risk = arg_type(float, lambda r: math.isfinite(r) and 0.0 < r < 1.0,
+                 "risk must be a probability in (0, 1), e.g. 0.05")
+_interval = arg_type(float, lambda x: math.isfinite(x) and x > 0,
+                     "interval must be a finite number > 0 in the history's time unit, e.g. 200")
+_min_interval = arg_type(float, lambda x: math.isfinite(x) and x >= 0,
+                         "minimum interval must be a finite number >= 0 in the history's time "
+                         "unit, e.g. 50")
+
+
+def planning_options(p: argparse.ArgumentParser, *, default_risk: bool = False) -> None:
+    """``--risk`` and the intervals of an inspection plan (``prognose``; ``fleet``, whose
+    risk defaults to :data:`~emaphm.prognosis.inspection.DEFAULT_RISK`)."""
+    from .inspection import DEFAULT_RISK, INTERVAL_DEFAULTS
+
+    d = INTERVAL_DEFAULTS["h"]
+    p.add_argument("--risk", type=_risk,
+                   help="plan the next inspection: the latest time at which the probability "
+                        "that an indicator has crossed its failure threshold stays <= RISK, "
+                        "e.g. 0.05" + (f" (default {DEFAULT_RISK:g})" if default_risk else "")
+                        + " (see docs/inspection-planning.md)")
+    p.add_argument("--max-interval", type=_interval, metavar="H",
+                   help=f"longest interval a plan reaches (default {d.max:g} h; a history in "
+                        "cycles takes the same numbers: give yours)")
+    p.add_argument("--min-interval", type=_min_interval, metavar="H",
+                   help=f"shortest interval worth planning: a risk that comes sooner flags the "
+                        f"actuator now (default {d.min:g} h)")
+    p.add_argument("--default-interval", type=_interval, metavar="H",
+                   help=f"interval under three inspections or with every indicator at its "
+                        f"healthy level (default {d.default:g} h)")
 
 
 def _register_demo(subparsers: Any) -> None:

@@ -1,0 +1,308 @@
+"""When to look next (issue 24): the next inspection at a stated risk.
+
+Known answers first: on a linear trend (the linear model alone, no floor, no model
+discrepancy) the chance that the threshold is crossed by ``t`` is a Student t of the
+fitted line at ``t``, so the planned time has a closed form, and over many histories of
+linear growth with known noise the share of crossings before it is the risk itself.
+Then the rules (fall-backs, act now, confirm, the caps), the same seed giving the same
+plan, the policy simulated to a flag, the misuse messages, and the command line.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy import optimize, stats
+
+from emaphm.cli import main
+from emaphm.prognosis.history import HealthHistory
+from emaphm.prognosis.inspection import (INTERVAL_DEFAULTS, MIN_FLAG_INSPECTIONS,
+                                         InspectionPolicy, crossing_cdf, first_crossing_cdf,
+                                         n_samples_for, next_inspection, plan_inspection,
+                                         risk_time, simulate_policy)
+from emaphm.prognosis.simulator import DegradationLaw, DegradationScenario
+from emaphm.prognosis.trends import predict_rul, prognose
+
+LINEAR = dict(models=("linear",), sigma_floor=0.0, discrepancy=0.0)
+
+
+def _friction_k(levels):
+    """k histories (n, 8) with friction at ``levels`` and every other component healthy."""
+    K = np.zeros((len(levels), 8))
+    K[:, 0] = levels
+    K[:, 6] = 0.5
+    K[:, 7] = 0.5
+    return K
+
+
+def _analytic_risk_time(t, y, threshold, risk):
+    """The planned time of a linear trend in closed form: the ``t`` where the Student t
+    (n - 2 dof) of the fitted line reaches the threshold with probability ``risk``."""
+    X = np.column_stack([np.ones_like(t), t - t[-1]])
+    beta, rss = np.linalg.lstsq(X, y, rcond=None)[:2]
+    cov = float(rss[0]) / (t.size - 2) * np.linalg.inv(X.T @ X)
+
+    def excess(tau):
+        x = np.array([1.0, tau])
+        z = (threshold - x @ beta) / math.sqrt(x @ cov @ x)
+        return stats.t.sf(z, t.size - 2) - risk
+    return t[-1] + optimize.brentq(excess, 0.0, 1e5)
+
+
+# ----------------------------------------------------------------------------- known answers
+@pytest.mark.parametrize("risk", [0.01, 0.05, 0.2])
+def test_the_planned_time_of_a_linear_trend_is_its_student_t_quantile(risk):
+    rng = np.random.default_rng(3)
+    t = np.linspace(0.0, 600.0, 9)
+    y = 0.02 + 4e-4 * t + 0.01 * rng.standard_normal(t.size)
+    p = predict_rul(t, y, 0.5, seed=1, n_samples=n_samples_for(risk) * 25, **LINEAR)
+    want = _analytic_risk_time(t, y, 0.5, risk)
+    got = risk_time([p], risk)
+    # Monte Carlo: the quantile of 100,000+ draws, within a few hours of a ~400 h horizon
+    assert got == pytest.approx(want, abs=6.0)
+    assert crossing_cdf(p, want) == pytest.approx(risk, abs=0.15 * risk + 0.002)
+
+
+def test_over_linear_histories_with_known_noise_the_share_of_crossings_before_the_plan_is_the_risk():
+    # truth: y = 0.5 t / 1000 (+ N(0, 0.01)) crosses 0.5 at 1000 h; six inspections up to
+    # 600 h; the linear trend's t quantile is exact, so the realised share is the risk
+    risk, n_paths = 0.1, 400
+    t = np.linspace(0.0, 600.0, 6)
+    rng = np.random.default_rng(11)
+    late = 0
+    for i in range(n_paths):
+        y = 5e-4 * t + 0.01 * rng.standard_normal(t.size)
+        p = predict_rul(t, y, 0.5, seed=i, n_samples=4000, **LINEAR)
+        late += 1000.0 <= risk_time([p], risk)
+    margin = 1.96 * math.sqrt(risk * (1 - risk) / n_paths)
+    assert abs(late / n_paths - risk) <= margin + 0.01, late / n_paths
+
+
+def test_any_indicator_crossing_multiplies_the_chances_of_none():
+    rng = np.random.default_rng(0)
+    t = np.linspace(0.0, 500.0, 7)
+    a = predict_rul(t, 0.01 + 5e-4 * t + 0.005 * rng.standard_normal(7), 0.5, seed=1, **LINEAR)
+    b = predict_rul(t, 0.01 + 3e-4 * t + 0.005 * rng.standard_normal(7), 0.3, seed=2, **LINEAR)
+    grid = np.array([500.0, 700.0, 900.0, 1200.0])
+    both = first_crossing_cdf([a, b], grid)
+    np.testing.assert_allclose(both, 1 - (1 - crossing_cdf(a, grid)) * (1 - crossing_cdf(b, grid)))
+    assert np.all(both >= np.maximum(crossing_cdf(a, grid), crossing_cdf(b, grid)))
+    t_star = risk_time([a, b], 0.05)
+    assert first_crossing_cdf([a, b], t_star) > 0.05
+    assert first_crossing_cdf([a, b], np.nextafter(t_star, 0)) <= 0.05
+    assert risk_time([a, b], 0.05) <= min(risk_time([a], 0.05), risk_time([b], 0.05))
+
+
+# ----------------------------------------------------------------------------- the rules
+def _plan(t, levels, policy=InspectionPolicy(risk=0.05), **kw):
+    return next_inspection(np.asarray(t, float), _friction_k(levels), seed=0, policy=policy,
+                           discrepancy={}, **kw)
+
+
+def test_fall_backs_never_give_no_answer():
+    dflt = INTERVAL_DEFAULTS["h"]
+    never = plan_inspection([], None, policy=InspectionPolicy(risk=0.05))
+    assert (never.at, never.rule, never.act_now) == (0.0, "never inspected", True)
+    _, two = _plan([0.0, 100.0], [0.0, 0.01])
+    assert (two.at, two.rule, two.risk) == (100.0 + dflt.default, "too few inspections", None)
+    assert "too few inspections" in two.reason and "default interval" in two.reason
+    # already past its threshold at the second inspection: act now, however few
+    _, past = _plan([0.0, 100.0], [0.0, 0.7])
+    assert (past.at, past.rule, past.indicator) == (100.0, "act now", "friction")
+    # a flat, healthy history: no trend to extrapolate, the default interval
+    rng = np.random.default_rng(5)
+    _, flat = _plan(np.arange(8) * 150.0, np.abs(0.007 * rng.standard_normal(8)))
+    assert (flat.rule, flat.at, flat.risk) == ("healthy", 7 * 150.0 + dflt.default, None)
+
+
+def test_a_slow_growth_is_capped_by_the_maximum_interval_and_a_fast_one_by_its_risk():
+    t = np.arange(6) * 100.0
+    _, slow = _plan(t, 0.05 + 1e-4 * t + [0, 0.002, -0.001, 0.001, 0.0, -0.002])
+    assert slow.rule == "max interval" and slow.at == 500.0 + INTERVAL_DEFAULTS["h"].max
+    assert slow.risk < 0.05 and slow.indicator == "friction"
+    _, fast = _plan(t, 0.05 + 6e-4 * t + [0, 0.002, -0.001, 0.001, 0.0, -0.002])
+    assert fast.rule == "risk" and 500.0 + 50.0 <= fast.at < 500.0 + 400.0
+    assert fast.risk == pytest.approx(fast.target, abs=0.01) and fast.risk > fast.target
+    assert "friction growing towards its threshold" in fast.reason
+    # the max interval given: the cap moves
+    _, capped = _plan(t, 0.05 + 1e-4 * t, InspectionPolicy(risk=0.05, max_interval=150.0))
+    assert capped.at == 650.0 and capped.rule == "max interval"
+
+
+def test_near_its_threshold_an_actuator_is_flagged_and_not_chased():
+    t = np.arange(8) * 100.0
+    levels = 0.02 + 6.5e-4 * t + 0.004 * np.sin(t)             # 0.475 at 700 h of 0.5
+    _, plan = _plan(t, levels)
+    assert plan.rule == "act now" and plan.at == 700.0 and plan.act_now
+    assert "minimum interval" in plan.reason or "crossed" in plan.reason
+    # with fewer inspections than a trend needs to be trusted, confirm instead of acting
+    _, early = _plan(t[:3], [0.02, 0.2, 0.4])
+    assert early.rule == "confirm" and early.at == 200.0 + INTERVAL_DEFAULTS["h"].min
+    assert f"from {MIN_FLAG_INSPECTIONS}" in early.reason
+
+
+def test_a_plan_made_later_than_due_says_inspect_now():
+    t = np.arange(6) * 100.0
+    due = 500.0 + INTERVAL_DEFAULTS["h"].max
+    prog, plan = _plan(t, 0.05 + 1e-4 * t, t_now=due + 300.0)
+    assert plan.at == due and plan.act_now and plan.t_now == due + 300.0
+    assert plan.summary("EMA-7").startswith(
+        f"inspect EMA-7 now: its next inspection was due at {due:.0f} h")
+
+
+def test_the_same_seed_gives_the_same_plan_and_another_seed_nearly_the_same():
+    t = np.arange(7) * 100.0
+    levels = 0.02 + 4e-4 * t + [0, 0.004, -0.003, 0.002, 0, -0.004, 0.003]
+    a = _plan(t, levels)[1]
+    b = _plan(t, levels)[1]
+    assert a == b
+    c = next_inspection(t, _friction_k(levels), seed=9, policy=InspectionPolicy(risk=0.05),
+                        discrepancy={})[1]
+    assert c.rule == a.rule and abs(c.at - a.at) < 0.05 * (a.at - 600.0)
+
+
+def test_the_draws_resolve_the_risk():
+    assert n_samples_for(0.05) == 4000 and n_samples_for(0.001) == 40_000
+    t = np.arange(6) * 100.0
+    prog = prognose(t, _friction_k(0.05 + 6e-4 * t), seed=0)          # 4000 draws
+    with pytest.raises(ValueError, match="needs at least 40000 draws per indicator"):
+        plan_inspection(t, prog, policy=InspectionPolicy(risk=0.001))
+
+
+# ----------------------------------------------------------------------------- simulated
+def test_a_degrading_actuator_is_flagged_after_a_handful_of_inspections_and_not_missed():
+    law = DegradationLaw.reaching("linear", 0.5, 1000.0, onset=100.0)
+    sc = DegradationScenario("friction", law)
+    run = simulate_policy(sc, InspectionPolicy(risk=0.01), seed=4, discrepancy={})
+    assert run.flagged_at is not None and not run.missed
+    assert 0.6 <= run.life_used < 1.0
+    assert run.n_inspections <= 15 and run.rules[-1] == "act now"
+    gaps = np.diff(run.times)
+    assert gaps.min() >= INTERVAL_DEFAULTS["h"].min - 1e-9
+    # a fixed interval sees the same noise at its i-th inspection and is flagged by the
+    # same criterion: the chance of a crossing before its next inspection
+    fixed = simulate_policy(sc, InspectionPolicy(risk=0.01), seed=4, fixed_interval=100.0,
+                            discrepancy={})
+    np.testing.assert_allclose(np.diff(fixed.times), 100.0)
+    assert fixed.flagged_at is not None or fixed.missed
+    # a healthy actuator is inspected at the default interval to the horizon, never flagged
+    healthy = simulate_policy(None, InspectionPolicy(risk=0.01), seed=4, horizon=1500.0)
+    assert healthy.flagged_at is None and not healthy.missed
+    assert set(healthy.rules) <= {"too few inspections", "healthy"}
+
+
+# ----------------------------------------------------------------------------- misuse
+@pytest.mark.parametrize("kw, message", [
+    (dict(risk=0.0), r"risk must be a probability in \(0, 1\)"),
+    (dict(risk=1.0), r"risk must be a probability in \(0, 1\)"),
+    (dict(risk=float("nan")), r"risk must be a probability in \(0, 1\)"),
+    (dict(risk=True), r"risk must be a probability in \(0, 1\)"),
+    (dict(risk=1e-6), r"below 0.0001, the smallest the Monte Carlo draws resolve"),
+    (dict(max_interval=0.0), "max_interval must be a finite number > 0"),
+    (dict(max_interval=-5.0), "max_interval must be a finite number > 0"),
+    (dict(min_interval=-1.0), "min_interval must be a finite number >= 0"),
+    (dict(default_interval=math.inf), "default_interval must be a finite number > 0"),
+    (dict(min_interval=300.0, max_interval=200.0), "min_interval 300 must be below max_interval 200"),
+])
+def test_a_policy_refuses_what_makes_no_plan(kw, message):
+    with pytest.raises(ValueError, match=message):
+        InspectionPolicy(**kw)
+
+
+def test_the_defaults_given_in_part_are_checked_together():
+    with pytest.raises(ValueError, match="the minimum interval 900 h must be below the maximum"):
+        InspectionPolicy(min_interval=900.0).intervals("h")
+    iv = InspectionPolicy(max_interval=150.0).intervals("h")
+    assert iv.default == 150.0 and "given: max" in iv.source      # capped by the maximum
+    with pytest.raises(ValueError, match="unknown time unit 'days'"):
+        InspectionPolicy().intervals("days")
+
+
+# ----------------------------------------------------------------------------- command line
+def _rc(argv):
+    """The exit status of ``emaphm ARGV``, whether the parser (SystemExit) or the command
+    refused it."""
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return exc.code
+
+@pytest.fixture()
+def history(tmp_path):
+    db = tmp_path / "h.sqlite"
+    t = np.arange(8) * 100.0
+    rng = np.random.default_rng(2)
+    with HealthHistory(db) as h:
+        h.register("EMA-7")
+        for ti, k in zip(t, _friction_k(0.02 + 4e-4 * t + 0.004 * rng.standard_normal(8))):
+            h.add("EMA-7", float(ti), k)
+        h.register("EMA-2")
+        for ti in (0.0, 100.0):
+            h.add("EMA-2", ti, _friction_k([0.0])[0])
+        h.register("EMA-0")
+    return str(db)
+
+
+def test_prognose_risk_json_gains_the_next_inspection_and_keeps_the_rest(history, capsys):
+    assert main(["prognose", "EMA-7", "--db", history, "--json"]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert main(["prognose", "EMA-7", "--db", history, "--json", "--risk", "0.05"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    nxt = out.pop("next_inspection")
+    assert out == plain                         # 4000 draws either way: the same RUL
+    assert {"at", "risk", "indicator", "reason"} <= set(nxt)
+    assert nxt["indicator"] == "friction" and nxt["rule"] in ("risk", "max interval")
+    assert nxt["at"] > 700.0 and nxt["target"] == 0.05
+    # the same plan as in Python
+    with HealthHistory(history, readonly=True) as h:
+        data = h.data("EMA-7")
+    _, plan = next_inspection(data.times, data.K, seed=0, policy=InspectionPolicy(risk=0.05))
+    assert nxt["at"] == plan.at and nxt["reason"] == plan.reason
+
+
+def test_prognose_risk_text_says_when_in_one_line(history, capsys):
+    assert main(["prognose", "EMA-7", "--db", history, "--risk", "0.05"]) == 0
+    out = capsys.readouterr().out
+    assert "first to fail: friction" in out                  # the table is still there
+    assert sum(line.startswith("next inspection of EMA-7 by ") for line in out.splitlines()) == 1
+    assert main(["prognose", "EMA-7", "--db", history, "--risk", "0.05", "--at", "2000"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert sum(line.startswith(("act now: EMA-7", "inspect EMA-7 now")) for line in lines) == 1
+
+
+def test_prognose_risk_under_three_inspections_falls_back(history, capsys):
+    assert main(["prognose", "EMA-2", "--db", history, "--risk", "0.05", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["predictions"] == {} and out["n_inspections"] == 2
+    assert out["next_inspection"]["at"] == 100.0 + INTERVAL_DEFAULTS["h"].default
+    assert out["next_inspection"]["reason"].startswith("too few inspections")
+    assert main(["prognose", "EMA-0", "--db", history, "--risk", "0.05"]) == 0
+    assert "inspect EMA-0 now: it has never been inspected" in capsys.readouterr().out
+    # without --risk the refusal stands: a trend needs three inspections
+    assert main(["prognose", "EMA-2", "--db", history]) == 2
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["--risk", "0"], "risk must be a probability in (0, 1)"),
+    (["--risk", "1"], "risk must be a probability in (0, 1)"),
+    (["--risk", "-0.1"], "risk must be a probability in (0, 1)"),
+    (["--risk", "nan"], "risk must be a probability in (0, 1)"),
+    (["--risk", "0.00001"], "below 0.0001"),
+    (["--risk", "0.05", "--max-interval", "0"], "interval must be a finite number > 0"),
+    (["--risk", "0.05", "--max-interval", "-100"], "interval must be a finite number > 0"),
+    (["--risk", "0.05", "--min-interval", "900"], "the minimum interval 900 h must be below"),
+    (["--max-interval", "100"], "--max-interval plans the next inspection: give --risk too"),
+])
+def test_prognose_risk_refuses_bad_input_in_one_line(history, capsys, argv, needle):
+    assert _rc(["prognose", "EMA-7", "--db", history, *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err and needle in err, err
+
+
+def test_prognose_risk_of_an_unknown_actuator_is_one_line(history, capsys):
+    assert main(["prognose", "EMA-9", "--db", history, "--risk", "0.05"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "'EMA-9' is not registered" in err
