@@ -530,3 +530,133 @@ def test_a_site_is_built_around_a_stored_record_it_cannot_use(tmp_path, capsys):
     assert "emaphm history remove EMA-TYPO --id 11" in err
     assert hashlib.sha256(db.read_bytes()).hexdigest() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["fleet.sqlite", "site"]
+
+
+# ----------------------------------------------------------------------------- when to look next
+def test_assess_plans_each_actuators_next_inspection(tmp_path):
+    from emaphm.prognosis.inspection import INTERVAL_DEFAULTS, InspectionPolicy
+
+    t = np.linspace(0.0, 600.0, 7)
+    series = {
+        "GROW": (t, [_k(friction=0.02 + 0.0004 * x + 0.003 * math.sin(x)) for x in t]),
+        "PAST": (t, [_k(friction=0.1 + 0.0009 * x) for x in t]),
+        "FLAT": (t, [_k(backlash=0.004 * abs(math.sin(x))) for x in t]),
+        "NEW": (t[:1], [_k()]),
+        "NONE": ((), ()),
+    }
+    data = _history(tmp_path, series)
+    dflt = INTERVAL_DEFAULTS["h"]
+    grow = assess(data["GROW"], seed=0).plan
+    assert grow.indicator == "friction" and grow.rule in ("risk", "max interval")
+    assert 600.0 + dflt.min <= grow.at <= 600.0 + dflt.max and grow.target == 0.01
+    assert assess(data["PAST"], seed=0).plan.rule == "act now"
+    flat = assess(data["FLAT"], seed=0).plan
+    assert (flat.rule, flat.at) == ("healthy", 600.0 + dflt.default)
+    assert assess(data["NEW"], seed=0).plan.rule == "too few inspections"
+    assert assess(data["NONE"], seed=0).plan.rule == "never inspected"
+    assert assess(data["GROW"], seed=0, policy=None).plan is None
+    # a smaller risk plans sooner, with more draws behind it; the RUL stays the RUL
+    strict = assess(data["GROW"], seed=0, policy=InspectionPolicy(risk=0.002))
+    assert strict.plan.at <= grow.at and strict.prognosis.predictions["friction"].samples.size \
+        == 20_000
+
+
+def _unfold(ics: str) -> list[str]:
+    """RFC 5545 content lines: every physical line ends in CRLF, is at most 75 octets, and
+    a line that starts with a space continues the one before."""
+    assert ics.endswith("\r\n") and "\n" not in ics.replace("\r\n", "")
+    physical = ics.split("\r\n")[:-1]
+    assert all(len(line.encode("utf-8")) <= 75 for line in physical)
+    lines: list[str] = []
+    for line in physical:
+        if line.startswith(" "):
+            lines[-1] += line[1:]
+        else:
+            lines.append(line)
+    return lines
+
+
+def test_fleet_schedule_writes_one_row_per_actuator_soonest_first_linked_to_its_page(
+        small_site, tmp_path, capsys):
+    site, db = small_site
+    out = tmp_path / "plan.csv"
+    assert main(["fleet", "schedule", "--db", str(db), "--out", str(out), "--site",
+                 str(site.out), "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["rows"]
+    import csv
+
+    table = list(csv.DictReader(out.open(encoding="utf-8")))
+    assert [r["actuator"] for r in table] == [r["actuator"] for r in rows]
+    assert len(table) == 5 and table[0]["due_now"] == "yes"
+    assert table[0]["actuator"] == "EMA-PAST" and table[0]["rule"] == "act now"
+    assert table[0]["indicator"] == "short_a"
+    due = [r["inspect_by"] - (r["last_inspection"] or 0.0) for r in rows]
+    assert due == sorted(due)
+    soon = next(r for r in table if r["actuator"] == "EMA-SOON")     # 0.47 of 0.5, growing
+    assert (soon["indicator"], soon["rule"], soon["due_now"]) == ("friction", "act now", "yes")
+    assert float(soon["risk"]) > 0.01 and "friction" in soon["reason"]
+    cal = next(r for r in table if r["actuator"] == "EMA-CAL")       # flat backlash at 0.01
+    assert (cal["rule"], float(cal["inspect_by"])) == ("healthy", 600.0 + 300.0)
+    for r in table:                                  # each link is the page fleet report wrote
+        assert Path(r["link"]).is_file(), r["link"]
+        assert r["reason"] and r["time_unit"] == "h" and r["date"] == ""
+
+
+def test_fleet_schedule_as_a_calendar_maps_operating_hours_onto_dates(tmp_path, capsys):
+    import datetime as dt
+
+    t = np.linspace(0.0, 600.0, 7)
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-1", description="left aileron, A320; MSN 1234")
+        _add_series(h, "EMA-1", t, [_k(friction=0.02 + 0.0004 * x + 0.003 * math.sin(x))
+                                    for x in t])
+        h.register("EMA-2")
+        _add_series(h, "EMA-2", t[:2], [_k(), _k()])
+        _register_raw(h, "=HYPERLINK(\"x\")")
+    out = tmp_path / "plan.ics"
+    assert main(["fleet", "schedule", "--db", str(tmp_path / "h.sqlite"), "--out", str(out),
+                 "--start", "2026-12-01", "--per-day", "8", "--site",
+                 "https://ops.example/fleet", "--risk", "0.05", "--json"]) == 0
+    rows = {r["actuator"]: r for r in json.loads(capsys.readouterr().out)["rows"]}
+    lines = _unfold(out.read_bytes().decode("utf-8"))
+    assert lines[0] == "BEGIN:VCALENDAR" and lines[-1] == "END:VCALENDAR"
+    events = [i for i, line in enumerate(lines) if line == "BEGIN:VEVENT"]
+    assert len(events) == 3 and lines.count("END:VEVENT") == 3
+    start = dt.date(2026, 12, 1)
+    for r in rows.values():
+        days = 0 if r["due_now"] else math.floor((r["inspect_by"] - r["last_inspection"]) / 8)
+        assert r["date"] == (start + dt.timedelta(days=days)).isoformat()
+        assert f"DTSTART;VALUE=DATE:{r['date'].replace('-', '')}" in lines
+        assert f"URL:{r['link']}" in lines and r["link"].startswith("https://ops.example/fleet/")
+    assert rows["EMA-2"]["inspect_by"] == 100.0 + 300.0 and rows["EMA-2"]["date"] == "2027-01-07"
+    desc = next(line for line in lines if line.startswith("DESCRIPTION:EMA-1"))
+    assert "left aileron\\, A320\\; MSN 1234" in desc and "\\n" in desc
+    # the csv of an id that reads as a formula starts it with a quote
+    assert main(["fleet", "schedule", "--db", str(tmp_path / "h.sqlite"), "--out",
+                 str(tmp_path / "plan.csv")]) == 0
+    assert "'=HYPERLINK" in (tmp_path / "plan.csv").read_text(encoding="utf-8")
+
+
+def test_fleet_schedule_refuses_bad_input_in_one_line(small_site, tmp_path, capsys):
+    _, db = small_site
+    base = ["fleet", "schedule", "--db", str(db)]
+    ics = str(tmp_path / "p.ics")
+    _one_line_error(capsys, [*base, "--out", ics], "calendar events need dates",
+                    "--start DATE", "--per-day H")
+    _one_line_error(capsys, [*base, "--out", ics, "--start", "2026-12-01"],
+                    "give both, e.g. --start 2026-12-01 --per-day 8")
+    _one_line_error(capsys, [*base, "--out", ics, "--start", "1.12.2026", "--per-day", "8"],
+                    "write it as YYYY-MM-DD")
+    _one_line_error(capsys, [*base, "--out", str(tmp_path / "p.txt")], "must end in .csv or .ics")
+    _one_line_error(capsys, [*base, "--out", str(tmp_path / "p.csv"), "--actuator", "EMA-9"],
+                    "'EMA-9' is not registered")
+    _one_line_error(capsys, [*base, "--out", str(tmp_path / "p.csv"), "--risk", "0.01",
+                             "--min-interval", "900"], "must be below the maximum")
+    for argv, needle in ((["--risk", "1.5"], "risk must be a probability in (0, 1)"),
+                         (["--max-interval", "0"], "interval must be a finite number > 0"),
+                         (["--per-day", "-8"], "operating time per day must be a number")):
+        with pytest.raises(SystemExit) as exc:
+            main([*base, "--out", str(tmp_path / "p.csv"), *argv])
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and err.count("\n") == 1 and needle in err, err
+    assert not list(tmp_path.iterdir())                       # nothing written

@@ -3,6 +3,8 @@
     emaphm fleet report --db fleet.sqlite --out site/ [--actuator ID ...] [--threshold MODE=V]
                         [--workers N | --scheduler tcp://HOST:PORT]
     emaphm fleet demo --db demo.sqlite [--actuators 30] [--seed S] [--synthetic]
+    emaphm fleet schedule --db fleet.sqlite --out plan.csv|plan.ics [--risk 0.01]
+                          [--start 2026-12-01 --per-day 8] [--site URL]
 
 The store is ``--db PATH``, else ``$EMAPHM_HISTORY``, else ``emaphm-history.sqlite``, as
 for ``emaphm history``. This module imports nothing heavy until a command runs.
@@ -12,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import time
@@ -156,13 +159,86 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _date(text: str):
+    import datetime as dt
+
+    try:
+        return dt.date.fromisoformat(text.strip())
+    except ValueError:
+        raise _usage(f"--start {text!r} is not a date; write it as YYYY-MM-DD, e.g. "
+                     "--start 2026-12-01") from None
+
+
+def _calendar(args: argparse.Namespace):
+    """The :class:`~emaphm.fleet.schedule.Calendar` of ``--start`` and ``--per-day`` (both or
+    neither), or None."""
+    if (args.start is None) != (args.per_day is None):
+        given, other = ("--start", "--per-day") if args.start is not None else ("--per-day", "--start")
+        raise _usage(f"{given} maps operating time onto dates together with {other}: give both, "
+                     "e.g. --start 2026-12-01 --per-day 8")
+    if args.start is None:
+        return None
+    from .schedule import Calendar
+
+    return Calendar(start=_date(args.start), per_day=args.per_day)
+
+
+def cmd_schedule(args: argparse.Namespace) -> int:
+    from .._cli_common import out_path
+    from ..prognosis.cli import option_words, db_path, inspection_policy, threshold_option, warn
+    from ..prognosis.history import HealthHistory, skipped_note
+    from ..prognosis.inspection import DEFAULT_RISK
+
+    thresholds = threshold_option(args.threshold)
+    out = out_path(args.out, (".csv", ".ics"), "--out")
+    calendar = _calendar(args)
+    if out.suffix.lower() == ".ics" and calendar is None:
+        raise _usage(f"--out {out}: calendar events need dates, and a history's time is "
+                     "operating time (flight hours or cycles): give --start DATE (the date of "
+                     "the plan) and --per-day H (operating hours or cycles a day), or write "
+                     "a .csv")
+    if args.risk is None:
+        args.risk = DEFAULT_RISK
+    policy = inspection_policy(args)
+    from .schedule import assess_fleet, rows_from, write_csv, write_ics
+
+    db = db_path(args)
+    with HealthHistory(db, readonly=True) as h:
+        for actuator in args.actuator or ():
+            h.actuator(actuator)
+        for unit in {a.time_unit for a in h.actuators()}:
+            try:
+                policy.intervals(unit)
+            except ValueError as exc:
+                raise _usage(option_words(str(exc))) from None
+        statuses = assess_fleet(h, policy=policy, thresholds=thresholds, seed=args.seed,
+                                actuators=args.actuator)
+    rows = rows_from(statuses, base=args.site, calendar=calendar)
+    skipped = [s for s in statuses if s.data.skipped]
+    if skipped:
+        warn("fleet schedule", skipped_note(skipped[0].actuator, skipped[0].data.skipped)
+             + (f"; and {len(skipped) - 1} other actuator(s)" if len(skipped) > 1 else ""))
+    (write_ics if out.suffix.lower() == ".ics" else write_csv)(rows, out)
+    if args.json:
+        print(json.dumps({"out": str(out), "risk": policy.risk,
+                          "rows": [r.to_dict() for r in rows]}))
+        return 0
+    now = sum(r.due_now for r in rows)
+    print(f"wrote {out}: {len(rows)} actuator{'s' if len(rows) != 1 else ''}, {now} due now "
+          f"(risk {policy.risk:g})")
+    for r in rows[:3]:
+        when = f"{r.inspect_by:.0f} {r.time_unit}" + (f" ({r.date})" if r.date else "")
+        print(f"  {r.actuator}: {'now, ' if r.due_now else ''}by {when}: {r.reason}")
+    return 0
+
+
 # ----------------------------------------------------------------------------- wiring
 _workers = arg_type(int, lambda w: w >= 0, "workers must be a non-negative integer (0: in this "
                     "process)")
 
 
 def register(subparsers: Any) -> None:
-    """Add ``fleet report`` and ``fleet demo`` to the ``emaphm`` parser."""
+    """Add ``fleet report``, ``fleet demo`` and ``fleet schedule`` to the ``emaphm`` parser."""
     fp = subparsers.add_parser("fleet", help="the fleet health site: every actuator at a glance")
     fs = fp.add_subparsers(dest="fleet_command", required=True)
 
@@ -217,3 +293,43 @@ def register(subparsers: Any) -> None:
     d.add_argument("--json", action="store_true")
     d.add_argument("--quiet", action="store_true")
     d.set_defaults(func=cmd_demo)
+    _register_schedule(fs)
+
+
+_per_day = arg_type(float, lambda x: math.isfinite(x) and 0 < x <= 1e6,
+                    "operating time per day must be a number in (0, 1e6], e.g. 8 (hours a day)")
+
+
+def _register_schedule(fs: Any) -> None:
+    from ..prognosis.cli import planning_options
+
+    s = fs.add_parser(
+        "schedule", help="write the fleet's next inspections (CSV, or iCalendar with dates)",
+        description="Plan the next inspection of every actuator at a stated risk (as emaphm "
+                    "prognose --risk does) and write the schedule: one row (.csv) or all-day "
+                    "calendar event (.ics) per actuator, soonest first, with the driving "
+                    "indicator, the predicted risk, the reason and a link to its page on the "
+                    "fleet site. Times are operating time; --start and --per-day map them "
+                    "onto dates (a .ics needs them).")
+    s.add_argument("--db", help="health history database (default $EMAPHM_HISTORY or "
+                                "emaphm-history.sqlite)")
+    s.add_argument("--out", required=True, help="the schedule: plan.csv or plan.ics")
+    planning_options(s, default_risk=True)
+    s.add_argument("--start", metavar="DATE",
+                   help="date of the plan (YYYY-MM-DD): each actuator is taken to be at its last "
+                        "inspection's operating time then")
+    s.add_argument("--per-day", type=_per_day, metavar="H",
+                   help="operating time an actuator accrues per day, in its history's unit "
+                        "(e.g. 8 flight hours)")
+    s.add_argument("--site", default="fleet-site/",
+                   help="where the fleet site lives (folder or URL; default fleet-site/, as "
+                        "emaphm fleet report --out fleet-site/ writes it): the rows link to "
+                        "SITE/actuators/<page>.html")
+    s.add_argument("--actuator", action="append", metavar="ID",
+                   help="only this actuator (repeatable; default: all)")
+    s.add_argument("--threshold", action="append", metavar="MODE=VALUE",
+                   help="failure threshold of a fault mode (repeatable), as for emaphm prognose")
+    s.add_argument("--seed", type=_seed, default=0,
+                   help="seed of the Monte Carlo draws (default 0)")
+    s.add_argument("--json", action="store_true")
+    s.set_defaults(func=cmd_schedule)

@@ -18,6 +18,10 @@ trend           +1, 0 or -1: the sign of the fitted growth rate of ``worst`` at 
                 inspection, 0 unless it differs from zero by two standard errors
 past_threshold  an indicator is at or past its threshold: its last identified value,
                 or its fitted trend at the last inspection (RUL median 0)
+plan            the next inspection at the fleet's risk
+                (:class:`~emaphm.prognosis.inspection.NextInspection`: ``at``, the
+                driving indicator, the reason; :data:`FLEET_POLICY` unless given), or
+                None when no policy was asked for
 ==============  =======================================================================
 
 The *worst* indicator is, in this order: the one furthest past its threshold; the one
@@ -45,16 +49,23 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Iterable
 
 
+from ..prognosis.inspection import DEFAULT_RISK, InspectionPolicy, n_samples_for, plan_inspection
 from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds,
                                     indicator_values)
 from ..prognosis.trends import growth_rate, indicator_state
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..prognosis.history import Actuator, HistoryData
+    from ..prognosis.inspection import NextInspection
     from ..prognosis.trends import Prognosis
 
 __all__ = ["ActuatorStatus", "assess", "attention_key", "order_fleet", "growth_rate",
-           "indicator_state", "VERDICTS"]
+           "indicator_state", "VERDICTS", "FLEET_POLICY", "inspect_key"]
+
+#: The policy of the fleet's "inspect by" column and of ``emaphm fleet schedule`` unless
+#: given: :data:`~emaphm.prognosis.inspection.DEFAULT_RISK` that an indicator crosses its
+#: threshold before the inspection, the intervals of the history's time unit.
+FLEET_POLICY = InspectionPolicy(risk=DEFAULT_RISK)
 
 #: Verdicts of the last inspection, as the fleet table names them.
 VERDICTS = ("unexplained", "faulty", "healthy", "not diagnosed", "not inspected")
@@ -83,6 +94,7 @@ class ActuatorStatus:
     growth: float
     data: "HistoryData" = field(repr=False)
     prognosis: "Prognosis | None" = field(repr=False, default=None)
+    plan: "NextInspection | None" = field(repr=False, default=None)
 
     @property
     def id(self) -> str:
@@ -128,11 +140,14 @@ def _verdict(data: "HistoryData") -> tuple[str, tuple[str, ...]]:
 
 
 def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
-           seed: int = 0, level: float = 0.9, prognosis: "Prognosis | None" = None) -> ActuatorStatus:
+           seed: int = 0, level: float = 0.9, prognosis: "Prognosis | None" = None,
+           policy: InspectionPolicy | None = FLEET_POLICY) -> ActuatorStatus:
     """The state of one actuator from its history (module docstring).
 
     With three inspections or more its prognosis is computed (:func:`emaphm.prognosis.prognose`
-    with ``seed``, ``thresholds`` and ``level``) unless ``prognosis`` is given.
+    with ``seed``, ``thresholds`` and ``level``, and the draws ``policy``'s risk needs)
+    unless ``prognosis`` is given; with a ``policy``, its next inspection
+    (:func:`~emaphm.prognosis.inspection.plan_inspection`, from its last inspection).
     """
     from ..prognosis.trends import MIN_INSPECTIONS
 
@@ -142,19 +157,22 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
                 last_recorded_utc=data.inspections[-1].recorded_utc if data.n else None,
                 verdict=verdict, faults=faults, rul_level=float(level), data=data)
     if not data.n:
+        plan = None if policy is None else plan_inspection(
+            data.times, None, policy=policy, time_unit=data.actuator.time_unit)
         return ActuatorStatus(worst=None, level=math.nan, threshold=math.nan,
                               rul_median=math.nan, rul_lo=math.nan, rul_hi=math.nan,
                               no_growth=False, past_threshold=False, trend=None,
-                              growth=math.nan, prognosis=None, **base)
+                              growth=math.nan, prognosis=None, plan=plan, **base)
     now = indicator_values(data.K[-1])
     thr = {n: thresholds.for_indicator(n) for n in INDICATORS}
     ratio = {n: float(now[n]) / thr[n] for n in INDICATORS}
     if prognosis is None and data.n >= MIN_INSPECTIONS:
         from ..prognosis.trends import prognose
 
+        draws = {} if policy is None else {"n_samples": n_samples_for(policy.risk)}
         prognosis = prognose(data.times, data.K, seed=seed, thresholds=thresholds,
                              actuator=data.actuator.id, time_unit=data.actuator.time_unit,
-                             level=level)
+                             level=level, **draws)
     preds = prognosis.predictions if prognosis is not None else {}
     past = [n for n in INDICATORS if ratio[n] >= 1.0 or (n in preds and preds[n].median <= 0.0)]
     span = float(data.times[-1] - data.times[0])
@@ -173,10 +191,13 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
         flat = worst not in growing and not past
     else:
         trend, rate, rul, flat = None, math.nan, (math.nan,) * 3, False
+    plan = None if policy is None else plan_inspection(
+        data.times, prognosis, policy=policy, time_unit=data.actuator.time_unit, K=data.K,
+        thresholds=thresholds)
     return ActuatorStatus(worst=worst, level=float(now[worst]), threshold=thr[worst],
                           rul_median=float(rul[0]), rul_lo=float(rul[1]), rul_hi=float(rul[2]),
                           no_growth=bool(flat), past_threshold=bool(past), trend=trend,
-                          growth=float(rate), prognosis=prognosis, **base)
+                          growth=float(rate), prognosis=prognosis, plan=plan, **base)
 
 
 def attention_key(status: ActuatorStatus) -> tuple:
@@ -188,6 +209,16 @@ def attention_key(status: ActuatorStatus) -> tuple:
     if status.predicted:
         return (1, status.rul_median, status.rul_lo, status.id)
     return (2, -status.ratio, 0.0, status.id)
+
+
+def inspect_key(status: ActuatorStatus) -> tuple:
+    """Sort key of the schedule: the time of the next inspection, soonest first, as far
+    past due as it is (``at - t_now``; never inspected first of all), then by id; units
+    without a plan last."""
+    p = status.plan
+    if p is None:
+        return (1, 0.0, status.id)
+    return (0, p.at - p.t_now if p.t_last is not None else -math.inf, status.id)
 
 
 def order_fleet(statuses: Iterable[ActuatorStatus]) -> list[ActuatorStatus]:
