@@ -11,9 +11,12 @@
     assets/fleet.css, fleet.js  shipped with emaphm: no CDN, works offline and from file://
     actuators/STEM.html         a page per actuator: state, RUL per indicator, figures,
                                 calibration, inspections
-    actuators/STEM-history.png  :func:`emaphm.prognosis.plots.plot_history`
-    actuators/STEM-prognosis.png  :func:`emaphm.prognosis.plots.plot_prognosis` (from three
-                                inspections on)
+    actuators/STEM-history.png  the components of k that moved, as
+                                :func:`emaphm.prognosis.plots.plot_history` draws them
+    actuators/STEM-prognosis.png  trend, cone and RUL as :func:`~emaphm.prognosis.plots.
+                                plot_prognosis` draws them (from three inspections on);
+                                both drawn by :mod:`emaphm.fleet.figures` on figures it
+                                reuses from one actuator to the next
 
 ``STEM`` is :func:`emaphm.fleet.markup.page_stem` of the id (a slug and a hash), safe for
 any id. Every value from the store is escaped (:mod:`emaphm.fleet.markup`). The figures
@@ -182,7 +185,7 @@ _INDEX_KEY = ".index-key"
 #: page again.
 _PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.plots", "emaphm.prognosis.trends",
               "emaphm.prognosis.thresholds", "emaphm.fleet.status", "emaphm.fleet.site",
-              "emaphm.fleet.markup")
+              "emaphm.fleet.markup", "emaphm.fleet.figures")
 
 #: Most actuators in one task of a worker process or a Dask worker.
 _BATCH_MAX = 16
@@ -305,11 +308,13 @@ def _render_batch(jobs: Sequence[_Job]) -> list[dict]:
 def _draw(status: "ActuatorStatus", data: Any, thresholds: FailureThresholds,
           stem: str) -> tuple[dict, dict]:
     """The figures of one actuator as PNG bytes (name -> bytes) and as the page shows them
-    (``history``/``prognosis`` -> (name, width, height) in pixels)."""
-    from ..prognosis.plots import (interesting_indicators, moved_components, plot_history,
-                                   plot_prognosis)
+    (``history``/``prognosis`` -> (name, width, height) in pixels), drawn by this thread's
+    :class:`~emaphm.fleet.figures.PageFigures`."""
+    from ..prognosis.plots import MOVED_SHARE, interesting_indicators, moved_components
     from ..prognosis.thresholds import INDICATOR_COMPONENT
+    from .figures import page_figures
 
+    draw = page_figures(FIGURE_DPI, PNG_COMPRESSION)
     files: dict[str, bytes] = {}
     figures: dict[str, tuple] = {}
     hist_name, prog_name = _figure_names(stem)
@@ -317,32 +322,20 @@ def _draw(status: "ActuatorStatus", data: Any, thresholds: FailureThresholds,
         # the components that moved (and the worst): a panel per flat line of a healthy
         # component cost most of a fresh site's drawing time
         always = [INDICATOR_COMPONENT[status.worst]] if status.worst in INDICATOR_COMPONENT else []
-        fig = plot_history(data, thresholds=thresholds,
-                           components=moved_components(data, thresholds, always))
-        files[hist_name] = _png(fig)
-        figures["history"] = (hist_name, *_pixels(fig))
+        shown = moved_components(data, thresholds, always)
+        hidden = 8 - len(shown)
+        png, w, h = draw.history(data, components=shown, thresholds=thresholds, note=(
+            f"; {hidden} other components not shown (each stayed below {MOVED_SHARE:.0%} of "
+            "its threshold)" if hidden else ""))
+        files[hist_name], figures["history"] = png, (hist_name, w, h)
     prog = status.prognosis
     if prog is not None:                      # the worst, and up to two more that grow
         span = float(prog.times[-1] - prog.times[0])
         names = [status.worst] + [n for n in interesting_indicators(prog) if n != status.worst
                                   and not prog.predictions[n].no_growth(span)]
-        fig = plot_prognosis(prog, indicators=names[:3])
-        files[prog_name] = _png(fig)
-        figures["prognosis"] = (prog_name, *_pixels(fig))
+        png, w, h = draw.prognosis(prog, indicators=names[:3])
+        files[prog_name], figures["prognosis"] = png, (prog_name, w, h)
     return files, figures
-
-
-def _png(fig: Any) -> bytes:
-    import io
-
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=FIGURE_DPI, pil_kwargs={"compress_level": PNG_COMPRESSION})
-    return buf.getvalue()
-
-
-def _pixels(fig: Any) -> tuple[int, int]:
-    w, h = fig.get_size_inches()
-    return int(round(w * FIGURE_DPI)), int(round(h * FIGURE_DPI))
 
 
 class _LocalPool:

@@ -1,0 +1,284 @@
+"""A fleet site that grows: what a rebuild makes again and what it leaves alone, the
+figures drawn on reused matplotlib figures against the reference plots, the pages made
+by worker processes and on a Dask cluster, and the index of a large fleet.
+
+The index of 10,000 actuators in a real browser is in ``test_fleet_browser.py``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from emaphm.cli import main
+from emaphm.diagnosis import diagnose
+from emaphm.fleet.markup import page_stem
+from emaphm.prognosis.history import HealthHistory
+
+
+def _k(friction=0.0, short_a=0.0, ecc=0.0, gain=0.5):
+    return [friction, 0.0, short_a, 0.0, 0.0, ecc, 0.5, gain]
+
+
+def _add(h, aid, times, ks):
+    for t, k in zip(times, ks):
+        h.add(aid, float(t), k, diagnosis=diagnose(k, fault_model="paper").to_dict(),
+              algorithm="pso", seed=0, fingerprint=f"{aid}-{t}")
+
+
+T = np.linspace(0.0, 600.0, 5)
+SERIES = {
+    "EMA-PAST": [_k(friction=0.2 + 0.0006 * x) for x in T],
+    "EMA-SOON": [_k(short_a=0.02 + 0.0004 * x) for x in T],
+    "EMA-ECC": [_k(ecc=0.0005 * x) for x in T],
+    "EMA-OK": [_k(friction=0.01) for _ in T],
+}
+
+
+@pytest.fixture()
+def fleet(tmp_path):
+    db = tmp_path / "fleet.sqlite"
+    with HealthHistory(db) as h:
+        for aid, ks in SERIES.items():
+            h.register(aid, description=f"{aid.lower()} unit")
+            _add(h, aid, T, ks)
+        h.register("EMA-NEW")
+        _add(h, "EMA-NEW", T[:1], [_k(short_a=0.05)])
+    return db
+
+
+def _mtimes(folder: Path) -> dict:
+    return {p.relative_to(folder).as_posix(): p.stat().st_mtime_ns
+            for p in folder.rglob("*") if p.is_file()}
+
+
+# ----------------------------------------------------------------------------- rebuilds
+def test_a_rebuild_with_nothing_changed_assesses_draws_and_writes_nothing(fleet, tmp_path,
+                                                                          monkeypatch):
+    from emaphm.fleet import status
+    from emaphm.fleet.site import build_site
+
+    out = tmp_path / "site"
+    first = build_site(fleet, out, workers=0)
+    assert first.drawn == 5 and first.written > 10
+    before = _mtimes(out)
+    assert {".figures.json", ".index-key"} <= {Path(p).name for p in before}
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("an unchanged actuator was assessed again")
+
+    monkeypatch.setattr(status, "assess", refuse)
+    again = build_site(fleet, out, workers=0)
+    assert (again.drawn, again.written, again.statuses) == (0, 0, ())
+    assert _mtimes(out) == before                    # no page, figure, index or manifest
+    assert again.rows == first.rows and set(again.pages) == set(first.pages)
+    assert [r["id"] for r in again.rows] == [s.id for s in first.statuses]
+
+
+def test_the_order_of_the_index_is_the_order_of_attention(fleet, tmp_path):
+    from emaphm.fleet.site import build_site
+    from emaphm.fleet.status import order_fleet
+
+    site = build_site(fleet, tmp_path / "site", workers=0)
+    assert [r["id"] for r in site.rows] == [s.id for s in order_fleet(site.statuses)]
+    assert [r["rank"] for r in site.rows] == list(range(1, 6))
+    assert site.rows[0]["id"] == "EMA-PAST"
+
+
+def test_a_new_inspection_makes_that_actuators_page_and_figures_again_and_no_other(fleet,
+                                                                                   tmp_path):
+    from emaphm.fleet.site import build_site
+
+    out = tmp_path / "site"
+    build_site(fleet, out, workers=0)
+    before = _mtimes(out)
+    with HealthHistory(fleet) as h:
+        _add(h, "EMA-OK", [700.0], [_k(friction=0.45)])       # now near its threshold
+    site = build_site(fleet, out, workers=0)
+    assert site.drawn == 1 and [s.id for s in site.statuses] == ["EMA-OK"]
+    after = _mtimes(out)
+    changed = sorted(n for n in after if after[n] != before.get(n))
+    stem = page_stem("EMA-OK")
+    assert changed == sorted([f"actuators/{stem}.html", f"actuators/{stem}-history.png",
+                              f"actuators/{stem}-prognosis.png", "actuators/.figures.json",
+                              "actuators/.index-key", "fleet.json", "index.html"])
+    row = next(r for r in site.rows if r["id"] == "EMA-OK")
+    assert row["n_inspections"] == 6 and row["last_time"] == 700.0
+    index = (out / "index.html").read_text(encoding="utf-8")
+    assert "EMA-OK" in index and json.loads((out / "fleet.json").read_text())["actuators"] \
+        == [dict(r) for r in site.rows]
+    # a calibration recorded for another actuator makes its page again (the page shows it)
+    from emaphm.params import siemens_1fk7060
+
+    with HealthHistory(fleet) as h:
+        h.calibrate("EMA-NEW", 10.0, siemens_1fk7060(), sources=["/bench/h1.parquet"])
+    site = build_site(fleet, out, workers=0)
+    assert site.drawn == 1 and site.statuses[0].id == "EMA-NEW"
+    assert "h1.parquet" in site.pages["EMA-NEW"].read_text(encoding="utf-8")
+
+
+def test_other_settings_a_missing_or_cut_file_and_redraw_make_pages_again(fleet, tmp_path):
+    from emaphm.fleet.site import build_site
+
+    out = tmp_path / "site"
+    build_site(fleet, out, workers=0)
+    assert build_site(fleet, out, workers=0, seed=1).drawn == 5       # the RUL draws differ
+    assert build_site(fleet, out, workers=0, seed=1).drawn == 0
+    assert build_site(fleet, out, workers=0, seed=1, title="Other").drawn == 5
+    stem = page_stem("EMA-SOON")
+    png = out / "actuators" / f"{stem}-prognosis.png"
+    png.write_bytes(png.read_bytes()[:100])                            # cut short
+    (out / "actuators" / f"{page_stem('EMA-ECC')}.html").unlink()
+    site = build_site(fleet, out, workers=0, seed=1, title="Other")
+    assert sorted(s.id for s in site.statuses) == ["EMA-ECC", "EMA-SOON"]
+    assert png.stat().st_size > 1000
+    (out / "index.html").unlink()
+    site = build_site(fleet, out, workers=0, seed=1, title="Other")
+    assert site.drawn == 0 and site.written == 2 and (out / "index.html").is_file()
+    assert build_site(fleet, out, workers=0, seed=1, title="Other", redraw=True).drawn == 5
+
+
+def test_a_rebuild_with_nothing_changed_imports_neither_scipy_nor_matplotlib(fleet, tmp_path):
+    from emaphm.fleet.site import build_site
+
+    out = tmp_path / "site"
+    build_site(fleet, out, workers=0)
+    code = ("import sys; from emaphm.fleet.site import build_site; "
+            f"s = build_site({str(fleet)!r}, {str(out)!r}, workers=0); "
+            "print(s.drawn, s.written, sorted(m for m in ('scipy', 'matplotlib') "
+            "if m in sys.modules))")
+    out_text = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                              text=True).stdout.split()
+    assert out_text == ["0", "0", "[]"]
+
+
+def test_an_index_longer_than_a_page_holds_the_first_rows_and_all_the_data(fleet, tmp_path,
+                                                                            monkeypatch):
+    from emaphm.fleet import site as fleet_site
+
+    monkeypatch.setattr(fleet_site, "PAGE_ROWS", 2)
+    site = fleet_site.build_site(fleet, tmp_path / "site", workers=0)
+    html = site.index.read_text(encoding="utf-8")
+    assert re.findall(r"<tr data-i=\"(\d+)\"", html) == ["0", "1"]
+    assert "The first 2 of 5 actuators" in html and "2 of 5 shown" in html
+    block = re.search(r'<script type="application/json" id="fleet-data">(.*?)</script>', html,
+                      re.S).group(1)
+    data = json.loads(block)
+    assert data["page_rows"] == 2 and [r["id"] for r in data["actuators"]] == \
+        [r["id"] for r in site.rows]
+    for r in data["actuators"]:              # each row carries its table row, escaped
+        assert r["html"].startswith(f"<tr data-i=\"{r['rank'] - 1}\"")
+        assert f">{r['id']}</a>" in r["html"]
+
+
+def test_worker_processes_make_the_same_site(fleet, tmp_path):
+    from emaphm.fleet.site import build_site
+
+    serial = build_site(fleet, tmp_path / "serial", workers=0)
+    pool = build_site(fleet, tmp_path / "pool", workers=2)
+    assert pool.workers == 2 and pool.drawn == 5 and pool.statuses == ()
+    assert _same_files(tmp_path / "serial", tmp_path / "pool")
+    assert serial.rows == pool.rows
+
+
+def _same_files(a: Path, b: Path) -> bool:
+    """The two sites hold the same files with the same bytes, but for the index's build
+    time."""
+    names = sorted(p.relative_to(a).as_posix() for p in a.rglob("*") if p.is_file())
+    assert names == sorted(p.relative_to(b).as_posix() for p in b.rglob("*") if p.is_file())
+    for name in names:
+        x, y = (a / name).read_bytes(), (b / name).read_bytes()
+        if name == "index.html":
+            x, y = (re.sub(rb"built [0-9: -]+UTC", b"", v) for v in (x, y))
+        assert x == y, name
+    return True
+
+
+# ----------------------------------------------------------------------------- figures
+def _reference_points(fig, label):
+    """{axes title: sorted (x, y) of the reference figure's lines labelled ``label``}."""
+    out = {}
+    for ax in fig.axes:
+        pts = [tuple(p) for line in ax.get_lines() if line.get_label() == label
+               for p in np.asarray(line.get_xydata(), dtype=float)]
+        if ax.get_visible():
+            out[ax.get_title()] = sorted(pts)
+    return out
+
+
+def test_the_page_figures_draw_what_the_reference_plots_draw(fleet):
+    from emaphm.fleet.figures import PageFigures
+    from emaphm.fleet.status import assess
+    from emaphm.prognosis.plots import plot_history, plot_prognosis
+
+    figs = PageFigures()
+    with HealthHistory(fleet, readonly=True) as h:
+        data = {aid: h.data(aid) for aid in SERIES}
+    drawn = {"identified": 0, "median": 0, "bar": 0}
+    for aid, d in data.items():
+        shown = [0, 2, 5, 6, 7]
+        figs.history(d, components=shown)
+        mine = figs._history[3]
+        ref = plot_history(d, components=shown)
+        for state in ("healthy", "faulty", "unexplained"):
+            want = _reference_points(ref, state)
+            got = {p.ax.get_title(): sorted(tuple(x) for x in p.points[state].get_xydata())
+                   for p in mine[1][:len(shown)]}
+            assert got == {k: v for k, v in want.items() if k in got}, (aid, state)
+        hollow = _reference_points(ref, "no eccentricity: phase meaningless")
+        assert sorted(tuple(x) for x in mine[1][3].hollow.get_xydata()) == \
+            hollow.get("k7: eccentricity phase", [])
+        thr = {ax.get_title(): [line.get_ydata()[0] for line in ax.get_lines()
+                                if line.get_linestyle() == "--"] for ax in ref.axes}
+        for p in mine[1][:len(shown)]:
+            assert [line.get_ydata()[0] for line in p.thr if line.get_visible()] == \
+                thr[p.ax.get_title()]
+        s = assess(d, seed=0)
+        names = [s.worst] + [n for n in s.prognosis.predictions if n != s.worst][:1]
+        figs.prognosis(s.prognosis, indicators=names)
+        mine = figs._prognosis[2]
+        ref = plot_prognosis(s.prognosis, indicators=names)
+        for panel, ax in zip(mine[1], ref.axes):
+            assert panel.ax.get_title() == ax.get_title()
+            for label, line in (("identified", panel.points), ("median", panel.median)):
+                want = [np.asarray(x.get_xydata()) for x in ax.get_lines() if x.get_label() == label]
+                got = np.asarray(line.get_xydata())
+                assert (got.size == 0 and not want) or np.allclose(got, want[0])
+                drawn[label] += got.size > 0
+            want = [x.get_xydata() for x in ax.get_lines() if x.get_label().startswith("RUL ")]
+            assert (not want and not len(panel.bar.get_xydata())) or \
+                np.allclose(panel.bar.get_xydata(), want[0])
+            drawn["bar"] += bool(want)
+        assert mine[2].get_text() == ref.get_suptitle()
+    assert drawn["median"] >= 2 and drawn["bar"] >= 2 and drawn["identified"] == 8
+
+
+def test_a_reused_figure_draws_the_same_bytes_as_a_fresh_one(fleet):
+    from emaphm.fleet.figures import PageFigures
+    from emaphm.fleet.status import assess
+
+    with HealthHistory(fleet, readonly=True) as h:
+        past, ecc, new = (h.data(a) for a in ("EMA-PAST", "EMA-ECC", "EMA-NEW"))
+    figs = PageFigures()
+    first = figs.history(past, components=[0, 7])
+    prog = figs.prognosis(assess(past, seed=0).prognosis, indicators=["friction"])
+    figs.history(ecc, components=[5, 6])                 # the same layout, other data
+    figs.history(new, components=[2])
+    figs.prognosis(assess(ecc, seed=0).prognosis, indicators=["eccentricity"])
+    assert figs.history(past, components=[0, 7]) == first
+    assert figs.prognosis(assess(past, seed=0).prognosis, indicators=["friction"]) == prog
+    fresh = PageFigures()
+    assert fresh.history(past, components=[0, 7]) == first
+    assert first[0][:8] == b"\x89PNG\r\n\x1a\n" and first[1:] == (1100, 345)
+    with pytest.raises(ValueError, match="indices of k"):
+        figs.history(past, components=[8])
+    with pytest.raises(ValueError, match="no prediction for indicator 'x'"):
+        figs.prognosis(assess(past, seed=0).prognosis, indicators=["x"])
