@@ -320,19 +320,28 @@ def test_a_file_from_before_0_3_with_the_contact_under_plant_reads_it_into_trans
 
 def test_an_actuators_own_thresholds_round_trip_through_its_file(tmp_path):
     from emaphm.modes import THRESHOLDS_BY_FAULT_MODEL, thresholds_for
+    from emaphm.params import Calibration
 
     own = dataclasses.replace(siemens_1fk7060(), thresholds=(("short_circuit", 0.011),
-                                                             ("friction", 0.06)))
+                                                             ("friction", 0.06),
+                                                             ("backlash", 0.05)))
     path = save_params(own, tmp_path / "own.toml")
     assert "[thresholds]" in path.read_text()
     back = load_params(path)
-    assert back.thresholds == (("friction", 0.06), ("short_circuit", 0.011))
+    assert back.thresholds == (("backlash", 0.05), ("friction", 0.06), ("short_circuit", 0.011))
+    default = THRESHOLDS_BY_FAULT_MODEL["physical"]
+    # tuned for a calibrated unit: there they apply as they are
+    unit = dataclasses.replace(back, calibration=Calibration(date="2026-11-26T00:00:00+00:00"))
+    t = thresholds_for("physical", unit)
+    assert (t.friction, t.short_circuit, t.backlash) == (0.06, 0.011, 0.05)
+    assert t.eccentricity == default.eccentricity
+    # on the data sheet only where they raise the defaults
     t = thresholds_for("physical", back)
-    assert (t.friction, t.short_circuit) == (0.06, 0.011)
-    assert t.backlash == THRESHOLDS_BY_FAULT_MODEL["physical"].backlash
+    assert (t.friction, t.short_circuit, t.backlash) == (default.friction, default.short_circuit,
+                                                         0.05)
     # the paper's turn removal keeps its own thresholds; a data sheet without the table too
-    assert thresholds_for("paper", back) == THRESHOLDS_BY_FAULT_MODEL["paper"]
-    assert thresholds_for("physical", siemens_1fk7060()) == THRESHOLDS_BY_FAULT_MODEL["physical"]
+    assert thresholds_for("paper", unit) == THRESHOLDS_BY_FAULT_MODEL["paper"]
+    assert thresholds_for("physical", siemens_1fk7060()) == default
     # a file without the table writes none
     assert "[thresholds]" not in save_params(siemens_1fk7060(), tmp_path / "p.toml").read_text()
 
@@ -352,21 +361,26 @@ def test_a_bad_thresholds_table_is_refused_with_the_file_and_the_fix(tmp_path, t
 
 def test_a_diagnosis_and_a_calibration_keep_the_actuators_thresholds():
     from emaphm.diagnosis import diagnose
+    from emaphm.modes import DEFAULT_THRESHOLDS
+    from emaphm.params import Calibration
     from support import k_with
 
-    own = dataclasses.replace(siemens_1fk7060(), thresholds=(("friction", 0.05),))
+    sheet = dataclasses.replace(siemens_1fk7060(), thresholds=(("friction", 0.05),))
+    unit = dataclasses.replace(sheet, calibration=Calibration(date="2026-11-26T00:00:00+00:00"))
     k = k_with(k1=0.07)
-    assert [f.mode for f in diagnose(k, params=own, fault_model="physical").faults] == ["friction"]
+    assert [f.mode for f in diagnose(k, params=unit, fault_model="physical").faults] == ["friction"]
+    # on the data sheet the lowered threshold does not apply; without the table neither
+    assert not diagnose(k, params=sheet, fault_model="physical").faults
     assert not diagnose(k, params=siemens_1fk7060(), fault_model="physical").faults
     # explicit thresholds still win
-    from emaphm.modes import DEFAULT_THRESHOLDS
-
-    assert not diagnose(k, params=own, fault_model="physical", thresholds=DEFAULT_THRESHOLDS).faults
+    assert not diagnose(k, params=unit, fault_model="physical", thresholds=DEFAULT_THRESHOLDS).faults
     # emaphm calibrate writes the unit with the thresholds of the file it was given
     from emaphm.calibration import calibrate
     from emaphm.simulate import DEFAULT_SENSORS, simulate
 
-    traces = [simulate(model="monitoring", params=own, sensors=DEFAULT_SENSORS, seed=s)
+    traces = [simulate(model="monitoring", params=sheet, sensors=DEFAULT_SENSORS, seed=s)
               for s in (1, 2)]
-    unit = calibrate(traces, own).params
-    assert unit.calibration.date and unit.thresholds == own.thresholds
+    calibrated = calibrate(traces, sheet).params
+    assert calibrated.calibration.date and calibrated.thresholds == sheet.thresholds
+    assert [f.mode for f in diagnose(k, params=calibrated, fault_model="physical").faults] == \
+        ["friction"]

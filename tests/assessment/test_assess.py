@@ -4,6 +4,7 @@ the figures its JSON lets a reader recompute, resuming, the assessed parameters 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 from collections import Counter
@@ -77,36 +78,44 @@ def test_the_short_and_the_friction_are_named_after_calibration(assessed):
 
 
 def test_the_assessed_parameters_carry_the_tuned_thresholds(assessed, tmp_path, capsys):
+    from emaphm.modes import THRESHOLDS_BY_FAULT_MODEL
+
     a = json.loads((assessed / "assessment.json").read_text())
     params = load_params(assessed / "params.toml")
-    assert dict(params.thresholds) == pytest.approx(a["thresholds"]["values"])
-    assert a["thresholds"]["tuned"] and set(a["thresholds"]["tuning"]) == set(a["thresholds"]["values"])
+    tuned = a["thresholds"]["values"]
+    assert dict(params.thresholds) == pytest.approx(tuned)
+    assert a["thresholds"]["tuned"] and set(a["thresholds"]["tuning"]) == set(tuned)
     # everything else is the data sheet's
     assert params.to_dict() | {"thresholds": None} == siemens_1fk7060().to_dict() | {"thresholds": None}
-    # diagnose reads a k with them: a friction between the default and the tuned threshold
-    trace = tmp_path / "f.parquet"
-    t = params.thresholds
-    tuned = dict(t)["friction"]
-    assert tuned < 0.1
-    k1 = (tuned + 0.1) / 2
-    assert main(["simulate", "--k", f"{k1},0,0,0,0,0,0.5,0.5", "--model", "monitoring",
-                 "--out", str(trace)]) == 0
-    capsys.readouterr()
-    assert main(["diagnose", str(trace), "--json", "--quiet"]) == 0
-    default = json.loads(capsys.readouterr().out)
-    assert main(["diagnose", str(trace), "--params", str(assessed / "params.toml"), "--json",
+    # emaphm calibrate keeps them, and diagnose reads a calibrated unit with them; on the
+    # data sheet they only raise the defaults
+    os.chdir(tmp_path)
+    toml = str(assessed / "params.toml")
+    for s in (1, 2, 3):
+        assert main(["simulate", "--k", "0,0,0,0,0,0,0.5,0.5", "--model", "monitoring", "--params",
+                     toml, "--seed", str(s),
+                     "--out", f"h{s}.parquet"]) == 0
+    assert main(["calibrate", "h1.parquet", "h2.parquet", "--params", toml, "--out", "unit.toml",
                  "--quiet"]) == 0
-    own = json.loads(capsys.readouterr().out)
-    assert default["thresholds"]["friction"] == 0.1 and own["thresholds"]["friction"] == tuned
-    assert [f["mode"] for f in own["faults"]] == ["friction"]
-    assert "friction" not in [f["mode"] for f in default["faults"]]
+    assert dict(load_params("unit.toml").thresholds) == pytest.approx(tuned)
+    capsys.readouterr()
+    assert main(["diagnose", "h3.parquet", "--params", "unit.toml", "--json", "--quiet"]) == 0
+    unit = json.loads(capsys.readouterr().out)["thresholds"]
+    assert main(["diagnose", "h3.parquet", "--params", toml, "--json", "--quiet"]) == 0
+    sheet = json.loads(capsys.readouterr().out)["thresholds"]
+    default = dataclasses.asdict(THRESHOLDS_BY_FAULT_MODEL["physical"])
+    for name, value in tuned.items():
+        assert unit[name] == pytest.approx(value), name
+        assert sheet[name] == pytest.approx(max(value, default[name])), name
 
 
 def test_the_report_reads_in_words_with_its_figures(assessed):
     md = (assessed / "report.md").read_text()
     assert "## Conclusions" in md and "called faulty 0 times in 6" in md
     assert "![friction](pod_friction.png)" in md
-    assert "A friction of 1.5 (x nominal friction) is named right 3 times in 3" in md
+    assert ("Dry friction: named right 9 times in 10 or more from 1.5 (x nominal friction) on, "
+            "3 times in 3 there") in md
+    assert "min_detectable needs `--units 35` or more" in md
 
 
 def test_the_prediction_holds_on_fresh_units(assessed, tmp_path):

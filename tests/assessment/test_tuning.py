@@ -77,3 +77,22 @@ def test_bad_input_is_refused():
         tune_thresholds([], 0.01, DEFAULT_THRESHOLDS)
     with pytest.raises(ValueError, match="target_far"):
         tune_thresholds(readings(friction=[0.1]), 0.0, DEFAULT_THRESHOLDS)
+
+
+def test_a_threshold_stays_above_what_another_modes_fault_leaves_in_its_measure():
+    """A severe short brakes the motor and reads as a little friction: the friction
+    threshold stays above 1.25 times that, the short's own measure is not held against
+    its own threshold."""
+    rng = np.random.default_rng(4)
+    healthy = readings(friction=rng.normal(0.01, 0.003, 80), short_circuit=np.zeros(80))
+    crosstalk = [("short_circuit", {"friction": 0.09, "short_circuit": 0.2}),
+                 ("backlash", {"friction": 0.02, "short_circuit": 0.004})]
+    tuned = tune_thresholds(healthy, 0.01, DEFAULT_THRESHOLDS, crosstalk)
+    assert tuned["friction"].rule == "cross-talk"
+    assert tuned["friction"].value == pytest.approx(MARGIN * 0.09)
+    assert tuned["friction"].crosstalk == 0.09
+    # the short's own reading under a short is no cross-talk; under a backlash it is
+    assert tuned["short_circuit"].crosstalk == 0.004
+    assert tuned["short_circuit"].value == FLOOR * DEFAULT_THRESHOLDS.short_circuit
+    without = tune_thresholds(healthy, 0.01, DEFAULT_THRESHOLDS)
+    assert without["friction"].value < tuned["friction"].value

@@ -109,7 +109,8 @@ def summarize(spec: AssessmentSpec, tuned: Mapping[str, Any] | None,
            "assess": sum(u.get("cpu_s", 0.0) for u in assessed),
            "calibrate": sum(u.get("calibrate_cpu_s", 0.0) for u in units),
            "diagnose": sum(r.get("cpu_s", 0.0) for u in units
-                           for r in (*u.get("runs", ()), *u.get("healthy", ())))}
+                           for r in (*u.get("runs", ()), *u.get("healthy", ()),
+                                     *u.get("crosstalk", ())))}
     return {
         "schema_version": SCHEMA, "emaphm_version": version,
         "actuator": spec.params.get("name"), "spec": spec.to_dict(),
@@ -156,21 +157,59 @@ def conclusions(a: Mapping[str, Any]) -> list[str]:
                    f"{sheet['faulty']} times in {sheet['n']} (interval {_pct(sheet['lo'])} to "
                    f"{_pct(sheet['hi'])}), and `unexplained` {sheet['unexplained']} times: "
                    "calibrate a unit before trusting a diagnosis of it.")
+    small = False
     for grid, rows in a["pod"].items():
-        good = [r for r in rows if r["n"] and r["pci"] >= PCI_TARGET]
-        best = min(good, key=lambda r: r["magnitude"]) if good else max(
-            (r for r in rows if r["n"]), key=lambda r: r["pci"], default=None)
-        if best is None:
+        tried = [r for r in rows if r["n"]]
+        if not tried:
             continue
+        label = grid_label(grid)
+        unit = tried[0]["severity_unit"]
+        by_size = sorted(tried, key=lambda r: r["magnitude"])
+        good = [r for r in by_size if r["pci"] >= PCI_TARGET]
+        onwards = [r for i, r in enumerate(by_size)
+                   if all(q["pci"] >= PCI_TARGET for q in by_size[i:])]
+        if good:
+            r = (onwards or good)[0]
+            text = (f"{label}: named right 9 times in 10 or more "
+                    + ("from" if onwards else "at") + f" {r['severity']:g} ({unit})"
+                    + (" on" if onwards else ", not at every larger severity")
+                    + f", {r['right']} times in {r['n']} there (interval {_pct(r['lo'])} to "
+                    f"{_pct(r['hi'])})")
+        else:
+            r = max(tried, key=lambda r: (r["pci"], r["magnitude"]))
+            text = (f"{label}: named right at most {r['right']} times in {r['n']} (at "
+                    f"{r['severity']:g} {unit}); never 9 times in 10")
+        misses = Counter()
+        for row in tried:
+            misses.update({"unexplained": row["unexplained"], "missed": row["n"] - row["detected"]
+                           - row["unexplained"] - row.get("refused", 0),
+                           "named with another fault or the wrong one":
+                               row["detected"] - row["right"]})
+        if any(misses.values()):
+            text += "; of its other runs " + ", ".join(f"{v} {k}" for k, v in misses.items() if v)
         least = a["min_detectable"].get(grid)
-        tail = (f"; the smallest severity named right at least 9 times in 10 with 95 % "
-                f"confidence is {least:g}" if least is not None else
-                "; no severity reaches 9 in 10 at the lower end of its 95 % interval"
-                + (" (with this many units, none could)" if best["n"] < 35 else ""))
-        out.append(f"A {grid.replace('_', ' ')} of {best['severity']:g} "
-                   f"({best['severity_unit']}) is named right {best['right']} times in "
-                   f"{best['n']} (interval {_pct(best['lo'])} to {_pct(best['hi'])}){tail}.")
+        if least is not None:
+            text += f"; min_detectable {least:g}"
+        fit = a["pod_fit"].get(grid, {})
+        if fit.get("a90") is not None:
+            text += (f"; hit/miss fit a90 = {fit['a90']:.3g}"
+                     + (f", a90/95 = {fit['a90_95']:.3g}" if fit.get("a90_95") else "")
+                     + " in magnitude")
+        out.append(text + ".")
+        small = small or tried[0]["n"] < 35
+    if small:
+        out.append("No severity can show a 95 % lower bound of 0.9 with fewer than 35 runs "
+                   "(20 of 20 gives 84 %): min_detectable needs `--units 35` or more.")
     return out
+
+
+def grid_label(grid: str) -> str:
+    """A grid in words: its mode's label, and its variant (``current sensor (offset)``)."""
+    from ..modes import MODES
+
+    name, _, variant = grid.partition(":")
+    label = MODES[name].label if name in MODES else name.replace("_", " ")
+    return (label[0].upper() + label[1:]) + (f" ({variant})" if variant else "")
 
 
 def _md_table(header: list[str], rows: list[list[Any]]) -> list[str]:
@@ -200,9 +239,11 @@ def report_md(a: Mapping[str, Any], figures: Mapping[str, str]) -> str:
     tuning = a["thresholds"]["tuning"]
     rows = [[n, f"{v:.4g}", f"{tuning[n]['default']:.4g}" if n in tuning else "",
              f"{tuning[n]['largest']:.3g}" if n in tuning else "",
+             f"{tuning[n]['crosstalk']:.3g}" if n in tuning else "",
              tuning[n]["rule"] if n in tuning else ""]
             for n, v in a["thresholds"]["values"].items()]
-    lines += _md_table(["threshold", "value", "default", "largest healthy", "set by"], rows)
+    lines += _md_table(["threshold", "value", "default", "largest healthy",
+                        "largest under another fault", "set by"], rows)
     lines += ["", "## Probability of detection and of correct identification", "",
               "After calibration. `pod`: any fault named; `pci`: the right mode (and phase) "
               "named alone, with its Wilson 95 % interval.", ""]

@@ -103,20 +103,26 @@ def _run_phase(tasks: list, store: AssessmentStore, executor: Any, progress: Any
 
 
 def _thresholds(spec: AssessmentSpec, tune_results: list[dict]) -> tuple[dict, dict]:
-    """The thresholds the reported units are diagnosed with, and the tuning's account."""
-    from dataclasses import asdict
+    """The thresholds the reported units are diagnosed with (as a calibrated unit reads
+    them), and the tuning's account. Tuned from the defaults, whatever thresholds the
+    parameters already carry (so that assessing an assessed file does not ratchet them);
+    untuned, the parameters' own."""
+    from dataclasses import asdict, replace
 
-    from ..modes import thresholds_for
+    from ..modes import THRESHOLDS_BY_FAULT_MODEL
     from .tuning import tune_thresholds
 
-    base = thresholds_for("physical", spec.actuator())
+    base = THRESHOLDS_BY_FAULT_MODEL["physical"]
     if not spec.tune:
-        return asdict(base), {}
-    readings = [r["measures"] for u in tune_results for r in u.get("healthy", ())]
+        return asdict(replace(base, **dict(spec.actuator().thresholds))), {}
+    readings = [r["measures"] for u in tune_results for r in u.get("healthy", ())
+                if r["measures"]]
     if not readings:
         raise AssessmentError("no tuning unit could be calibrated: the thresholds cannot be "
                               "tuned (see the store's errors); check the tolerances")
-    tuned = tune_thresholds(readings, spec.target_far, base)
+    crosstalk = [(r["mode"], r["measures"]) for u in tune_results
+                 for r in u.get("crosstalk", ()) if r["measures"]]
+    tuned = tune_thresholds(readings, spec.target_far, base, crosstalk)
     return {n: t.value for n, t in tuned.items()}, tuned
 
 

@@ -126,18 +126,37 @@ def _calibrated(task: Task, unit: Any, sheet: Any) -> tuple[Any, dict]:
 
 
 def _tune(task: Task) -> dict[str, Any]:
-    """A tuning unit: calibrate it, and read its healthy traces' measures."""
+    """A tuning unit: calibrate it, read its healthy traces' measures, and those of one
+    faulty trace at the largest severity of every other grid (alternating from unit to
+    unit: each grid on half the tuning units): what a fault of one mode leaves in the
+    measures of the others, the cross-talk a threshold must stay above."""
     spec, sheet, unit, config = _unit(task)
     cal, out = _calibrated(task, unit, sheet)
     if cal is None:
         return out
     readings = []
-    for j in range(spec.tune_healthy):
-        seed = task.noise0 + FIRST_HEALTHY + j
+    seed = task.noise0 + FIRST_HEALTHY
+    for _ in range(spec.tune_healthy):
         ex, res = _examine(_trace(unit, sheet, seed), cal.params, config)
         readings.append({**res, "noise_seed": seed,
                          "measures": {} if ex is None else measures_of(ex, cal.params)})
+        seed += 1
     out["healthy"] = readings
+    crosstalk = []
+    largest: dict[str, Case] = {}
+    for case in spec.cases(task.index):
+        if case.grid not in largest or case.magnitude > largest[case.grid].magnitude:
+            largest[case.grid] = case
+    for gi, case in enumerate(largest.values()):
+        if (gi + task.index) % 2:
+            continue
+        tr = _trace(unit, sheet, seed, case.injection())
+        ex, res = _examine(tr, cal.params, config, case.expected)
+        crosstalk.append({**res, "case": case.grid, "mode": case.mode, "severity": case.severity,
+                          "noise_seed": seed,
+                          "measures": {} if ex is None else measures_of(ex, cal.params)})
+        seed += 1
+    out["crosstalk"] = crosstalk
     return out
 
 

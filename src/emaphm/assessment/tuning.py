@@ -18,7 +18,10 @@ each threshold is the larger of
 * the largest value seen, with a margin of a quarter of its distance from the mean
   (``mean + 1.25 (largest - mean)``: 1.25 times the largest for a measure centred on 0,
   the rule the default thresholds were set by; a measure with a bias, the plant's
-  Stribeck friction read as more Coulomb friction, keeps its bias); and
+  Stribeck friction read as more Coulomb friction, keeps its bias);
+* 1.25 times the largest value the measure takes on the tuning units' faulty traces of
+  the *other* modes (the **cross-talk**: a severe short brakes the motor and reads as a
+  little friction; a threshold under that names a second fault beside the first); and
 * half the default threshold: a floor for a measure that never moved on the tuning
   units, where a handful of traces says little about its tail.
 
@@ -63,6 +66,7 @@ class TunedThreshold:
     sd: float
     censored: int
     quantile: float
+    crosstalk: float
     rule: str
 
     def to_dict(self) -> dict[str, Any]:
@@ -101,10 +105,22 @@ def tolerance_factor(n: int, z: float, confidence: float = CONFIDENCE) -> float:
 
 
 def tune_thresholds(readings: Sequence[Mapping[str, float]], target_far: float,
-                    defaults: Any) -> dict[str, TunedThreshold]:
+                    defaults: Any,
+                    crosstalk: Sequence[tuple[str, Mapping[str, float]]] = ()
+                    ) -> dict[str, TunedThreshold]:
     """The thresholds (one per field of ``defaults``, a :class:`emaphm.modes.Thresholds`)
     that keep the false-alarm rate of the healthy ``readings`` (one mapping of measures per
-    healthy trace) under ``target_far``; see the module doc."""
+    healthy trace) under ``target_far``, and stay above the ``crosstalk`` (``(mode,
+    measures)`` of faulty traces: each measure not of that mode's own thresholds); see the
+    module doc."""
+    from ..modes import MODES
+
+    others: dict[str, list[float]] = {}
+    for mode, measures in crosstalk:
+        own = set(MODES[mode].fields()) if mode in MODES else set()
+        for name, v in measures.items():
+            if name not in own and math.isfinite(v):
+                others.setdefault(name, []).append(float(v))
     names = [f for f in asdict(defaults)]
     if not readings:
         raise ValueError("no healthy readings to tune the thresholds on")
@@ -118,7 +134,7 @@ def tune_thresholds(readings: Sequence[Mapping[str, float]], target_far: float,
         x = x[np.isfinite(x)]
         if x.size == 0:
             out[name] = TunedThreshold(name, default, default, 0, math.nan, math.nan, math.nan,
-                                       0, math.nan, "no reading: the default kept")
+                                       0, math.nan, math.nan, "no reading: the default kept")
             continue
         # a k component at its bound reads 0 to within the solver's tolerance
         low = 0.0 if 0.0 <= float(x.min()) <= AT_BOUND else float(x.min())
@@ -134,10 +150,12 @@ def tune_thresholds(readings: Sequence[Mapping[str, float]], target_far: float,
         centre = float(np.mean(x))
         candidates = {"tolerance limit": q,
                       "1.25 x largest": centre + MARGIN * (float(x.max()) - centre),
+                      "cross-talk": MARGIN * max(others.get(name, [0.0])),
                       "half the default": FLOOR * default}
         candidates = {k: v for k, v in candidates.items() if math.isfinite(v)}
         rule = max(candidates, key=candidates.get)
         value = float(min(max(candidates.values()), 0.99))
         out[name] = TunedThreshold(name, value, default, int(x.size), float(x.max()), mu, sd,
-                                   n_at if censored else 0, float(q), rule)
+                                   n_at if censored else 0, float(q),
+                                   max(others.get(name, [math.nan])), rule)
     return out

@@ -101,11 +101,17 @@ def thresholds_for(fault_model: str, params: Any = None) -> Any:
     (:data:`THRESHOLDS_BY_FAULT_MODEL`), with the actuator's own ``[thresholds]``
     (:attr:`emaphm.params.ActuatorParams.thresholds`, tuned by ``emaphm assess``) in place
     under the ``physical`` fault model, the one they were tuned on (the ``paper``'s turn
-    removal keeps its own)."""
+    removal keeps its own); for parameters without a calibration (a data sheet) only where
+    they are higher than the defaults: they were tuned for a calibrated unit."""
     base = THRESHOLDS_BY_FAULT_MODEL[fault_model]
     own = getattr(params, "thresholds", ())
     if fault_model != "physical" or not own:
         return base
+    if not params.calibration.date:
+        # tuned for a calibrated unit: on a data sheet, whose unit differs from it by its
+        # tolerances, a threshold is only ever raised (emaphm assess measured a lowered
+        # one calling 5 of 40 healthy data-sheet diagnoses faulty)
+        own = tuple((n, max(v, getattr(base, n))) for n, v in own)
     return dataclasses.replace(base, **dict(own))
 
 
