@@ -282,3 +282,30 @@ def test_a_reused_figure_draws_the_same_bytes_as_a_fresh_one(fleet):
         figs.history(past, components=[8])
     with pytest.raises(ValueError, match="no prediction for indicator 'x'"):
         figs.prognosis(assess(past, seed=0).prognosis, indicators=["x"])
+
+
+# ----------------------------------------------------------------------------- the demo
+def test_a_synthetic_demo_fleet_grows_to_twenty_thousand_and_its_units_do_not_change(tmp_path,
+                                                                                      capsys):
+    from emaphm.fleet.demo import MAX_SYNTHETIC, demo_fleet, record_demo_fleet
+
+    big = demo_fleet(10_000, seed=0, synthetic=True)
+    assert len(big) == 10_000 and big[:30] == demo_fleet(30, seed=0)
+    assert big[-1].id == "EMA-10000" and len({u.id for u in big}) == 10_000
+    with pytest.raises(ValueError, match="1 to 500 actuators \\(1 to 20000 synthetic\\)"):
+        demo_fleet(600)
+    with pytest.raises(ValueError, match="1 to 20000 synthetic"):
+        demo_fleet(MAX_SYNTHETIC + 1, synthetic=True)
+    with pytest.raises(ValueError, match="at most 500 actuators.*synthetic=True"):
+        record_demo_fleet(tmp_path / "real.sqlite", big[:501])
+    assert not (tmp_path / "real.sqlite").exists()
+    rc = main(["fleet", "demo", "--db", str(tmp_path / "d.sqlite"), "--actuators", "600"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1
+    assert "--actuators must be 1 to 500, got 600 (20000 with --synthetic)" in err
+    assert main(["fleet", "demo", "--db", str(tmp_path / "d.sqlite"), "--actuators", "600",
+                 "--synthetic", "--quiet"]) == 0
+    with HealthHistory(tmp_path / "d.sqlite", readonly=True) as h:
+        acts = h.actuators()
+    assert len(acts) == 600 and sum(a.n_inspections for a in acts) == \
+        sum(len(u.times) for u in big[:600])

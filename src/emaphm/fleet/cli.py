@@ -118,10 +118,12 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from .demo import MAX_ACTUATORS, demo_fleet, record_demo_fleet
+    from .demo import MAX_ACTUATORS, MAX_SYNTHETIC, demo_fleet, record_demo_fleet
 
-    if not 1 <= args.actuators <= MAX_ACTUATORS:
-        raise _usage(f"--actuators must be 1 to {MAX_ACTUATORS}, got {args.actuators}")
+    most = MAX_SYNTHETIC if args.synthetic else MAX_ACTUATORS
+    if not 1 <= args.actuators <= most:
+        raise _usage(f"--actuators must be 1 to {most}, got {args.actuators}"
+                     + ("" if args.synthetic else f" ({MAX_SYNTHETIC} with --synthetic)"))
     budget = budget_option(args.budget)
     from ..prognosis.cli import db_path
 
@@ -132,7 +134,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     if not db.parent.exists():
         raise _usage(f"--db {db}: folder {db.parent} does not exist; create it first")
     writable_folder(db.parent, "--db")
-    units = demo_fleet(args.actuators, seed=args.seed)
+    units = demo_fleet(args.actuators, seed=args.seed, synthetic=args.synthetic)
     n_ins = sum(len(u.times) for u in units)
     quiet = args.quiet or args.json
     if not quiet:
@@ -283,7 +285,8 @@ def register(subparsers: Any) -> None:
                     "plus identification-sized noise instead, in seconds: a demo of the page, "
                     "not of the diagnosis.")
     d.add_argument("--db", required=True, help="the new health history (must not exist)")
-    d.add_argument("--actuators", type=int, default=30, help="how many (default 30)")
+    d.add_argument("--actuators", type=int, default=30,
+                   help="how many (default 30; at most 500, 20000 with --synthetic)")
     d.add_argument("--seed", type=_seed, default=0, help="seed of the whole fleet (default 0)")
     d.add_argument("--synthetic", action="store_true",
                    help="no traces, no identifications: true k plus noise (seconds)")

@@ -30,7 +30,7 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
@@ -38,10 +38,16 @@ from ..prognosis.simulator import DegradationLaw, DegradationScenario
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS
 from ..seeds import check_seed
 
-__all__ = ["DemoUnit", "demo_fleet", "record_demo_fleet", "FAULT_KINDS", "MAX_ACTUATORS"]
+__all__ = ["DemoUnit", "demo_fleet", "record_demo_fleet", "FAULT_KINDS", "MAX_ACTUATORS",
+           "MAX_SYNTHETIC"]
 
-#: The most actuators a demo fleet may have.
+#: The most actuators a demo fleet diagnosed from simulated traces may have (about 8 s of
+#: CPU each).
 MAX_ACTUATORS = 500
+
+#: The most actuators a synthetic demo fleet may have (a fleet to try the site's scale on:
+#: recording 10,000 takes minutes, mostly the history's commits).
+MAX_SYNTHETIC = 20_000
 
 #: The faults of the demo fleet, dealt in this order (``None``: a healthy unit):
 #: (health indicator, degradation law, direction, words).
@@ -97,15 +103,18 @@ class DemoUnit:
                 "eol": None if math.isinf(self.eol) else self.eol}
 
 
-def _check_count(n: Any) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_ACTUATORS:
-        raise ValueError(f"a demo fleet has 1 to {MAX_ACTUATORS} actuators, got {n!r}")
+def _check_count(n: Any, synthetic: bool = False) -> int:
+    most = MAX_SYNTHETIC if synthetic else MAX_ACTUATORS
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= most:
+        raise ValueError(f"a demo fleet has 1 to {MAX_ACTUATORS} actuators (1 to "
+                         f"{MAX_SYNTHETIC} synthetic), got {n!r}")
     return int(n)
 
 
-def demo_fleet(n: int = 30, *, seed: int = 0) -> tuple[DemoUnit, ...]:
-    """``n`` demo actuators (module docstring), all drawn from ``seed``."""
-    n = _check_count(n)
+def demo_fleet(n: int = 30, *, seed: int = 0, synthetic: bool = False) -> tuple[DemoUnit, ...]:
+    """``n`` demo actuators (module docstring), all drawn from ``seed``; at most
+    :data:`MAX_ACTUATORS`, or :data:`MAX_SYNTHETIC` for a ``synthetic`` fleet."""
+    n = _check_count(n, synthetic)
     seed = check_seed(seed)
     thr = DEFAULT_FAILURE_THRESHOLDS
     units = []
@@ -172,9 +181,11 @@ def _synthetic(unit: DemoUnit) -> np.ndarray:
     return np.clip(unit.k_true() + noise, 0.0, 1.0)
 
 
-def _record(task: _Task) -> dict:
+def _record(task: _Task, history: Any = None) -> dict:
     """Register one demo actuator and record its inspections (in a worker process for the
-    real ones); returns its summary."""
+    real ones) into ``history`` (open) or the history ``task.db``; returns its summary."""
+    import contextlib
+
     from ..identify import IdentificationConfig
     from ..prognosis.history import HealthHistory
     from ..prognosis.workflow import inspect
@@ -182,7 +193,7 @@ def _record(task: _Task) -> dict:
     unit = task.unit
     t0 = time.process_time()
     verdicts = []
-    with HealthHistory(task.db) as h:
+    with HealthHistory(task.db) if history is None else contextlib.nullcontext(history) as h:
         h.register(unit.id, description=unit.description, time_unit="h")
         if task.synthetic:
             from ..diagnosis import diagnose
@@ -224,28 +235,42 @@ def record_demo_fleet(db: str | Path, units: Sequence[DemoUnit], *, synthetic: b
     if db.exists():
         raise ValueError(f"{db} exists; the fleet demo writes a new health history: give a new "
                          "--db path or delete that file")
-    with HealthHistory(db):                     # the schema, before the workers open it
-        pass
+    if not synthetic and len(units) > MAX_ACTUATORS:
+        raise ValueError(f"a demo fleet diagnosed from simulated traces has at most "
+                         f"{MAX_ACTUATORS} actuators, got {len(units)}; record more with "
+                         "synthetic=True (--synthetic)")
     tasks = [_Task(unit=u, db=str(db), synthetic=synthetic, budget=budget) for u in units]
-    if synthetic:
-        from ..campaign.executors import SerialExecutor
-
-        executor: Any = SerialExecutor()
-    else:
+    done: dict[str, dict] = {}
+    errors: list = []
+    with HealthHistory(db) as h:                # the schema, before the workers open it
+        if synthetic:                           # in this process, through this connection:
+            _collect(_serial(tasks, h), done, errors, progress)   # an open checks the file
+    if not synthetic:
         from ..campaign.executors import make_executor
 
-        executor = make_executor(workers)
-    done: dict[str, dict] = {}
-    errors = []
-    for task, result in executor.map_unordered(_record, tasks):
+        _collect(make_executor(workers).map_unordered(_record, tasks), done, errors, progress)
+    if errors:
+        unit_id, exc = errors[0]
+        raise RuntimeError(f"the demo actuator {unit_id} could not be recorded ({exc!r}); "
+                           f"{len(done)} others were") from exc
+    return [done[u.id] for u in units]
+
+
+def _serial(tasks: Sequence[_Task], history: Any) -> Iterator[tuple[_Task, Any]]:
+    """``(task, summary or exception)`` of each task recorded through ``history``."""
+    for task in tasks:
+        try:
+            yield task, _record(task, history)
+        except Exception as exc:                # noqa: BLE001 - reported with the others
+            yield task, exc
+
+
+def _collect(results: Iterable[tuple[_Task, Any]], done: dict, errors: list,
+             progress: Callable[[dict], None] | None) -> None:
+    for task, result in results:
         if isinstance(result, BaseException):
             errors.append((task.unit.id, result))
             continue
         done[task.unit.id] = result
         if progress is not None:
             progress(result)
-    if errors:
-        unit_id, exc = errors[0]
-        raise RuntimeError(f"the demo actuator {unit_id} could not be recorded ({exc!r}); "
-                           f"{len(done)} others were") from exc
-    return [done[u.id] for u in units]
