@@ -309,3 +309,52 @@ def test_a_synthetic_demo_fleet_grows_to_twenty_thousand_and_its_units_do_not_ch
         acts = h.actuators()
     assert len(acts) == 600 and sum(a.n_inspections for a in acts) == \
         sum(len(u.times) for u in big[:600])
+
+
+# ----------------------------------------------------------------------------- Dask
+def test_fleet_report_refuses_a_bad_scheduler_in_one_line_before_any_work(fleet, tmp_path,
+                                                                           capsys):
+    pytest.importorskip("distributed")
+    s = socket.socket()
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()                                   # bound, never listened: refused
+    out = tmp_path / "site"
+    for argv, words in (
+            (["--scheduler", f"127.0.0.1:{port}"],
+             f"cannot reach a Dask scheduler at tcp://127.0.0.1:{port} (Connection refused)"),
+            (["--scheduler", "inproc://x"], "scheme inproc:// is not supported"),
+            (["--scheduler", "tcp://10.0.0.1"], "is not HOST:PORT after tcp://"),
+            (["--scheduler", f"127.0.0.1:{port}", "--workers", "2"],
+             "give either --workers (local processes) or --scheduler (Dask cluster), not both")):
+        rc = main(["fleet", "report", "--db", str(fleet), "--out", str(out), *argv])
+        err = capsys.readouterr().err
+        assert rc == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+        assert words in err, err
+    assert not out.exists()
+    from emaphm.fleet.site import build_site
+
+    with pytest.raises(ValueError, match="executor must have a map_unordered"):
+        build_site(fleet, out, executor=object())
+
+
+def test_a_dask_cluster_makes_the_same_site(fleet, tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    from emaphm.campaign.executors import DaskExecutor
+    from emaphm.fleet.site import build_site
+
+    build_site(fleet, tmp_path / "serial", workers=0)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=40) as cluster:
+        site = build_site(fleet, tmp_path / "dask",
+                          executor=DaskExecutor(cluster.scheduler_address, warm=False))
+        assert (site.drawn, site.workers, site.statuses) == (5, 0, ())
+        assert _same_files(tmp_path / "serial", tmp_path / "dask")
+        argv = ["fleet", "report", "--db", str(fleet), "--out", str(tmp_path / "cli"),
+                "--scheduler", cluster.scheduler_address, "--quiet", "--json"]
+        assert main(argv) == 0
+        assert json.loads(capsys.readouterr().out)["drawn"] == 5
+        assert _same_files(tmp_path / "serial", tmp_path / "cli")
+        assert main(argv) == 0                     # nothing changed: nothing sent, written
+        rep = json.loads(capsys.readouterr().out)
+        assert (rep["drawn"], rep["written"]) == (0, 0)
