@@ -660,3 +660,34 @@ def test_fleet_schedule_refuses_bad_input_in_one_line(small_site, tmp_path, caps
         err = capsys.readouterr().err
         assert exc.value.code == 2 and err.count("\n") == 1 and needle in err, err
     assert not list(tmp_path.iterdir())                       # nothing written
+
+
+def test_the_index_shows_when_to_inspect_each_actuator_sortable_and_due_in_red(small_site):
+    site, _ = small_site
+    data = json.loads((site.out / "fleet.json").read_text())
+    rows = {r["id"]: r for r in data["actuators"]}
+    past, soon, cal = rows["EMA-PAST"], rows["EMA-SOON"], rows["EMA-CAL"]
+    assert past["inspect_now"] and past["inspect_rule"] == "act now"
+    assert past["inspect_indicator"] == "short_a" and past["inspect_by"] == 600.0
+    assert soon["inspect_indicator"] == "friction" and soon["inspect_reason"]
+    assert (cal["inspect_rule"], cal["inspect_by"], cal["inspect_now"]) == ("healthy", 900.0, False)
+    assert rows["EMA-NEW"]["inspect_rule"] == "too few inspections"
+    assert all(r["inspect_target"] == 0.01 for r in rows.values())
+    # the script sorts the column by how far each is from due: the due ones first
+    keys = sorted(rows.values(), key=lambda r: r["sort"]["inspect"])
+    assert [r["inspect_now"] for r in keys] == sorted((r["inspect_now"] for r in keys),
+                                                      reverse=True)
+    assert {r["id"] for r in keys[-2:]} == {"EMA-CAL", "EMA-NEW"}   # a default interval ahead
+    assert keys[-1]["sort"]["inspect"] == keys[-2]["sort"]["inspect"] == 300.0
+    html = site.index.read_text(encoding="utf-8")
+    assert '<button type="button" data-key="inspect">Inspect by</button>' in html
+    assert '<option value="inspect">Inspect by</option>' in html
+    assert html.count('class="c-inspect"') == 5 + 1           # each row and the heading
+    due = re.findall(r'<td class="c-inspect"[^>]*><div><strong class="due" title="([^"]*)">'
+                     r'act now</strong><small>([^<]*)</small>', html)
+    assert ("short_a" in {ind for _, ind in due}) and all(t for t, _ in due)
+    assert re.search(r'<td class="c-inspect"[^>]*><div><span title="[^"]*">900 h</span>'
+                     r'<small>default interval</small>', html)
+    assert ".due { color: var(--red); }" in (site.out / "assets" / "fleet.css").read_text()
+    page = site.pages["EMA-CAL"].read_text(encoding="utf-8")
+    assert "<dt>Inspect by</dt>" in page and "every indicator at its healthy level" in page

@@ -184,7 +184,8 @@ _INDEX_KEY = ".index-key"
 #: The modules whose code shapes a page or a figure: a change in any of them makes every
 #: page again.
 _PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.plots", "emaphm.prognosis.trends",
-              "emaphm.prognosis.thresholds", "emaphm.fleet.status", "emaphm.fleet.site",
+              "emaphm.prognosis.thresholds", "emaphm.prognosis.inspection",
+              "emaphm.fleet.status", "emaphm.fleet.site",
               "emaphm.fleet.markup", "emaphm.fleet.figures")
 
 #: Most actuators in one task of a worker process or a Dask worker.
@@ -452,15 +453,41 @@ def _row(s: ActuatorStatus, rank: int, page: str) -> dict:
         "ratio": ratio, "rul_state": s.rul_state, "rul_median": _num(s.rul_median),
         "rul_lo": _num(s.rul_lo), "rul_hi": _num(s.rul_hi),
         "rul_hi_infinite": bool(math.isinf(s.rul_hi)), "rul_level": s.rul_level,
-        "trend": s.trend, "growth": _num(s.growth), "tags": tags,
+        "trend": s.trend, "growth": _num(s.growth), "tags": tags, **_inspect_fields(s),
         # what the script sorts on: one key per column, nulls last
         "sort": {"rank": rank, "id": a.id.lower(), "description": a.description.lower(),
                  "last": _num(s.last_time), "verdict": VERDICTS.index(s.verdict),
                  "worst": None if ratio is None else -ratio, "rul": rank,
+                 "inspect": _inspect_sort(s),
                  "trend": None if s.trend is None else -s.trend, "n": -s.n_inspections},
         "text": " ".join([a.id, a.description, s.verdict, " ".join(s.faults),
                           s.worst or "", s.rul_state]).lower(),
     }
+
+
+def _inspect_fields(s: ActuatorStatus) -> dict:
+    """The next inspection of ``s`` (:attr:`ActuatorStatus.plan`) as fields of its row."""
+    p = s.plan
+    if p is None:
+        return {"inspect_by": None}
+    return {"inspect_by": _num(p.at), "inspect_now": p.act_now, "inspect_rule": p.rule,
+            "inspect_indicator": p.indicator, "inspect_risk": _num(p.risk),
+            "inspect_target": p.target, "inspect_reason": p.reason}
+
+
+def _inspect_sort(s: ActuatorStatus) -> float | None:
+    """Sort key of the "inspect by" column: operating time left until the next inspection
+    is due (negative: past due; never inspected first), nulls last."""
+    from .status import inspect_key
+
+    key = inspect_key(s)
+    return None if key[0] else (-1e300 if math.isinf(key[1]) else float(key[1]))
+
+
+def _plan_risk(rows: Sequence[dict]) -> str:
+    """The risk the rows' next inspections were planned at, in words."""
+    risks = sorted({r["inspect_target"] for r in rows if r.get("inspect_target") is not None})
+    return ", ".join(f"{x:g}" for x in risks) or "\u2013"
 
 
 def _ranked(row: dict, rank: int) -> dict:
@@ -511,6 +538,23 @@ def _trend_cell(s: ActuatorStatus) -> str:
             f"aria-label=\"{esc(word)}\">{arrow}</span>")
 
 
+def _inspect_cell(s: ActuatorStatus) -> str:
+    """The next inspection: the time (red when due now), the indicator that drives it."""
+    p = s.plan
+    if p is None:
+        return "\u2013"
+    unit = s.actuator.time_unit
+    title = esc(p.reason)
+    if p.act_now:
+        what = "act now" if p.rule == "act now" else "inspect now"
+        return (f"<strong class=\"due\" title=\"{title}\">{what}</strong>"
+                + (f"<small>{esc(p.indicator)}</small>" if p.indicator else ""))
+    why = p.indicator or ("default interval" if p.rule in ("healthy", "too few inspections")
+                          else p.rule)
+    return (f"<span title=\"{title}\">{esc(_fmt_time(p.at, unit))}</span>"
+            f"<small>{esc(why)}</small>")
+
+
 def _worst_cell(s: ActuatorStatus) -> str:
     if s.worst is None:
         return "\u2013"
@@ -522,7 +566,8 @@ _COLUMNS = (  # key, heading, class (the less important ones are dropped on a ph
     ("rank", "#", "c-rank"), ("id", "Actuator", "c-id"), ("description", "Description", "c-desc"),
     ("last", "Last inspection", "c-last"), ("verdict", "Verdict", "c-verdict"),
     ("worst", "Nearest its threshold", "c-worst"), ("rul", "RUL median (interval)", "c-rul"),
-    ("trend", "Trend", "c-trend"), ("n", "Inspections", "c-n"))
+    ("inspect", "Inspect by", "c-inspect"), ("trend", "Trend", "c-trend"),
+    ("n", "Inspections", "c-n"))
 
 
 def _cells(s: ActuatorStatus, page: str) -> dict:
@@ -535,8 +580,8 @@ def _cells(s: ActuatorStatus, page: str) -> dict:
         "id": f"<a href=\"{esc(page)}\">{esc(s.id)}</a>",
         "description": esc(s.actuator.description) or "<span class=\"muted\">\u2013</span>",
         "last": last, "verdict": _verdict_badge(s.verdict, s.faults),
-        "worst": _worst_cell(s), "rul": _rul_cell(s), "trend": _trend_cell(s),
-        "n": str(s.n_inspections)}
+        "worst": _worst_cell(s), "rul": _rul_cell(s), "inspect": _inspect_cell(s),
+        "trend": _trend_cell(s), "n": str(s.n_inspections)}
 
 
 def _tr(row: dict, cells: dict) -> str:
@@ -619,6 +664,13 @@ def _index_html(rows: list[dict], trs: list[str], *, title: str, source: str,
         f"(seed {seed}); a trend needs three inspections. <i>No growth</i>: no indicator "
         "rises beyond the noise towards its threshold within ten times the span of the "
         "history.</li>\n"
+        "<li><b>Inspect by</b>: the next inspection, the latest operating time at which the "
+        "chance that an indicator has crossed its failure threshold stays under a risk of "
+        f"{_plan_risk(rows)} (as <code>emaphm prognose --risk</code>), and the indicator that "
+        "sets it; <i>act now</i> (red): that chance is reached within the minimum interval, "
+        "or already; a default interval under three inspections or with every indicator at "
+        "its healthy level. Sort by it to see what is due first; <code>emaphm fleet "
+        "schedule</code> writes it as a table or a calendar.</li>\n"
         "<li><b>Trend</b>: the sign of the fitted growth rate of that indicator at the last "
         "inspection (\u2192 when within two standard errors of zero).</li>\n"
         f"<li>Failure thresholds: {esc(thr)}.</li>\n</ul></section>\n</main>\n"
@@ -813,6 +865,8 @@ def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *,
         ("Nearest its threshold", _worst_cell(s)),
         ("RUL median (interval)", _rul_cell(s)),
         ("Trend", _trend_cell(s)),
+        ("Inspect by", _inspect_cell(s) + (f"<small>{esc(s.plan.reason)}</small>"
+                                           if s.plan is not None else "")),
         ("Inspections", f"{s.n_inspections}" + (
             f"<small>last at {esc(_fmt_time(s.last_time, unit))}, "
             f"{esc(_date(s.last_recorded_utc))} UTC</small>" if s.last_time is not None else "")),
