@@ -36,6 +36,10 @@ SHORTER = (
     ("emaphm demo-degradation", ["--inspections", "4", "--budget", "1000"]),
     # 30 actuators of real diagnoses are minutes of CPU: three of them
     ("emaphm fleet demo --db demo.sqlite", ["--actuators", "3"]),
+    # 40 production units on every grid are minutes on every core: two and two, one grid
+    ("emaphm assess", ["--units", "2", "--tune-units", "2", "--healthy", "1",
+                       "--healthy-datasheet", "1", "--grids", "short_circuit",
+                       "--severities", "short_circuit=0.15", "--workers", "0"]),
 )
 #: README commands not run, and why.
 SKIPPED = {
@@ -130,9 +134,9 @@ def test_readme_commands_run_in_order_in_an_empty_folder(tmp_path):
             continue
         argv = shortened(step)
         reads, outputs = inputs_and_outputs(argv)
-        for f in reads:
-            assert f in written and (tmp_path / f).exists(), \
-                f"`{cmd}` reads {f}, which no earlier README command wrote"
+        for f in reads:      # written itself, or in a folder an earlier command wrote
+            assert any(p in written for p in (f, *map(str, Path(f).parents))) \
+                and (tmp_path / f).exists(), f"`{cmd}` reads {f}, which no earlier README command wrote"
         r = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True,
                            timeout=600)
         assert r.returncode == 0, f"`{' '.join(argv)}` exited {r.returncode}:\n{r.stderr[-3000:]}"
@@ -162,5 +166,9 @@ def test_readme_commands_run_in_order_in_an_empty_folder(tmp_path):
     header = show.splitlines()[1].split()
     assert header[2:10] == list(K_NAMES), header
     assert "3 inspections" in show
+    # the unit calibrated with the assessed parameters names its short with their thresholds
+    (assessed,) = [out for cmd, out in outputs_of.items()
+                   if cmd == "emaphm diagnose inspection.parquet --params unit7-assessed.toml"]
+    assert "verdict: FAULTY" in assessed and "short circuit" in assessed and "phase A" in assessed
     (prog,) = [out for cmd, out in outputs_of.items() if cmd.startswith("emaphm prognose")]
     assert "first to fail: short_a" in prog
