@@ -291,3 +291,84 @@ def test_without_a_browser_the_test_skips_and_says_why_unless_ci_requires_it(mon
     monkeypatch.setenv("EMAPHM_REQUIRE_BROWSER", "1")
     with pytest.raises(pytest.fail.Exception, match="EMAPHM_REQUIRE_BROWSER is set"):
         _browser()
+
+
+# ----------------------------------------------------------------------------- a large fleet
+BIG = 10_000
+POSITIONS = ("aileron", "elevator", "rudder", "spoiler", "flap")
+
+
+@pytest.fixture(scope="module")
+def big_site(tmp_path_factory):
+    """10,000 actuators: ten with three inspections (a failure predicted or past), the
+    others registered and never inspected, so that the site builds in seconds."""
+    from emaphm.fleet.site import build_site
+
+    tmp = tmp_path_factory.mktemp("fleet-big")
+    db = tmp / "big.sqlite"
+    with HealthHistory(db) as h:
+        h._con.execute("BEGIN")              # one transaction: a commit each took minutes
+        h._con.executemany(
+            "INSERT INTO actuators (id, description, time_unit, created_utc, updated_utc) "
+            "VALUES (?, ?, 'h', '2026-01-01T00:00:00', '2026-01-01T00:00:00')",
+            [(f"EMA-{i:05d}", f"{POSITIONS[i % 5]}, aircraft {100 + i // 10}")
+             for i in range(1, BIG + 1)])
+        h._con.execute("COMMIT")
+        for i in range(1, BIG + 1, 1000):
+            for t in (0.0, 300.0, 600.0):
+                k = _k(friction=0.0008 * t) if i % 3 == 1 else _k(short_a=0.0004 * t)
+                h.add(f"EMA-{i:05d}", t, k, diagnosis=diagnose(k, fault_model="paper").to_dict())
+    return build_site(db, tmp / "site", workers=0)
+
+
+def _page_text(driver):
+    return driver.execute_script(
+        "var p = document.getElementById('pager'); "
+        "return p.hidden ? null : document.getElementById('page').textContent")
+
+
+def test_an_index_of_ten_thousand_actuators_pages_sorts_and_filters(big_site, driver):
+    from selenium.webdriver.support.ui import Select
+
+    order = [r["id"] for r in big_site.rows]
+    assert len(order) == BIG and order[0] == "EMA-00001"          # past its threshold
+    _open(driver, big_site.index)
+    assert driver.find_element("id", "shown").text == f"{BIG} of {BIG} shown"
+    assert _visible_ids(driver) == order[:100]                     # the order of attention
+    assert _page_text(driver) == "page 1 of 100 (1\u2013100)"
+    assert not driver.find_element("id", "more").is_displayed()    # the note for no script
+    nxt, prev = driver.find_element("id", "next"), driver.find_element("id", "prev")
+    assert not prev.is_enabled()
+    nxt.click()
+    assert _visible_ids(driver) == order[100:200]
+    assert _page_text(driver) == "page 2 of 100 (101\u2013200)" and prev.is_enabled()
+    prev.click()
+    assert _visible_ids(driver) == order[:100]
+
+    box = driver.find_element("id", "filter")
+    box.send_keys("ema-07777")
+    assert _visible_ids(driver) == ["EMA-07777"]
+    assert driver.find_element("id", "shown").text == f"1 of {BIG} shown"
+    assert _page_text(driver) is None                              # one page: no pager
+    box.clear()
+    box.send_keys("aircraft 1000")
+    want = [r["id"] for r in big_site.rows              # every word somewhere in its text
+            if "aircraft" in r["text"] and "1000" in r["text"]]
+    assert len(want) == 12 and _visible_ids(driver) == want   # aircraft 1000; EMA-(0)1000
+    box.clear()
+    button = driver.find_element("css selector", "thead button[data-key=id]")
+    button.click()
+    button.click()                                                 # descending
+    assert _visible_ids(driver)[:3] == ["EMA-10000", "EMA-09999", "EMA-09998"]
+    assert _page_text(driver) == "page 1 of 100 (1\u2013100)"
+    box.send_keys("rudder")                                        # 2,000: twenty pages
+    assert _page_text(driver) == "page 1 of 20 (1\u2013100)"
+    for _ in range(19):
+        nxt.click()
+    assert _page_text(driver) == "page 20 of 20 (1901\u20132000)" and not nxt.is_enabled()
+    assert _visible_ids(driver)[-1] == "EMA-00002"
+    box.clear()
+    Select(driver.find_element("id", "show")).select_by_value("attention")
+    want = sorted((r["id"] for r in big_site.rows if "attention" in r["tags"]), reverse=True)
+    assert len(want) == 10 and _visible_ids(driver) == want
+    assert _severe(driver) == []
