@@ -1,26 +1,30 @@
-"""How long the fleet health site takes to build, and where the time goes.
+"""How long the fleet health site takes to build as the fleet grows, and where the time goes.
 
-Run: ``python benchmarks/bench_fleet.py [--db HISTORY] [--real] [--actuators 30]``
+Run: ``python benchmarks/bench_fleet.py [--sizes 30,300,1000,10000] [--base REV] [--dask]``
 -> ``benchmarks/results/fleet.md`` and ``fleet.json`` (the table is printed too).
 
-The fleet is the demo fleet of ``emaphm fleet demo`` (seed 0, 30 actuators, 136
-inspections): by default recorded with ``--synthetic`` (seconds; the site draws the
-same number of figures of the same kind either way), with ``--real`` diagnosed from
-reference-plant traces first (minutes), or any existing history with ``--db``.
+Each fleet is the demo fleet of ``emaphm fleet demo --synthetic`` (seed 0; true k plus
+identification-sized noise: the site draws the same kind of figures as for a diagnosed
+fleet). For each size, ``emaphm fleet report`` runs in a fresh process, as a user would:
 
-Each build runs ``emaphm fleet report`` in a fresh process, as a user would, and
-reports its wall time and its CPU time together with every worker process it started
-(``getrusage(RUSAGE_CHILDREN)``), beside the load average before and after:
-
-* cold, ``--workers 0`` (in the one process), into an empty folder;
 * cold, ``--workers N`` (default: every core), into an empty folder;
-* a rebuild into the same folder with nothing changed (the figures are kept);
-* a rebuild after one new inspection of one actuator (its figures are drawn again).
+* a rebuild into the same folder with nothing changed;
+* a rebuild after one new inspection of one actuator.
 
-Then, in this process and on one core, the CPU time per actuator of each part of a
-cold build: the prognosis (:func:`emaphm.fleet.status.assess`), building and saving
-the history figure, building and saving the prognosis figure. On a shared machine the
-wall time grows with the load; the CPU time is the measure of the code.
+Each row reports the wall time and the CPU time of the process with every worker process
+it started (``getrusage(RUSAGE_CHILDREN)``), beside the load average before and after: on
+a shared machine the wall time grows with the load, the CPU time much less.
+
+``--base REV`` builds the 300-actuator fleet's site with emaphm at git revision ``REV``
+as well (its ``src/`` extracted by ``git archive``), cold and rebuilt with nothing
+changed, alternating with this tree's builds, so that both see the same load; ``--dask``
+adds a cold build of that fleet on a local Dask cluster of N worker processes
+(``--scheduler``). Then, in this process and on one core, the CPU time per actuator of
+each part of a cold build on the first 60 actuators of that fleet: the prognosis
+(:func:`emaphm.fleet.status.assess`), the two figures as the site draws them
+(:class:`emaphm.fleet.figures.PageFigures`) and as the reference plots draw them
+(:func:`emaphm.prognosis.plots.plot_history`, ``plot_prognosis``, saved at the site's
+resolution).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ import resource
 import shutil
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
 from pathlib import Path
@@ -42,151 +47,209 @@ from _machine import machine as _machine  # the scripts run from benchmarks/
 
 ROOT = Path(__file__).resolve().parent
 
+#: The commit before the fleet site learnt to grow (issue 24 item 6).
+BASE = "17bc857"
+
 
 def machine() -> str:
     return _machine("matplotlib")
 
 
-def _cli(*args: str) -> dict:
-    """Run ``emaphm ARGS`` in a fresh process: wall and CPU seconds (with its workers)."""
+def _cli(*args: str, src: Path | None = None) -> dict:
+    """Run ``emaphm ARGS`` in a fresh process (emaphm from ``src`` if given): wall and CPU
+    seconds with its workers, the load average around it and its JSON answer if any."""
+    env = dict(os.environ)
+    if src is not None:
+        env["PYTHONPATH"] = str(src)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     load0 = os.getloadavg()[0]
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, "-m", "emaphm.cli", *args], check=True,
-                         capture_output=True, text=True)
+                         capture_output=True, text=True, env=env)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    try:
+        answer = json.loads(out.stdout)
+    except ValueError:
+        answer = {}
     return {"wall_s": wall, "cpu_s": cpu, "load_before": load0, "load_after": os.getloadavg()[0],
-            "stdout": out.stdout.strip()}
+            "drawn": answer.get("drawn"), "written": answer.get("written")}
 
 
-def _parts(db: Path) -> dict:
+def _extract(rev: str, dest: Path) -> Path:
+    archive = dest / "src.tar"
+    with open(archive, "wb") as f:
+        subprocess.run(["git", "archive", rev, "src"], cwd=ROOT.parent, stdout=f, check=True)
+    with tarfile.open(archive) as t:
+        t.extractall(dest, filter="data")
+    return dest / "src"
+
+
+def _add_inspection(db: Path) -> str:
+    """One more inspection of the actuator with the most: its last k again, 50 h later."""
+    from emaphm.prognosis.history import HealthHistory
+
+    with HealthHistory(db) as h:
+        last = max(h.actuators(), key=lambda a: (a.n_inspections, a.id))
+        ins = h.inspections(last.id)[-1]
+        h.add(last.id, ins.time + 50.0, ins.k, k_lo=ins.k_lo, k_hi=ins.k_hi,
+              diagnosis=ins.diagnosis, source="bench_fleet: one more inspection")
+    return last.id
+
+
+def _fleet(n: int, tmp: Path, workers: int, base: Path | None, dask: bool) -> dict:
+    db = tmp / f"demo{n}.sqlite"
+    rec = _cli("fleet", "demo", "--db", str(db), "--actuators", str(n), "--synthetic", "--quiet")
+    from emaphm.prognosis.history import HealthHistory
+
+    with HealthHistory(db, readonly=True) as h:
+        n_ins = sum(a.n_inspections for a in h.actuators())
+    report = ["fleet", "report", "--db", str(db), "--quiet", "--json"]
+    out, out_base = tmp / f"site{n}", tmp / f"base{n}"
+    w = ["--workers", str(workers)]
+    rows = {}
+    rows["cold"] = _cli(*report, "--out", str(out), *w)
+    if base is not None:
+        rows[f"cold, emaphm {BASE}"] = _cli(*report, "--out", str(out_base), *w, src=base)
+    rows["rebuild, nothing changed"] = _cli(*report, "--out", str(out), *w)
+    if base is not None:
+        rows[f"rebuild, nothing changed, emaphm {BASE}"] = _cli(*report, "--out", str(out_base),
+                                                                *w, src=base)
+    _add_inspection(db)
+    rows["rebuild, one actuator with a new inspection"] = _cli(*report, "--out", str(out), *w)
+    if dask:
+        from distributed import LocalCluster
+
+        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                          dashboard_address=None, silence_logs=40) as cluster:
+            rows[f"cold, --scheduler (local Dask cluster, {workers} worker processes)"] = _cli(
+                *report, "--out", str(tmp / f"dask{n}"), "--scheduler", cluster.scheduler_address)
+    return {"actuators": n, "inspections": n_ins, "record": rec, "builds": rows}
+
+
+def _parts(db: Path, n: int = 60) -> dict:
     """CPU seconds per actuator of each part of a cold build, in this process."""
     import matplotlib
 
     matplotlib.use("Agg")
-    from emaphm.fleet.site import FIGURE_DPI
+    from emaphm.fleet.figures import PageFigures
+    from emaphm.fleet.site import FIGURE_DPI, PNG_COMPRESSION
     from emaphm.fleet.status import assess
     from emaphm.prognosis.history import HealthHistory
     from emaphm.prognosis.plots import (interesting_indicators, moved_components, plot_history,
                                         plot_prognosis)
     from emaphm.prognosis.thresholds import INDICATOR_COMPONENT
 
-    with HealthHistory(db, create=False) as h:
-        datas = [h.data(a.id) for a in h.actuators()]
-    plot_history(datas[0]).savefig(io.BytesIO(), format="png", dpi=FIGURE_DPI)   # fonts, caches
-    parts = {"prognosis (assess)": 0.0, "history figure: build": 0.0,
-             "history figure: draw and save PNG": 0.0, "prognosis figure: build": 0.0,
-             "prognosis figure: draw and save PNG": 0.0}
-    n_prog = 0
-    for d in datas:
+    with HealthHistory(db, readonly=True) as h:
+        datas = [h.data(a.id) for a in h.actuators()[:n]]
+    figs = PageFigures(dpi=FIGURE_DPI, compress_level=PNG_COMPRESSION)
+    names = ("prognosis (assess, with the next inspection's plan)",
+             "history figure, as the site draws it", "prognosis figure, as the site draws it",
+             "history figure, reference plot_history", "prognosis figure, reference plot_prognosis")
+    parts = dict.fromkeys(names, 0.0)
+
+    def timed(name, fn):
         c = time.process_time()
-        s = assess(d, seed=0)
-        parts["prognosis (assess)"] += time.process_time() - c
-        c = time.process_time()
-        always = [INDICATOR_COMPONENT[s.worst]] if s.worst in INDICATOR_COMPONENT else []
-        fig = plot_history(d, components=moved_components(d, always=always))   # as the site
-        parts["history figure: build"] += time.process_time() - c
-        c = time.process_time()
+        value = fn()
+        parts[name] += time.process_time() - c
+        return value
+
+    def png(fig):
         fig.savefig(io.BytesIO(), format="png", dpi=FIGURE_DPI)
-        parts["history figure: draw and save PNG"] += time.process_time() - c
+
+    plot_history(datas[0]).savefig(io.BytesIO(), format="png")              # fonts, caches
+    n_prog = 0
+    for i, d in enumerate(datas):
+        s = timed(names[0], lambda: assess(d, seed=0))
+        always = [INDICATOR_COMPONENT[s.worst]] if s.worst in INDICATOR_COMPONENT else []
+        shown = moved_components(d, always=always)
+        if i == 0:
+            figs.history(d, components=shown)                                # its first layout
+        timed(names[1], lambda: figs.history(d, components=shown))
+        timed(names[3], lambda: png(plot_history(d, components=shown)))
         if s.prognosis is not None:
             n_prog += 1
             p = s.prognosis
             span = float(p.times[-1] - p.times[0])
-            names = [s.worst] + [n for n in interesting_indicators(p) if n != s.worst
-                                 and not p.predictions[n].no_growth(span)]
-            c = time.process_time()
-            fig = plot_prognosis(p, indicators=names[:3])
-            parts["prognosis figure: build"] += time.process_time() - c
-            c = time.process_time()
-            fig.savefig(io.BytesIO(), format="png", dpi=FIGURE_DPI)
-            parts["prognosis figure: draw and save PNG"] += time.process_time() - c
+            ind = ([s.worst] + [x for x in interesting_indicators(p) if x != s.worst
+                                and not p.predictions[x].no_growth(span)])[:3]
+            timed(names[2], lambda: figs.prognosis(p, indicators=ind))
+            timed(names[4], lambda: png(plot_prognosis(p, indicators=ind)))
     return {"n_actuators": len(datas), "n_prognoses": n_prog,
             "per_actuator_cpu_s": {k: v / len(datas) for k, v in parts.items()}}
 
 
+def _table(fleets: list[dict], parts: dict, when: str, base: str | None, workers: int) -> str:
+    lines = ["## Fleet health site: build time as the fleet grows (`benchmarks/bench_fleet.py`)",
+             "", f"Run {when} on {machine()}. Fleets: the demo fleet (seed 0) recorded by "
+             "`emaphm fleet demo --synthetic` (true k plus identification-sized noise). Each "
+             f"build is `emaphm fleet report --workers {workers}` in a fresh process; CPU includes its "
+             "worker processes. Load average (1 min) before and after each build shown: the "
+             "machine is shared, so wall times grow with the load. Targets (issue 24 item 6): "
+             "300 actuators in at most 15 s on 2 cores, at most 1 s when nothing changed, "
+             "linear up to 10,000."
+             + (f" `emaphm {base}` is the code before the site learnt to grow, run "
+                "alternately with this tree on the same fleet." if base else ""), "",
+             "| fleet | build | wall [s] | CPU [s] | CPU per actuator [ms] | pages made | "
+             "files written | load before / after |", "|---|---|---|---|---|---|---|---|"]
+    for f in fleets:
+        n = f["actuators"]
+        rec = f["record"]
+        lines.append(f"| {n:,} ({f['inspections']:,} inspections) | recording it (`fleet demo "
+                     f"--synthetic`) | {rec['wall_s']:.1f} | {rec['cpu_s']:.1f} | "
+                     f"{1000 * rec['cpu_s'] / n:.1f} | | | {rec['load_before']:.2f} / "
+                     f"{rec['load_after']:.2f} |")
+        for name, r in f["builds"].items():
+            fmt = (lambda v: "" if v is None else f"{v:,}")
+            lines.append(f"| {n:,} | {name} | {r['wall_s']:.2f} | {r['cpu_s']:.2f} | "
+                         f"{1000 * r['cpu_s'] / n:.1f} | {fmt(r['drawn'])} | {fmt(r['written'])} "
+                         f"| {r['load_before']:.2f} / {r['load_after']:.2f} |")
+    if parts:
+        lines += ["", f"CPU per actuator of the parts of a cold build, one core, in one process "
+                  f"(the first {parts['n_actuators']} actuators of the 300-actuator fleet, "
+                  f"{parts['n_prognoses']} with a prognosis; a figure's time includes saving its "
+                  "PNG):", "", "| part | CPU per actuator [ms] |", "|---|---|"]
+        for name, v in parts["per_actuator_cpu_s"].items():
+            lines.append(f"| {name} | {1000 * v:.1f} |")
+    return "\n".join(lines) + "\n"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--db", help="an existing health history (default: record the demo fleet)")
-    ap.add_argument("--real", action="store_true",
-                    help="record the demo fleet from reference-plant traces (minutes)")
-    ap.add_argument("--actuators", type=int, default=30)
+    ap.add_argument("--sizes", default="30,300,1000,10000",
+                    help="fleet sizes, comma-separated (default 30,300,1000,10000)")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--base", nargs="?", const=BASE, default=None,
+                    help=f"also build the 300-actuator site with emaphm at this revision "
+                         f"(default {BASE})")
+    ap.add_argument("--dask", action="store_true", help="a cold build on a local Dask cluster")
     ap.add_argument("--out", default=str(ROOT / "results"), help="folder of fleet.md/json")
     args = ap.parse_args()
+    sizes = [int(x) for x in args.sizes.split(",")]
 
     tmp = Path(tempfile.mkdtemp(prefix="emaphm-bench-fleet-"))
     try:
-        if args.db:
-            db = tmp / "history.sqlite"
-            shutil.copy(args.db, db)
-            fleet = f"the history {Path(args.db).name}"
-        else:
-            db = tmp / "demo.sqlite"
-            demo = ["fleet", "demo", "--db", str(db), "--actuators", str(args.actuators),
-                    "--quiet"] + ([] if args.real else ["--synthetic"])
-            rec = _cli(*demo)
-            fleet = (f"the demo fleet (seed 0, {args.actuators} actuators) recorded "
-                     + ("from reference-plant traces, diagnosed" if args.real else
-                        "--synthetic (true k plus noise)")
-                     + f" in {rec['wall_s']:.1f} s ({rec['cpu_s']:.1f} s CPU)")
-        from emaphm.prognosis.history import HealthHistory
-
-        with HealthHistory(db, create=False) as h:
-            acts = h.actuators()
-        n_act, n_ins = len(acts), sum(a.n_inspections for a in acts)
-        report = ["fleet", "report", "--db", str(db), "--quiet", "--json"]
-        rows = {}
-        rows["cold, --workers 0 (one process)"] = _cli(*report, "--out", str(tmp / "s0"),
-                                                      "--workers", "0")
-        rows[f"cold, --workers {args.workers}"] = _cli(*report, "--out", str(tmp / "s1"),
-                                                       "--workers", str(args.workers))
-        rows["rebuild, nothing changed"] = _cli(*report, "--out", str(tmp / "s1"),
-                                                "--workers", str(args.workers))
-        last = max(acts, key=lambda a: a.n_inspections)
-        with HealthHistory(db) as h:
-            ins = h.inspections(last.id)[-1]
-            h.add(last.id, ins.time + 50.0, ins.k, k_lo=ins.k_lo, k_hi=ins.k_hi,
-                  diagnosis=ins.diagnosis, source="bench_fleet: one more inspection")
-        rows["rebuild, one actuator with a new inspection"] = _cli(
-            *report, "--out", str(tmp / "s1"), "--workers", str(args.workers))
-        for r in rows.values():
-            r["drawn"] = json.loads(r.pop("stdout"))["drawn"]
-        parts = _parts(db)
+        base = _extract(args.base, tmp) if args.base else None
+        fleets, parts = [], {}
+        for n in sizes:
+            fleets.append(_fleet(n, tmp, args.workers, base if n == 300 else None,
+                                 args.dask and n == 300))
+            print(json.dumps(fleets[-1]), file=sys.stderr, flush=True)
+            if n == 300:
+                parts = _parts(tmp / "demo300.sqlite")
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
     when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    lines = ["## Fleet health site: build time (`benchmarks/bench_fleet.py`)", "",
-             f"Run {when} on {machine()}. Fleet: {fleet}; {n_act} actuators, {n_ins} "
-             f"inspections. Each build is `emaphm fleet report` in a fresh process; CPU "
-             f"includes its worker processes. Load average before and after each build "
-             f"shown: the machine is shared, so wall times grow with the load, CPU times "
-             f"do not. Target (issue 12): the site of a 30-actuator demo fleet builds in "
-             f"under 10 s.", "",
-             "| build | wall [s] | CPU [s] | actuators drawn | load before / after |",
-             "|---|---|---|---|---|"]
-    for name, r in rows.items():
-        lines.append(f"| {name} | {r['wall_s']:.1f} | {r['cpu_s']:.1f} | {r['drawn']} | "
-                     f"{r['load_before']:.2f} / {r['load_after']:.2f} |")
-    lines += ["", f"CPU per actuator of a cold build, one core, in one process "
-              f"({parts['n_actuators']} actuators, {parts['n_prognoses']} with a prognosis):", "",
-              "| part | CPU per actuator [s] |", "|---|---|"]
-    total = 0.0
-    for name, v in parts["per_actuator_cpu_s"].items():
-        lines.append(f"| {name} | {v:.3f} |")
-        total += v
-    lines.append(f"| total | {total:.3f} |")
-    text = "\n".join(lines) + "\n"
+    text = _table(fleets, parts, when, args.base, args.workers)
     print(text)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "fleet.md").write_text(text)
     (out / "fleet.json").write_text(json.dumps(
-        {"date": when, "machine": machine(), "fleet": fleet, "actuators": n_act,
-         "inspections": n_ins, "builds": rows, "parts": parts}, indent=1) + "\n")
+        {"date": when, "machine": machine(), "workers": args.workers, "base": args.base,
+         "fleets": fleets, "parts": parts}, indent=1) + "\n")
 
 
 if __name__ == "__main__":
