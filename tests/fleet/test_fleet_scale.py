@@ -358,3 +358,19 @@ def test_a_dask_cluster_makes_the_same_site(fleet, tmp_path, capsys):
         assert main(argv) == 0                     # nothing changed: nothing sent, written
         rep = json.loads(capsys.readouterr().out)
         assert (rep["drawn"], rep["written"]) == (0, 0)
+
+
+def test_a_figure_the_page_no_longer_has_is_removed(fleet, tmp_path):
+    from emaphm.fleet.site import build_site
+
+    out = tmp_path / "site"
+    build_site(fleet, out, workers=0)
+    prog = out / "actuators" / f"{page_stem('EMA-OK')}-prognosis.png"
+    assert prog.is_file()
+    with HealthHistory(fleet) as h:            # three of its five inspections taken back:
+        for t in T[-3:]:                        # too few for a trend
+            h.remove("EMA-OK", at=float(t))
+    site = build_site(fleet, out, workers=0)
+    assert site.drawn == 1 and not prog.exists()
+    page = site.pages["EMA-OK"].read_text(encoding="utf-8")
+    assert "-prognosis.png" not in page and "-history.png" in page

@@ -1038,6 +1038,9 @@ def _make(jobs: list[_Job], executor: Any, figdir: Path,
         for name, payload in res["files"].items():
             _replace(figdir / name, payload)
             paths.append(figdir / name)
+        for name in _figure_names(res["stem"]):       # one it no longer has (fewer inspections)
+            if name not in res["files"]:
+                (figdir / name).unlink(missing_ok=True)
         made[res["id"]] = {"key": res["key"], "figures": res["figures"], "row": res["row"],
                            "cells": res["cells"], "order": res["order"],
                            "files": {n: len(b) for n, b in res["files"].items()}}
