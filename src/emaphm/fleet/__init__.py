@@ -3,7 +3,10 @@
 * :mod:`.status`: one actuator's state (verdict, the indicator nearest its threshold,
   RUL, trend) and the fleet's order of attention (:func:`assess`, :func:`order_fleet`);
 * :mod:`.markup`: escaping of values written into HTML and inline JSON, safe file names;
-* :mod:`.site`: the static site (:func:`build_site`): an index and a page per actuator;
+* :mod:`.site`: the static site (:func:`build_site`): an index and a page per actuator,
+  made again only where its inputs changed, in worker processes or on a Dask cluster;
+* :mod:`.figures`: the pages' two figures, drawn on matplotlib figures reused from one
+  actuator to the next (:class:`PageFigures`);
 * :mod:`.demo`: a simulated fleet to fill a history (:func:`record_demo_fleet`);
 * :mod:`.cli`: ``emaphm fleet report`` and ``emaphm fleet demo``.
 
@@ -24,6 +27,7 @@ _EXPORTS = {
     "slug": "markup",
     "FleetSite": "site",
     "build_site": "site",
+    "PageFigures": "figures",
     "DemoUnit": "demo",
     "demo_fleet": "demo",
     "record_demo_fleet": "demo",
