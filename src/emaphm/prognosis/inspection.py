@@ -155,10 +155,11 @@ def check_risk(risk: Any) -> float:
 @dataclass(frozen=True)
 class InspectionPolicy:
     """How the next inspection is chosen: the ``risk`` (probability that an indicator has
-    crossed its failure threshold by the inspection) and the intervals, in the history's
-    time unit (None: :data:`INTERVAL_DEFAULTS` of that unit). Validated on construction."""
+    crossed its failure threshold by the inspection; default :data:`DEFAULT_RISK`) and the
+    intervals, in the history's time unit (None: :data:`INTERVAL_DEFAULTS` of that unit).
+    Validated on construction."""
 
-    risk: float = 0.05
+    risk: float = DEFAULT_RISK
     max_interval: float | None = None
     min_interval: float | None = None
     default_interval: float | None = None
@@ -542,7 +543,7 @@ class PolicyRun:
 def simulate_policy(scenario: Any, policy: InspectionPolicy = InspectionPolicy(), *, seed: int,
                     fixed_interval: float | None = None, noise: float = 0.007,
                     horizon: float | None = None, max_inspections: int = 500,
-                    **kwargs: Any) -> PolicyRun:
+                    observer: Any = None, **kwargs: Any) -> PolicyRun:
     """Inspect a simulated actuator from t = 0 by ``policy`` until it is flagged (``act
     now``), its fault crosses the failure threshold before the next planned inspection (a
     miss), or ``horizon`` (default: its end of life) is passed.
@@ -554,8 +555,10 @@ def simulate_policy(scenario: Any, policy: InspectionPolicy = InspectionPolicy()
     child of the noise seed, the first child of ``SeedSequence(seed)``, so two policies see
     the same noise at their ``i``-th inspections). ``fixed_interval``: the baseline of a fixed
     interval instead, flagged where the same risk criterion finds a crossing before the
-    next fixed inspection likely (``t* - t_now`` under the interval). ``seed`` spawns the
-    noise seed and one seed per plan; ``kwargs`` go to
+    next fixed inspection likely (``t* - t_now`` under the interval). ``observer(times)``,
+    if given, returns the k history (n, 8) at the inspection times so far instead (e.g.
+    each a plant trace, identified). ``seed`` spawns the noise seed and one seed per plan;
+    ``kwargs`` go to
     :func:`~emaphm.prognosis.trends.prognose` (e.g. ``discrepancy={}`` for synthetic k,
     which carries no model discrepancy)."""
     from ..seeds import check_seed
@@ -576,7 +579,8 @@ def simulate_policy(scenario: Any, policy: InspectionPolicy = InspectionPolicy()
     rules: list[str] = []
     while True:
         t = np.asarray(times)
-        K = observe(scenario, t, seed=noise_seed, noise=noise)
+        K = (observe(scenario, t, seed=noise_seed, noise=noise) if observer is None
+             else np.asarray(observer(t), dtype=float))
         plan_seed = int(plan_ss.spawn(1)[0].generate_state(1)[0])
         _, plan = next_inspection(t, K, seed=plan_seed, policy=policy, **kwargs)
         rules.append(plan.rule)
