@@ -223,6 +223,14 @@ class IdentificationProblem:
         fault model (``fit_ratio``, ``thresholds``, ``mismatch`` passed on)."""
         return diagnose(k, params=self.params, fault_model=self.fault_model, **kw)
 
+    def fitness_at(self, k: Any, nuisance: Any = None) -> float:
+        """Eq. 4 of the fault vector ``k`` with the parameters searched beside it at
+        ``nuisance`` (a mapping by name, as an identification reports them; those left out
+        at 0, their nominal value)."""
+        extra = dict(nuisance or {})
+        row = np.concatenate([as_k(k), [float(extra.get(n, 0.0)) for n in self.nuisance]])
+        return float(self.objective(row[None, :])[0])
+
     def params_at(self, nu: np.ndarray | None = None) -> ActuatorParams:
         """The healthy actuator with the values ``nu`` of the parameters searched beside k
         applied (:func:`apply_extra`)."""

@@ -41,7 +41,8 @@ from .params import ActuatorParams
 from .problem import IdentificationProblem, apply_extra
 from .traces import Trace
 
-__all__ = ["diagnose", "diagnose_identification", "examine", "Examination", "mismatch_fit",
+__all__ = ["diagnose", "diagnose_identification", "examine", "Examination", "screen_sensors",
+           "mismatch_fit",
            "needs_mismatch_check",
            "MISMATCH_NUISANCE", "NOISELESS_NOTE", "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P",
            "misfit_p_value", "misfit_limit", "fit_ratio_of"]
@@ -288,6 +289,29 @@ class Examination:
     sensor: Any
 
 
+def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, seed: int,
+                   thresholds: Thresholds | None = None, callback: Any = None
+                   ) -> tuple[Any, Trace, Any]:
+    """The current sensors of ``trace`` judged from the sum of its currents
+    (:func:`emaphm.modes.current_sensor.screen`, with ``thresholds``, default the
+    actuator's) and a faulty one undone: ``(finding, corrected trace, identification or
+    None)``. An offset alone is placed on the phase whose corrected trace the model fits
+    best (:func:`~emaphm.modes.current_sensor.resolve`: the three corrections scored at
+    the healthy actuator, the likely ones identified); the identification made for that
+    choice is returned, with ``config`` and ``seed``."""
+    from .faults import K_NOMINAL
+    from .fitness import trace_fault_model
+    from .identify import identify
+    from .modes.current_sensor import resolve, screen
+
+    fault_model = config.fault_model or trace_fault_model(trace)
+    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
+    scored = replace(config, fault_model=fault_model)
+    return resolve(trace, screen(trace, params, limits),
+                   lambda t: identify(t, config, seed=seed, params=params, callback=callback),
+                   lambda t: scored.problem(t, params).fitness_at(K_NOMINAL))
+
+
 def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any = None,
             seed: int = 0, callback: Any = None, thresholds: Thresholds | None = None,
             loops: bool = True) -> Examination:
@@ -303,17 +327,14 @@ def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any =
     3. The verdict with its checks (:func:`diagnose_identification`; ``loops``: with the
        report of a short's fault loop).
     """
-    from .fitness import trace_fault_model
     from .identify import IdentificationConfig, identify
-    from .modes.current_sensor import UNOBSERVABLE_NOTE, resolve, screen
+    from .modes.current_sensor import UNOBSERVABLE_NOTE
 
     config = IdentificationConfig() if config is None else config
-    fault_model = config.fault_model or trace_fault_model(trace)
-    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
-    run = lambda t: identify(t, config, seed=seed, params=params, callback=callback)  # noqa: E731
-    finding, work, ident = resolve(trace, screen(trace, params, limits), run)
+    finding, work, ident = screen_sensors(trace, params=params, config=config, seed=seed,
+                                          thresholds=thresholds, callback=callback)
     if ident is None:
-        ident = run(work)
+        ident = identify(work, config, seed=seed, params=params, callback=callback)
     diag = diagnose_identification(work, ident, params=params, thresholds=thresholds,
                                    findings={"current_sensor": finding}, loops=loops)
     if not finding.observable:

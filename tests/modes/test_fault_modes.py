@@ -146,6 +146,36 @@ def test_a_sensor_offset_is_placed_by_the_model(plant):
     assert ex.diagnosis.faults[0].details["value"] == pytest.approx(0.2, abs=0.02)
 
 
+def test_an_offsets_phase_is_scored_before_it_is_identified(plant):
+    """The three corrections scored at the healthy actuator: the right one stands out (a
+    wrong one leaves the offset in two currents), so one identification places it; without
+    a score all three are identified, to the same phase."""
+    from emaphm.faults import K_NOMINAL
+    from emaphm.identify import identify
+    from emaphm.modes.current_sensor import correct, resolve, screen
+    from emaphm.problem import IdentificationProblem
+
+    trace = plant["offset"]
+    finding = screen(trace, None, DEFAULT_THRESHOLDS)
+    assert finding.needs_phase
+    calls = []
+
+    def run(t):
+        calls.append(t)
+        return identify(t, seed=0, fault_model="physical")
+
+    def score(t):
+        return IdentificationProblem(t, fault_model="physical").fitness_at(K_NOMINAL)
+
+    scores = [score(correct(trace, finding, j)) for j in range(3)]
+    assert min(scores) * 10 < sorted(scores)[1]          # the right phase stands out
+    placed, fixed, ident = resolve(trace, finding, run, score)
+    assert placed.phase == 2 and len(calls) == 1 and ident.fitness > 0
+    calls.clear()
+    again, _, ident3 = resolve(trace, finding, run)
+    assert again.phase == 2 and len(calls) == 3 and ident3.fitness == ident.fitness
+
+
 def test_a_short_is_never_a_sensor_fault_and_carries_its_fault_loop(plant):
     ex = examine(plant["short"], seed=0)
     assert not ex.sensor.faulty

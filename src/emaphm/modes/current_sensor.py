@@ -127,17 +127,35 @@ def correct(trace: Trace, finding: SensorFinding, phase: int | None = None) -> T
     return replace(trace, i_abc=i, meta=meta)
 
 
-def resolve(trace: Trace, finding: SensorFinding,
-            identify: Callable[[Trace], Any]) -> tuple[SensorFinding, Trace, Any]:
+#: With ``score``, :func:`resolve` identifies every phase whose correction scores within
+#: this factor of the best.
+SCORE_MARGIN = 1.5
+
+
+def resolve(trace: Trace, finding: SensorFinding, identify: Callable[[Trace], Any],
+            score: Callable[[Trace], float] | None = None
+            ) -> tuple[SensorFinding, Trace, Any]:
     """``(finding, corrected trace, identification)``: a faulty sensor undone on its phase;
     an offset alone, whose phase the sum cannot tell, on the phase whose corrected trace
     the machine model fits best (``identify(trace)`` -> an object with ``fitness``; its
-    result on the chosen trace is returned, None where no choice was needed)."""
+    result on the chosen trace is returned, None where no choice was needed).
+
+    Without ``score`` each of the three corrections is identified. With ``score(trace)``
+    (Eq. 4 of the healthy actuator on a trace) the three are scored first: a wrong phase
+    leaves the offset in two phases' currents, a constant no machine fault makes, which
+    adds the same to the fit of any k; only the phases scoring within
+    :data:`SCORE_MARGIN` of the best are identified (one identification, usually, instead
+    of three, and not the slow one of a wrong correction), and the best fit is kept."""
     if not finding.faulty:
         return finding, trace, None
     if not finding.needs_phase:
         return finding, correct(trace, finding), None
-    tries = [(identify(correct(trace, finding, j)), j) for j in range(3)]
+    fixed = [correct(trace, finding, j) for j in range(3)]
+    phases = range(3)
+    if score is not None:
+        scores = [score(t) for t in fixed]
+        phases = [j for j in phases if scores[j] <= SCORE_MARGIN * min(scores)]
+    tries = [(identify(fixed[j]), j) for j in phases]
     ident, j = min(tries, key=lambda x: x[0].fitness)
     placed = finding.placed(j)
     return placed, correct(trace, placed), ident
