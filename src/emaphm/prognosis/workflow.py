@@ -51,11 +51,10 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     release, with a DeprecationWarning.
     """
     from ..fitness import trace_fault_model
-    from ..identify import DEFAULT_ALGORITHM, IdentificationConfig, identify
-    from ..modes import thresholds_for
-    from ..modes.current_sensor import UNOBSERVABLE_NOTE, resolve, screen
+    from ..identify import DEFAULT_ALGORITHM, IdentificationConfig
+    from ..modes.current_sensor import UNOBSERVABLE_NOTE
     from ..traces import validate
-    from ..verdict import diagnose_identification
+    from ..verdict import diagnose_identification, screen_sensors
     from .uncertainty import identify_with_spread
 
     if deprecated:
@@ -76,9 +75,8 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
             start = previous[-1].k
     # the current sensors judged from the sum of the currents; the machine identified on
     # the corrected trace (emaphm.verdict.examine does the same for one diagnosis)
-    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
-    finding, work, _ = resolve(trace, screen(trace, params, limits),
-                               lambda t: identify(t, config, seed=seed, params=params))
+    finding, work, _ = screen_sensors(trace, params=params, config=config, seed=seed,
+                                      thresholds=thresholds)
     a = identify_with_spread(work, config, seed=seed, method=method, level=level, n_runs=n_runs,
                              params=params, start=start, callback=callback)
     ident = a.identification
