@@ -372,3 +372,22 @@ def test_an_index_of_ten_thousand_actuators_pages_sorts_and_filters(big_site, dr
     want = sorted((r["id"] for r in big_site.rows if "attention" in r["tags"]), reverse=True)
     assert len(want) == 10 and _visible_ids(driver) == want
     assert _severe(driver) == []
+
+
+def test_a_phone_pages_the_large_index_without_horizontal_scrolling(big_site, driver):
+    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
+                           {"width": 375, "height": 812, "deviceScaleFactor": 1, "mobile": True})
+    try:
+        _open(driver, big_site.index)
+        assert driver.execute_script("return window.innerWidth") == 375
+        assert driver.find_element("id", "pager").is_displayed()
+        assert len(driver.find_elements("css selector", "#fleet tbody tr")) == 100
+        driver.find_element("id", "next").click()
+        assert _visible_ids(driver) == [r["id"] for r in big_site.rows[100:200]]
+        assert driver.execute_script("return document.documentElement.scrollWidth") <= 375
+        right = driver.execute_script(
+            "return Math.max(...Array.from(document.querySelectorAll('#fleet tbody tr, "
+            "#pager')).map(e => e.getBoundingClientRect().right))")
+        assert right <= 375
+    finally:
+        driver.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})

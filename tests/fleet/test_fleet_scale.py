@@ -83,6 +83,53 @@ def test_a_rebuild_with_nothing_changed_assesses_draws_and_writes_nothing(fleet,
     assert [r["id"] for r in again.rows] == [s.id for s in first.statuses]
 
 
+def test_a_rebuild_reads_only_the_changed_actuators_records_from_the_history(fleet, tmp_path,
+                                                                             monkeypatch):
+    from emaphm.fleet.site import build_site
+
+    out = tmp_path / "site"
+    build_site(fleet, out, workers=0)
+    read = []
+    real = HealthHistory.data
+    monkeypatch.setattr(HealthHistory, "data", lambda h, i: read.append(i) or real(h, i))
+    assert build_site(fleet, out, workers=0).drawn == 0 and read == []
+    with HealthHistory(fleet) as h:
+        _add(h, "EMA-SOON", [700.0], [_k(short_a=0.3)])
+    assert build_site(fleet, out, workers=0).drawn == 1 and read == ["EMA-SOON"]
+
+
+def test_without_the_stored_records_the_actuators_are_keyed_by_what_the_history_returns(
+        fleet, tmp_path, monkeypatch):
+    from emaphm.fleet import site as fleet_site
+
+    monkeypatch.setattr(fleet_site, "_stored_digests", lambda path: None)
+    out = tmp_path / "site"
+    assert fleet_site.build_site(fleet, out, workers=0).drawn == 5
+    assert fleet_site.build_site(fleet, out, workers=0).drawn == 0
+    with HealthHistory(fleet) as h:
+        _add(h, "EMA-SOON", [700.0], [_k(short_a=0.3)])
+    site = fleet_site.build_site(fleet, out, workers=0)
+    assert site.drawn == 1 and site.statuses[0].id == "EMA-SOON"
+
+
+def test_the_records_left_out_are_named_on_every_build_even_with_nothing_changed(fleet,
+                                                                                tmp_path,
+                                                                                capsys):
+    with HealthHistory(fleet) as h:             # a record an older emaphm let through
+        h._con.execute("DROP TRIGGER inspections_time_forward")
+        h._con.execute("INSERT INTO inspections (actuator, time, k, k_lo, k_hi, recorded_utc) "
+                       "SELECT actuator, 1e308, k, k_lo, k_hi, recorded_utc FROM inspections "
+                       "WHERE actuator = 'EMA-OK' AND time = 600")
+    argv = ["fleet", "report", "--db", str(fleet), "--out", str(tmp_path / "site"),
+            "--workers", "0", "--json", "--quiet"]
+    for drawn in (5, 0):
+        assert main(argv) == 0
+        captured = capsys.readouterr()
+        assert json.loads(captured.out)["drawn"] == drawn
+        assert captured.err.count("\n") == 1 and "left out 1 stored inspection of EMA-OK" \
+            in captured.err
+
+
 def test_the_order_of_the_index_is_the_order_of_attention(fleet, tmp_path):
     from emaphm.fleet.site import build_site
     from emaphm.fleet.status import order_fleet

@@ -27,9 +27,9 @@ calibrations and registration) and on the build's settings (thresholds, seed, le
 title, and the versions of emaphm and matplotlib and the code of the modules that shape a
 page): ``actuators/.figures.json`` keeps, per page stem, the SHA-256 of all of it, the
 sizes of the files it made, and its row of the index. A rebuild into the same folder
-reads the history, hashes each actuator and stats its files: one whose digest and files
-are unchanged costs nothing more; the others are assessed (the prognosis), drawn and
-written again. The index and ``fleet.json`` are written again only when a row, the order
+reads every actuator's stored records in one pass without decoding them, hashes them and
+stats each actuator's files: one whose digest and files are unchanged costs nothing more;
+the others are read from the history, assessed (the prognosis), drawn and written again. The index and ``fleet.json`` are written again only when a row, the order
 or the settings changed (``actuators/.index-key``); ``redraw=True`` makes every page again.
 A build of the whole history removes the pages and figures of actuators an earlier build
 into the folder wrote that the history no longer has; a build of some ``actuators`` keeps
@@ -184,7 +184,8 @@ _INDEX_KEY = ".index-key"
 
 #: The modules whose code shapes a page or a figure: a change in any of them makes every
 #: page again.
-_PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.plots", "emaphm.prognosis.trends",
+_PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.history", "emaphm.prognosis.plots",
+              "emaphm.prognosis.trends",
               "emaphm.prognosis.thresholds", "emaphm.prognosis.inspection",
               "emaphm.fleet.status", "emaphm.fleet.site",
               "emaphm.fleet.markup", "emaphm.fleet.figures")
@@ -299,6 +300,7 @@ def _render(job: _Job, keep: bool = False) -> dict:
             "row": _row(status, 0, f"actuators/{page}"),
             "cells": _cells(status, f"actuators/{page}"),
             "order": list(attention_key(status)), "figures": figures, "files": files,
+            "skipped": [x.to_dict() for x in job.data.skipped],
             "status": status if keep else None}
 
 
@@ -916,22 +918,70 @@ def _out_folder(out: str | os.PathLike[str]) -> Path:
     return p
 
 
-def _read(history: Any, actuators: Sequence[str] | None) -> tuple[list, dict, str]:
-    from ..prognosis.history import HealthHistory
+def _actuators(h: Any, actuators: Sequence[str] | None) -> list:
+    """The :class:`~emaphm.prognosis.history.Actuator` records to build (``actuators``:
+    those ids, each checked; default all), refused before anything is written."""
+    every = h.actuators()
+    if actuators:
+        by_id = {a.id: a for a in every}
+        for i in actuators:
+            if i not in by_id:
+                h.actuator(i)                  # UnknownActuatorError, naming the registered
+        every = [by_id[i] for i in dict.fromkeys(actuators)]
+    if not every:
+        raise ValueError(f"the health history {h.path} has no actuators; register them "
+                         f"first (emaphm history register ID --db {h.path})")
+    return every
 
-    own = not isinstance(history, HealthHistory)
-    h = HealthHistory(history, readonly=True) if own else history
+
+def _stored_digests(path: Path) -> dict[str, str] | None:
+    """SHA-256 of each actuator's records as the history stores them (its row, its
+    inspections and calibrations, every column), read in one pass in one snapshot without
+    decoding any: what tells an unchanged actuator in a large fleet. None where the file
+    cannot be read that way; the actuators are then keyed by what
+    :meth:`~emaphm.prognosis.HealthHistory.data` returns (:func:`_actuator_key`)."""
+    import sqlite3
+
+    from .._sqlite import connect_readonly
+
     try:
-        ids = list(actuators) if actuators else [a.id for a in h.actuators()]
-        if not ids:
-            raise ValueError(f"the health history {h.path} has no actuators; register them "
-                             f"first (emaphm history register ID --db {h.path})")
-        datas = [h.data(i) for i in dict.fromkeys(ids)]
-        records = {d.actuator.id: h.calibrations(d.actuator.id) for d in datas}
-        return datas, records, h.path.name
+        con = connect_readonly(Path(path), 30.0)
+    except (sqlite3.Error, OSError):
+        return None
+    hashes: dict[str, Any] = {}
+    try:
+        con.execute("BEGIN")                   # the three tables as of one moment
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
+        for table, owner in (("actuators", "id"), ("inspections", "actuator"),
+                             ("calibrations", "actuator")):
+            if table not in tables:
+                continue
+            for row in con.execute(f"SELECT {owner}, * FROM {table} ORDER BY {owner}, rowid"):
+                h = hashes.get(row[0])
+                if h is None:
+                    h = hashes[row[0]] = hashlib.sha256()
+                h.update(f"{table}\x00{row[1:]!r}\x00".encode("utf-8", "surrogatepass"))
+    except sqlite3.Error:
+        return None
     finally:
-        if own:
-            h.close()
+        con.close()
+    return {str(k): v.hexdigest() for k, v in hashes.items()}
+
+
+def _skipped_of(entry: dict) -> tuple:
+    """The :class:`~emaphm.prognosis.history.SkippedInspection` records a manifest entry
+    noted (an unchanged actuator's, for the command's warning)."""
+    from ..prognosis.history import SkippedInspection
+
+    out = []
+    for d in entry.get("skipped") or ():
+        try:
+            out.append(SkippedInspection(id=int(d["id"]), actuator=str(d["actuator"]),
+                                         time=float(d["time"]), reason=str(d["reason"]),
+                                         recorded_utc=d.get("recorded_utc")))
+        except (TypeError, ValueError, KeyError):
+            continue
+    return tuple(out)
 
 
 def build_site(history: Any, out: str | os.PathLike[str], *,
@@ -951,6 +1001,8 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     still up to date in ``out`` are kept unless ``redraw`` (module docstring);
     ``progress`` is called with a short line as pages are made.
     """
+    from ..prognosis.history import HealthHistory
+
     seed = check_seed(seed)
     if not 0.0 < level < 1.0:
         raise ValueError(f"level must be in (0, 1), e.g. 0.9, got {level!r}")
@@ -961,15 +1013,21 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
         raise ValueError("executor must have a map_unordered(fn, items) method, e.g. "
                          "emaphm.campaign.DaskExecutor('tcp://HOST:8786')")
     t0 = time.perf_counter()
-    datas, records, source = _read(history, actuators)
-    folder = _out_folder(out)
-    figdir = folder / "actuators"
     # every option that changes a page or a row of the index: in both
     common = {"thresholds": thresholds, "seed": seed, "level": level, "title": title}
     settings = {**common, "thresholds": thresholds.to_dict(), "code": _code_fingerprint()}
-    known = _read_manifest(figdir)             # kept for the actuators not built this time
-    stems, jobs, entries = _plan(datas, records, common, _digest(settings), known, figdir,
-                                 redraw)
+    own = not isinstance(history, HealthHistory)
+    h = HealthHistory(history, readonly=True) if own else history
+    try:
+        acts = _actuators(h, actuators)
+        folder = _out_folder(out)
+        figdir = folder / "actuators"
+        known = _read_manifest(figdir)         # kept for the actuators not built this time
+        stems, jobs, entries, skipped = _plan(h, acts, common, _digest(settings), known,
+                                              figdir, redraw)
+    finally:
+        if own:
+            h.close()
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     pool = executor is None and n_workers > 1 and len(jobs) > 1
     made, statuses, written = _make(jobs, _LocalPool(n_workers) if pool else executor,
@@ -983,47 +1041,72 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     order = sorted(entries, key=lambda i: tuple(entries[i]["order"]))   # status.attention_key
     rows = [_ranked(entries[i]["row"], rank) for rank, i in enumerate(order, start=1)]
     written += _write_assets(folder)
-    index = folder / "index.html"
-    meta = {"title": title, "history": source, "seed": seed, "level": level,
-            "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS)}
-    index_key = _digest({"settings": settings, "meta": meta, "page_rows": PAGE_ROWS,
-                         "rows": [[stems[i], entries[i]["key"]] for i in order]})
-    if _read_key(figdir / _INDEX_KEY) != index_key or not index.is_file() \
-            or not (folder / "fleet.json").is_file():
-        trs = [_tr(row, entries[i]["cells"]) for row, i in zip(rows, order)]
-        atomic_write_text(folder / "fleet.json", json.dumps(
-            {**meta, "actuators": rows}, indent=1, allow_nan=False) + "\n")
-        atomic_write_text(index, _index_html(rows, trs, title=title, source=source,
-                                             thresholds=thresholds, seed=seed, level=level))
-        atomic_write_text(figdir / _INDEX_KEY, index_key + "\n")
-        written += 2
-    return FleetSite(out=folder, index=index,
+    written += _write_index(folder, rows, [entries[i]["cells"] for i in order],
+                            [[stems[i], entries[i]["key"]] for i in order], settings,
+                            title=title, source=h.path.name, thresholds=thresholds, seed=seed,
+                            level=level)
+    return FleetSite(out=folder, index=folder / "index.html",
                      pages={i: figdir / f"{stems[i]}.html" for i in order},
                      statuses=tuple(statuses[i] for i in order if i in statuses),
                      elapsed_s=time.perf_counter() - t0, drawn=len(jobs),
                      workers=min(n_workers, len(jobs)) if pool else 0, rows=tuple(rows),
-                     skipped=tuple((d.actuator, d.skipped) for d in datas if d.skipped),
-                     written=written)
+                     skipped=tuple(skipped), written=written)
 
 
-def _plan(datas: list, records: dict, common: dict, digest: str, known: dict, figdir: Path,
-          redraw: bool) -> tuple[dict, list[_Job], dict]:
+def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, settings: dict,
+                 *, title: str, source: str, thresholds: FailureThresholds, seed: int,
+                 level: float) -> int:
+    """Write ``index.html`` and ``fleet.json`` of ``rows`` (ranked, in order) unless what
+    they were last written from (``keys``: page stem and key of each row, the settings) is
+    the same and both are there; returns the files written."""
+    index = folder / "index.html"
+    meta = {"title": title, "history": source, "seed": seed, "level": level,
+            "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS)}
+    index_key = _digest({"settings": settings, "meta": meta, "page_rows": PAGE_ROWS,
+                         "rows": keys})
+    key_file = folder / "actuators" / _INDEX_KEY
+    if _read_key(key_file) == index_key and index.is_file() and (folder / "fleet.json").is_file():
+        return 0
+    trs = [_tr(row, c) for row, c in zip(rows, cells)]
+    atomic_write_text(folder / "fleet.json", json.dumps(
+        {**meta, "actuators": rows}, indent=1, allow_nan=False) + "\n")
+    atomic_write_text(index, _index_html(rows, trs, title=title, source=source,
+                                         thresholds=thresholds, seed=seed, level=level))
+    atomic_write_text(key_file, index_key + "\n")
+    return 2
+
+
+def _plan(h: Any, acts: list, common: dict, digest: str, known: dict, figdir: Path,
+          redraw: bool) -> tuple[dict, list[_Job], dict, list]:
     """Page stems, the jobs (with the options ``common``) of the actuators whose page must
-    be made, and the manifest entries of those whose page is up to date, by id; ``digest``
-    is that of the build's settings."""
-    stems = {d.actuator.id: page_stem(d.actuator.id) for d in datas}
+    be made, the manifest entries of those whose page is up to date, by id, and the
+    ``(Actuator, skipped records)`` of those with records the analyses leave out; ``digest``
+    is that of the build's settings. Only the actuators whose records changed are read
+    from the history ``h`` (:func:`_stored_digests`)."""
+    stems = {a.id: page_stem(a.id) for a in acts}
     if len(set(stems.values())) != len(stems):          # a 40-bit hash prefix collided
         stems = {i: page_stem(i, digits=64) for i in stems}
-    jobs, reused = [], {}
-    for d in datas:
-        aid = d.actuator.id
-        key = _actuator_key(d, records[aid], digest)
-        if not redraw and _reusable(known.get(stems[aid]), key, figdir):
-            reused[aid] = known[stems[aid]]
+    stored = _stored_digests(h.path)
+    jobs, reused, skipped = [], {}, []
+    for a in acts:
+        entry, data = known.get(stems[a.id]), None
+        if stored is not None:
+            key = _digest([digest, stored.get(a.id, "")])
+        else:                                  # the history read record by record
+            data, recs = h.data(a.id), h.calibrations(a.id)
+            key = _actuator_key(data, recs, digest)
+        if not redraw and _reusable(entry, key, figdir):
+            reused[a.id] = entry
+            found = data.skipped if data is not None else _skipped_of(entry)
         else:
-            jobs.append(_Job(data=d, records=tuple(records[aid]), stem=stems[aid], key=key,
+            if data is None:
+                data, recs = h.data(a.id), h.calibrations(a.id)
+            jobs.append(_Job(data=data, records=tuple(recs), stem=stems[a.id], key=key,
                              **common))
-    return stems, jobs, reused
+            found = data.skipped
+        if found:
+            skipped.append((a, tuple(found)))
+    return stems, jobs, reused, skipped
 
 
 def _make(jobs: list[_Job], executor: Any, figdir: Path,
@@ -1043,6 +1126,7 @@ def _make(jobs: list[_Job], executor: Any, figdir: Path,
                 (figdir / name).unlink(missing_ok=True)
         made[res["id"]] = {"key": res["key"], "figures": res["figures"], "row": res["row"],
                            "cells": res["cells"], "order": res["order"],
+                           "skipped": res["skipped"],
                            "files": {n: len(b) for n, b in res["files"].items()}}
         if res["status"] is not None:
             statuses[res["id"]] = res["status"]
