@@ -1,7 +1,10 @@
 """How long the fleet health site takes to build as the fleet grows, and where the time goes.
 
 Run: ``python benchmarks/bench_fleet.py [--sizes 30,300,1000,10000] [--base REV] [--dask]``
--> ``benchmarks/results/fleet.md`` and ``fleet.json`` (the table is printed too).
+-> ``benchmarks/results/fleet.md`` and ``fleet.json`` (the table is printed too);
+``--append`` adds the sizes it measures to the ``fleet.json`` there (a 10,000-actuator
+fleet's cold build takes over an hour on two shared cores: run it apart), each run's date
+in the table.
 
 Each fleet is the demo fleet of ``emaphm fleet demo --synthetic`` (seed 0; true k plus
 identification-sized noise: the site draws the same kind of figures as for a diagnosed
@@ -181,22 +184,26 @@ def _parts(db: Path, n: int = 60) -> dict:
 
 
 def _table(fleets: list[dict], parts: dict, when: str, base: str | None, workers: int) -> str:
+    runs = sorted({f.get("date", when) for f in fleets})
     lines = ["## Fleet health site: build time as the fleet grows (`benchmarks/bench_fleet.py`)",
-             "", f"Run {when} on {machine()}. Fleets: the demo fleet (seed 0) recorded by "
-             "`emaphm fleet demo --synthetic` (true k plus identification-sized noise). Each "
-             f"build is `emaphm fleet report --workers {workers}` in a fresh process; CPU includes its "
-             "worker processes. Load average (1 min) before and after each build shown: the "
-             "machine is shared, so wall times grow with the load. Targets (issue 24 item 6): "
-             "300 actuators in at most 15 s on 2 cores, at most 1 s when nothing changed, "
-             "linear up to 10,000."
+             "", f"Run {' and '.join(runs)} on {machine()}. Fleets: the demo fleet (seed 0) "
+             "recorded by `emaphm fleet demo --synthetic` (true k plus identification-sized "
+             f"noise). Each build is `emaphm fleet report --workers {workers}` in a fresh "
+             "process; CPU includes its worker processes (on a Dask cluster: this process "
+             "only, the cluster's workers are not its children). Load average (1 min) before "
+             "and after each build shown: the machine is shared, so wall times grow with the "
+             "load. Targets (issue 24 item 6): 300 actuators in at most 15 s on 2 cores, at "
+             "most 1 s when nothing changed, linear up to 10,000."
              + (f" `emaphm {base}` is the code before the site learnt to grow, run "
                 "alternately with this tree on the same fleet." if base else ""), "",
              "| fleet | build | wall [s] | CPU [s] | CPU per actuator [ms] | pages made | "
              "files written | load before / after |", "|---|---|---|---|---|---|---|---|"]
+    many = len(runs) > 1
     for f in fleets:
         n = f["actuators"]
         rec = f["record"]
-        lines.append(f"| {n:,} ({f['inspections']:,} inspections) | recording it (`fleet demo "
+        lines.append(f"| {n:,} ({f['inspections']:,} inspections"
+                     + (f", run {f['date']}" if many else "") + ") | recording it (`fleet demo "
                      f"--synthetic`) | {rec['wall_s']:.1f} | {rec['cpu_s']:.1f} | "
                      f"{1000 * rec['cpu_s'] / n:.1f} | | | {rec['load_before']:.2f} / "
                      f"{rec['load_after']:.2f} |")
@@ -225,6 +232,8 @@ def main() -> None:
                          f"(default {BASE})")
     ap.add_argument("--dask", action="store_true", help="a cold build on a local Dask cluster")
     ap.add_argument("--out", default=str(ROOT / "results"), help="folder of fleet.md/json")
+    ap.add_argument("--append", action="store_true",
+                    help="add these sizes to the fleet.json in --out (same machine)")
     args = ap.parse_args()
     sizes = [int(x) for x in args.sizes.split(",")]
 
@@ -242,9 +251,21 @@ def main() -> None:
         shutil.rmtree(tmp, ignore_errors=True)
 
     when = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    for f in fleets:
+        f["date"] = when
+    out = Path(args.out)
+    if args.append:
+        old = json.loads((out / "fleet.json").read_text())
+        if old["machine"] != machine() or old["workers"] != args.workers:
+            raise SystemExit(f"--append: {out / 'fleet.json'} was measured on {old['machine']} "
+                             f"with {old['workers']} workers; run all sizes again here")
+        measured = {f["actuators"] for f in fleets}
+        fleets = sorted([f for f in old["fleets"] if f["actuators"] not in measured] + fleets,
+                        key=lambda f: f["actuators"])
+        parts = parts or old["parts"]
+        args.base = args.base or old["base"]
     text = _table(fleets, parts, when, args.base, args.workers)
     print(text)
-    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "fleet.md").write_text(text)
     (out / "fleet.json").write_text(json.dumps(

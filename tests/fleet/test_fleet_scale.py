@@ -296,7 +296,8 @@ def test_the_page_figures_draw_what_the_reference_plots_draw(fleet):
         for panel, ax in zip(mine[1], ref.axes):
             assert panel.ax.get_title() == ax.get_title()
             for label, line in (("identified", panel.points), ("median", panel.median)):
-                want = [np.asarray(x.get_xydata()) for x in ax.get_lines() if x.get_label() == label]
+                want = [np.asarray(x.get_xydata()) for x in ax.get_lines()
+                        if x.get_label() == label]
                 got = np.asarray(line.get_xydata())
                 assert (got.size == 0 and not want) or np.allclose(got, want[0])
                 drawn[label] += got.size > 0

@@ -32,7 +32,8 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..faults import K_LABELS
-from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT, FailureThresholds
+from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT,
+                                    FailureThresholds)
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..prognosis.history import HistoryData
@@ -234,10 +235,11 @@ class PageFigures:
             keys = [Line2D([], [], marker="o", color=c, ms=4, ls="none") for _, c in _STATES]
             keys += [Line2D([], [], color="C3", ls="--", lw=1.0),
                      Line2D([], [], marker="o", mfc="none", color="0.6", ms=4, ls="none")]
+            below_title = 1.0 - 0.42 / fig.get_size_inches()[1]
             fig.legend(keys, [s for s, _ in _STATES] + ["failure threshold",
                                                        "phase without eccentricity"],
-                       loc="upper center", bbox_to_anchor=(0.5, 1.0 - 0.42 / fig.get_size_inches()[1]),
-                       ncols=5, fontsize=7, frameon=False)
+                       loc="upper center", bbox_to_anchor=(0.5, below_title), ncols=5,
+                       fontsize=7, frameon=False)
             title = fig.suptitle("", fontsize=10)
             self._history[nrows] = (fig, panels, title)
         return self._history[nrows]

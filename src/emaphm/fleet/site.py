@@ -29,8 +29,9 @@ page): ``actuators/.figures.json`` keeps, per page stem, the SHA-256 of all of i
 sizes of the files it made, and its row of the index. A rebuild into the same folder
 reads every actuator's stored records in one pass without decoding them, hashes them and
 stats each actuator's files: one whose digest and files are unchanged costs nothing more;
-the others are read from the history, assessed (the prognosis), drawn and written again. The index and ``fleet.json`` are written again only when a row, the order
-or the settings changed (``actuators/.index-key``); ``redraw=True`` makes every page again.
+the others are read from the history, assessed (the prognosis), drawn and written again.
+The index and ``fleet.json`` are written again only when a row, the order or the settings
+changed (``actuators/.index-key``); ``redraw=True`` makes every page again.
 A build of the whole history removes the pages and figures of actuators an earlier build
 into the folder wrote that the history no longer has; a build of some ``actuators`` keeps
 the others'.
