@@ -118,6 +118,27 @@ def test_fall_backs_never_give_no_answer():
     assert (flat.rule, flat.at, flat.risk) == ("healthy", 7 * 150.0 + dflt.default, None)
 
 
+def test_healthy_indicators_scatter_into_crossings_so_they_take_no_part():
+    # seven flat indicators at zero, scattered by identification-sized noise: their trend
+    # draws (an exponential fitted to the scatter) cross within an interval often enough
+    # to drive any plan; the healthy rule leaves them out
+    from emaphm.faults import K_NOMINAL
+
+    rng = np.random.default_rng(8)
+    t = np.arange(6) * 200.0
+    f_all, rules = [], []
+    for i in range(10):
+        K = np.clip(K_NOMINAL + 0.007 * rng.standard_normal((t.size, 8)), 0.0, 1.0)
+        prog, plan = next_inspection(t, K, seed=i, discrepancy={})
+        rules.append(plan.rule)
+        f_all.append(float(first_crossing_cdf(list(prog.predictions.values()),
+                                              1000.0 + INTERVAL_DEFAULTS["h"].default)))
+    assert np.mean(f_all) > 0.1, f_all
+    # the one left: the gain's scatter rose by more than two standard errors at the last
+    # inspection (the fleet's "growing"), the false flag docs/inspection-planning.md counts
+    assert rules.count("healthy") == 9 and rules.count("act now") == 1, rules
+
+
 def test_a_slow_growth_is_capped_by_the_maximum_interval_and_a_fast_one_by_its_risk():
     t = np.arange(6) * 100.0
     _, slow = _plan(t, 0.05 + 1e-4 * t + [0, 0.002, -0.001, 0.001, 0.0, -0.002])

@@ -38,11 +38,9 @@ standard errors and its RUL median is finite, within ten times the history's spa
 when its level now is at least :data:`HEALTHY_SHARE` (a quarter) of its threshold,
 growing or not. The others are at their *healthy level*: their trends follow the scatter
 of an identification around zero, and an exponential fitted to that scatter crosses a
-distant threshold in a fraction of the draws without any growth (on 20 healthy
-histories of 3-8 inspections every 100-250 h the seven indicators together gave a
-median ``F`` of 0.3-0.5 within one interval). Their draws are no prediction, so they
-are left out, and an actuator with none that takes part is inspected at the default
-interval.
+distant threshold in a sizeable share of the draws without any growth (a test shows it
+on simulated healthy histories). Their draws are no prediction, so they are left out,
+and an actuator with none that takes part is inspected at the default interval.
 
 ``at <= t_now`` means *inspect / act now*. The default, minimum and maximum intervals
 come from :data:`INTERVAL_DEFAULTS` by the history's time unit, unless given
