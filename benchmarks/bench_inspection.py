@@ -435,7 +435,7 @@ def real(n: int, workers: int) -> None:
     """The plant-trace check (``--real N``), added to the synthetic run's results."""
     res = json.loads((RESULTS / "inspection.json").read_text())
     best = res["comparison"]["best_fixed"]
-    wall0, cpu0 = time.perf_counter(), time.process_time()
+    wall0 = time.perf_counter()
     load0 = os.getloadavg()
     tasks = [("risk", s, FIXED_RISK, None) for s in range(n)]
     tasks += [("fixed", s, FIXED_RISK, best) for s in range(n)]
@@ -583,7 +583,7 @@ def report(res: dict) -> str:
                   f"{_f(v['life_used_min'])} | {_f(v['flagged_before_0.6'])} | "
                   f"{_f(v['wasted_h_median'], '.0f')} | {hf} |")
     b = cmp_["best_fixed"]
-    md += ["", f"Best fixed interval (longest with no miss, chosen with hindsight): "
+    md += ["", "Best fixed interval (longest with no miss, chosen with hindsight): "
            + ("none in the grid" if b is None else f"{b:g} h")
            + (f"; best alarm baseline: share {cmp_['best_alarm']['share']:g} every "
               f"{cmp_['best_alarm']['interval']:g} h" if cmp_["best_alarm"] else "") + "."]

@@ -168,7 +168,7 @@ def test_near_its_threshold_an_actuator_is_flagged_and_not_chased():
 def test_a_plan_made_later_than_due_says_inspect_now():
     t = np.arange(6) * 100.0
     due = 500.0 + INTERVAL_DEFAULTS["h"].max
-    prog, plan = _plan(t, 0.05 + 1e-4 * t, t_now=due + 300.0)
+    _, plan = _plan(t, 0.05 + 1e-4 * t, t_now=due + 300.0)
     assert plan.at == due and plan.act_now and plan.t_now == due + 300.0
     assert plan.summary("EMA-7").startswith(
         f"inspect EMA-7 now: its next inspection was due at {due:.0f} h")

@@ -114,7 +114,7 @@ class IntervalDefaults:
 #: ``benchmarks/bench_inspection.py --tune`` on 40 simulated actuators of tuning seeds
 #: (1000-1039; lives of 800-2500 h): of ten candidates, the fewest inspections per 1000
 #: operating hours with no miss and a median life used of at least 0.8, at risk 0.01
-#: (5.0, against 5.1-6.3 for the others that qualified); the reported seeds are 0-199
+#: (5.0, against 5.4 and 6.3 for the two others that qualified); the reported seeds are 0-199
 #: (docs/inspection-planning.md).
 #: Cycles: no fleet in cycles has been simulated; the flight-hour numbers are kept as
 #: they are (one cycle for one hour) and said so: give yours.
