@@ -15,7 +15,8 @@ For each actuator (the preset and ``examples/actuators/ema-270v-750w.toml``, a 2
    fresh units' own Wilson interval (the 10-unit sampling error) overlaps it; the fresh
    point estimate inside the assessed interval is reported too.
 
-Run: ``python benchmarks/bench_assess.py [--workers 2] [--units 20] [--fresh 10]`` ->
+Run: ``python benchmarks/bench_assess.py [--workers 2] [--units 20] [--fresh 10]`` (or
+``--render``: the tables again from ``assess.json``, nothing run) ->
 ``benchmarks/results/assess.md`` and ``assess.json``.
 """
 
@@ -69,7 +70,9 @@ def run(name: str, workers: int, units: int, fresh: int, work: Path) -> dict:
     b = assess(fspec, work / f"{name}-fresh", executor=executor).summary
     fresh_wall = time.perf_counter() - t1
     return {"actuator": name, "wall_s": wall, "load_end": os.getloadavg()[0], "summary": a,
-            "fresh": b, "fresh_wall_s": fresh_wall}
+            "fresh": b, "fresh_wall_s": fresh_wall, "workers": workers,
+            "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+            "machine": machine("numba")}
 
 
 def _holds(lo: float, hi: float, k: int, n: int) -> tuple[bool, bool, tuple[float, float]]:
@@ -79,10 +82,29 @@ def _holds(lo: float, hi: float, k: int, n: int) -> tuple[bool, bool, tuple[floa
     return (w[0] <= hi and lo <= w[1]), (lo <= k / n <= hi if n else False), w
 
 
-def report(rows: list[dict], workers: int) -> list[str]:
-    now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    lines = [f"## `emaphm assess` on two actuators ({now})", "",
-             f"Machine: {machine('numba')}; {workers} worker processes. "
+def _min_detectable(least: float | None, rows: list[dict]) -> str:
+    """The smallest severity detected at a 95 % lower bound of 90 %, or why there is none."""
+    if least is not None:
+        return f"{least:g}"
+    n = max(r["n"] for r in rows)
+    return f"none ({n}/{n} bounds it at {100 * rows[0]['lo']:.0f} %, under 90 %)" \
+        if all(r["right"] == r["n"] for r in rows) else f"none at {n} units"
+
+
+def _fit(fit: dict) -> str:
+    if fit["a90"] is not None:
+        return f"{fit['a90']:.3g}" + ("" if fit["a90_95"] is None else f" ({fit['a90_95']:.3g})")
+    note = fit["note"]
+    if note.startswith("every run a hit"):
+        return "every run a hit: below the sizes tried"
+    return note.split(":")[0].split(" (")[0]
+
+
+def report(rows: list[dict]) -> list[str]:
+    when = rows[-1].get("date", "date not recorded")
+    lines = [f"## `emaphm assess` on two actuators ({when})", "",
+             f"Machine: {rows[-1].get('machine', machine('numba'))}; "
+             f"{rows[-1].get('workers', 2)} worker processes. "
              "`benchmarks/bench_assess.py`: the assessment at its defaults (20 units, "
              "thresholds tuned on 20 others for a 1 % false-alarm target, all 8 grids), then "
              "10 fresh units (another seed) calibrated with the assessed `params.toml`. Wall "
@@ -115,10 +137,8 @@ def report(rows: list[dict], workers: int) -> list[str]:
             fit = a["pod_fit"][grid]
             cells = [f"{x['severity']:g}: {x['right']}/{x['n']}" for x in rs]
             cells += [""] * (4 - len(cells))
-            a90 = ("" if fit["a90"] is None else f"{fit['a90']:.3g}"
-                   + ("" if fit["a90_95"] is None else f" ({fit['a90_95']:.3g})"))
             lines.append(f"| {grid} | " + " | ".join(cells)
-                         + f" | {a['min_detectable'][grid]} | {a90 or fit['note'][:40]} |")
+                         + f" | {_min_detectable(a['min_detectable'][grid], rs)} | {_fit(fit)} |")
         lines.append("")
     lines += ["The prediction on fresh units (10 new units each, seed 1, thresholds from the "
               "assessed `params.toml`): the assessed 95 % interval, the fresh rate with its "
@@ -152,14 +172,23 @@ def main() -> None:
     ap.add_argument("--units", type=int, default=20)
     ap.add_argument("--fresh", type=int, default=10)
     ap.add_argument("--actuators", default=",".join(ACTUATORS))
+    ap.add_argument("--render", action="store_true",
+                    help="write assess.md again from assess.json, running nothing")
     args = ap.parse_args()
+    if args.render:
+        rows = [{**r, "summary": {**r["summary"], "runs": r["runs"]}}
+                for r in json.loads((RESULTS / "assess.json").read_text())]
+        lines = report(rows)
+        (RESULTS / "assess.md").write_text("\n".join(lines) + "\n")
+        print("\n".join(lines))
+        return
     work = Path(tempfile.mkdtemp(prefix="bench-assess-"))
     try:
         rows = [run(name, args.workers, args.units, args.fresh, work)
                 for name in args.actuators.split(",")]
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    lines = report(rows, args.workers)
+    lines = report(rows)
     (RESULTS / "assess.md").write_text("\n".join(lines) + "\n")
     slim = [{**r, "summary": {k: v for k, v in r["summary"].items() if k != "runs"},
              "runs": r["summary"]["runs"], "fresh": r["fresh"]} for r in rows]

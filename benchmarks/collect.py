@@ -10,7 +10,7 @@ Run: ``python benchmarks/collect.py``.
 from pathlib import Path
 
 ROOT = Path(__file__).parent
-ORDER = ["plant.md", "commissioning.md", "pipeline.md", "identification.md", "identification_twin.md",
+ORDER = ["plant.md", "commissioning.md", "assess.md", "pipeline.md", "identification.md", "identification_twin.md",
          "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
          "inspection.md", "fault_coverage.md", "fleet.md", "versions.md", "import.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
@@ -38,6 +38,8 @@ functions: it does not depend on the actuator model. Every script re-runs its se
 |---|---|
 | FDI on plant traces beside twin traces (physical faults, thresholds, verdicts) | `benchmarks/bench_plant.py` |
 | commissioning production units (`emaphm calibrate`) | `benchmarks/bench_commissioning.py` |
+| what the method detects on an actuator, and how often it false-alarms (`emaphm assess`) | `benchmarks/bench_assess.py` |
+| faults beyond the paper: severe shorts, demagnetization, current sensors | `benchmarks/bench_fault_coverage.py` |
 | the default pipeline (`lsq`) beside SciPy's DE and PSO, twin and plant | `benchmarks/bench_identification.py --pipeline` |
 | monitoring/reference model speed | `benchmarks/bench_models.py` |
 | small populations (least-squares batches) against N = 50 | `benchmarks/bench_models.py --small-batches-only` |
