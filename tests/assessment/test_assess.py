@@ -77,7 +77,8 @@ def test_the_short_and_the_friction_are_named_after_calibration(assessed):
     assert a["false_alarm"]["calibrated"]["faulty"] == 0
 
 
-def test_the_assessed_parameters_carry_the_tuned_thresholds(assessed, tmp_path, capsys):
+def test_the_assessed_parameters_carry_the_tuned_thresholds(assessed, tmp_path, capsys,
+                                                            monkeypatch):
     from emaphm.modes import THRESHOLDS_BY_FAULT_MODEL
 
     a = json.loads((assessed / "assessment.json").read_text())
@@ -89,7 +90,7 @@ def test_the_assessed_parameters_carry_the_tuned_thresholds(assessed, tmp_path, 
     assert params.to_dict() | {"thresholds": None} == siemens_1fk7060().to_dict() | {"thresholds": None}
     # emaphm calibrate keeps them, and diagnose reads a calibrated unit with them; on the
     # data sheet they only raise the defaults
-    os.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)
     toml = str(assessed / "params.toml")
     for s in (1, 2, 3):
         assert main(["simulate", "--k", "0,0,0,0,0,0,0.5,0.5", "--model", "monitoring", "--params",
@@ -185,8 +186,8 @@ def _fails(argv, capsys, match):
     assert match in err[0], err[0]
 
 
-def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys):
-    os.chdir(tmp_path)
+def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     Path("tol.toml").write_text("[tolerances]\nJJ = [0, 1]\n")
     _fails(["assess", "--out", "o", "--tolerances", "tol.toml"], capsys, "unknown tolerance(s) ['JJ']")
     _fails(["assess", "--out", "o", "--units", "0"], capsys, "--units")
