@@ -36,8 +36,8 @@ def _k(friction=0.0, backlash=0.0, short_a=0.0, gain=0.5):
 
 def _add_series(h, actuator, times, ks, **kw):
     for t, k in zip(times, ks):
-        h.add(actuator, float(t), k, diagnosis=diagnose(k).to_dict(), algorithm="pso", seed=0,
-              fingerprint=f"{actuator}-{t}", **kw)
+        h.add(actuator, float(t), k, diagnosis=diagnose(k, fault_model="paper").to_dict(),
+              algorithm="pso", seed=0, fingerprint=f"{actuator}-{t}", **kw)
 
 
 def _register_raw(h, actuator_id, description=""):

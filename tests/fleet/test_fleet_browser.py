@@ -93,8 +93,8 @@ def site(tmp_path_factory):
             else:
                 h.register(aid, description=f"{aid.lower()} <b>unit</b>")
             for x, k in zip(t, ks):
-                h.add(aid, float(x), k, diagnosis=diagnose(k).to_dict(), algorithm="pso",
-                      fingerprint=f"{aid}{x}")
+                h.add(aid, float(x), k, diagnosis=diagnose(k, fault_model="paper").to_dict(),
+                      algorithm="pso", fingerprint=f"{aid}{x}")
     return build_site(tmp / "fleet.sqlite", tmp / "site", workers=0)
 
 

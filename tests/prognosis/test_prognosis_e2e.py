@@ -8,6 +8,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -16,11 +17,13 @@ from support import assert_png_of
 
 from emaphm.cli import main
 from emaphm.fitness import Eq4Objective
+from emaphm.identify import IdentificationConfig
 from emaphm.prognosis import (HealthHistory, degradation_scenario, identify_with_spread, inspect,
                               inspection_times, prognose, simulate_degradation)
+from emaphm.problem import IdentificationProblem
 from emaphm.traces import write_trace
 
-FAST = {"budget": 1500}            # the default pipeline (lsq) needs a few hundred
+FAST = {"config": IdentificationConfig(budget=1500)}   # lsq needs a few hundred
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -89,12 +92,14 @@ def test_cli_loop(run, tmp_path, capsys):
 def test_spread_methods(run):
     trace = run.traces[2]
     obj = Eq4Objective.from_trace(trace)
+    problem = IdentificationProblem(trace, objective=obj)     # the trace set up once
+    PSO = IdentificationConfig("pso", options={"pop_size": 20})
     res = {}
     for method in ("population", "seeds", "bootstrap"):
         # budget 900: at 600 one of the two seeds' PSO runs stops above the misfit limit
         # (1.74x the floor) and "seeds" drops it
-        a = identify_with_spread(trace, seed=1, method=method, n_runs=2, budget=900,
-                                 options={"pop_size": 20}, objective=obj, algorithm="pso")
+        a = identify_with_spread(problem, replace(PSO, budget=900), seed=1, method=method,
+                                 n_runs=2)
         iv = a.interval
         assert np.all(iv.lo <= iv.k) and np.all(iv.k <= iv.hi)
         assert iv.details["n_eff"] > 0 and iv.method == method
@@ -106,19 +111,23 @@ def test_spread_methods(run):
     from emaphm.prognosis.uncertainty import IDENTIFICATION_ERROR_P90
 
     assert res["population"].interval.half_width[0] >= IDENTIFICATION_ERROR_P90[0] - 1e-12
-    bare = identify_with_spread(trace, seed=1, budget=600, options={"pop_size": 20},
-                                objective=obj, error_floor=0.0, algorithm="pso")
+    bare = identify_with_spread(problem, replace(PSO, budget=600), seed=1, error_floor=0.0)
     assert bare.interval.half_width[0] < res["population"].interval.half_width[0] + 1e-12
     ks = np.array(res["seeds"].interval.details["k_runs"])
     np.testing.assert_allclose(res["seeds"].k, np.median(ks, axis=0))
     assert np.all(res["seeds"].interval.lo <= ks.min(axis=0) + 1e-12)
     # an identification far above the trace's noise level is run again with a new seed
     assert 0.3 < res["population"].identification.fitness / obj.noise_floor() < 3.0
-    weak = identify_with_spread(trace, seed=1, budget=20, options={"pop_size": 10}, polish=False,
-                                objective=obj, retries=1, algorithm="pso")
+    weak = identify_with_spread(problem, IdentificationConfig("pso", options={"pop_size": 10},
+                                                              budget=20, polish=False),
+                                seed=1, retries=1)
     assert weak.interval.details["retries"] == 1 and len(weak.runs) == 1
     assert weak.interval.details["fitness_ratio"] > 5 and weak.interval.details["suspect"]
     with pytest.raises(ValueError, match="suspect_ratio"):
+        identify_with_spread(trace, IdentificationConfig(suspect_ratio=0.5), seed=1)
+    # the 0.3 keywords still work for one release, with a warning
+    with pytest.warns(DeprecationWarning, match="0.3 spelling"), \
+            pytest.raises(ValueError, match="suspect_ratio"):
         identify_with_spread(trace, seed=1, suspect_ratio=0.5)
     with pytest.raises(ValueError, match="unknown spread method"):
         identify_with_spread(trace, seed=1, method="jackknife")

@@ -25,8 +25,8 @@ from emaphm.cli import EXIT_USAGE, main
 from emaphm.faults import K_NOMINAL
 from emaphm.prognosis import history as hist
 from emaphm.prognosis.history import (DuplicateInspectionError, HealthHistory, HistoryError,
-                                      TimeOrderError, UnknownActuatorError, inspect,
-                                      trace_fingerprint)
+                                      TimeOrderError, UnknownActuatorError, trace_fingerprint)
+from emaphm.prognosis.workflow import inspect
 from emaphm.simulate import simulate
 from emaphm.traces import Trace, TraceError, write_trace
 
@@ -375,7 +375,7 @@ def test_history_plot_colours_each_component_by_its_own_verdict(tmp_path):
         ks = [[0.0, 0.01, 0, 0, 0, 0.0, 0.5, 0.5], [0.5, 0.01, 0, 0, 0, 0.0, 0.8, 0.5],
               [0.6, 0.02, 0, 0, 0, 0.2, 0.3, 0.5]]
         for t, k in zip((10.0, 20.0, 30.0), ks):
-            d = diagnose(k, fit_ratio=10.0 if t == 30.0 else 1.2).to_dict()
+            d = diagnose(k, fit_ratio=10.0 if t == 30.0 else 1.2, fault_model="paper").to_dict()
             h.add("EMA-P", t, k, diagnosis=d)
         data = h.data("EMA-P")
     st = component_status(data)
@@ -446,7 +446,8 @@ def test_history_plot_of_the_components_that_moved(tmp_path):
               [0.5 * thr_f, 0.0, 0, 0, 0, 0.3, 0.2, 0.5],
               [1.1 * MOVED_SHARE * thr_f, 0.0, 0, 0, 0, 0.3, 0.2, 0.5]]
         for t, k in zip((1.0, 2.0, 3.0), ks):
-            h.add("EMA-M", t, k, diagnosis=diagnose(k, fit_ratio=1.2).to_dict())
+            h.add("EMA-M", t, k,
+                  diagnosis=diagnose(k, fit_ratio=1.2, fault_model="paper").to_dict())
         data = h.data("EMA-M")
         h.register("EMA-Q")
         h.add("EMA-Q", 1.0, [0, 0, 0, 0, 0, 0, 0.5, 0.5])
