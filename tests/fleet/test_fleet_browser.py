@@ -8,6 +8,7 @@ missing; where ``EMAPHM_REQUIRE_BROWSER=1`` (set by ``.ci/run``) they fail inste
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import shutil
@@ -244,10 +245,19 @@ def test_the_script_id_has_a_page_of_its_own_that_renders_it_as_text(site, drive
     assert _severe(driver) == []
 
 
-def test_a_phone_shows_the_index_without_horizontal_scrolling(site, driver):
+@contextlib.contextmanager
+def _phone(driver):
+    """The page as a 375 px wide phone shows it, for the ``with`` block."""
     driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
                            {"width": 375, "height": 812, "deviceScaleFactor": 1, "mobile": True})
     try:
+        yield
+    finally:
+        driver.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
+
+
+def test_a_phone_shows_the_index_without_horizontal_scrolling(site, driver):
+    with _phone(driver):
         _open(driver, site.index)
         assert driver.execute_script("return window.innerWidth") == 375
         assert driver.execute_script("return document.documentElement.scrollWidth") <= 375
@@ -260,8 +270,6 @@ def test_a_phone_shows_the_index_without_horizontal_scrolling(site, driver):
             "return document.querySelector('#fleet thead').getBoundingClientRect().height") <= 1
         px = _screenshot_pixels(driver)
         assert px.shape[1] == 375 and px.std() > 20
-    finally:
-        driver.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})
 
 
 def test_printing_drops_the_controls_and_keeps_the_table(site, driver):
@@ -375,9 +383,7 @@ def test_an_index_of_ten_thousand_actuators_pages_sorts_and_filters(big_site, dr
 
 
 def test_a_phone_pages_the_large_index_without_horizontal_scrolling(big_site, driver):
-    driver.execute_cdp_cmd("Emulation.setDeviceMetricsOverride",
-                           {"width": 375, "height": 812, "deviceScaleFactor": 1, "mobile": True})
-    try:
+    with _phone(driver):
         _open(driver, big_site.index)
         assert driver.execute_script("return window.innerWidth") == 375
         assert driver.find_element("id", "pager").is_displayed()
@@ -389,5 +395,3 @@ def test_a_phone_pages_the_large_index_without_horizontal_scrolling(big_site, dr
             "return Math.max(...Array.from(document.querySelectorAll('#fleet tbody tr, "
             "#pager')).map(e => e.getBoundingClientRect().right))")
         assert right <= 375
-    finally:
-        driver.execute_cdp_cmd("Emulation.clearDeviceMetricsOverride", {})

@@ -977,9 +977,7 @@ def _skipped_of(entry: dict) -> tuple:
     out = []
     for d in entry.get("skipped") or ():
         try:
-            out.append(SkippedInspection(id=int(d["id"]), actuator=str(d["actuator"]),
-                                         time=float(d["time"]), reason=str(d["reason"]),
-                                         recorded_utc=d.get("recorded_utc")))
+            out.append(SkippedInspection.from_dict(d))
         except (TypeError, ValueError, KeyError):
             continue
     return tuple(out)

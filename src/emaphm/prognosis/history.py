@@ -56,7 +56,7 @@ import re
 import sqlite3
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -252,6 +252,13 @@ class SkippedInspection:
         d = dict(self.__dict__)
         d["time"] = self.time if math.isfinite(self.time) else str(self.time)
         return d
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "SkippedInspection":
+        """The record :meth:`to_dict` wrote (KeyError, TypeError or ValueError when ``d``
+        is not one)."""
+        return cls(id=int(d["id"]), actuator=str(d["actuator"]), time=float(d["time"]),
+                   recorded_utc=d.get("recorded_utc"), reason=str(d["reason"]))
 
 
 @dataclass(frozen=True)
