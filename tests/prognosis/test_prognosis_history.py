@@ -10,6 +10,8 @@ to ``tmp_path`` only.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import signal
 import subprocess
@@ -695,3 +697,14 @@ def test_history_add_quiet_prints_the_record_in_one_line(tmp_path, capsys, mm_tr
     assert out == "recorded inspection of EMA-R at 50 h: FAULTY (friction)\n"
     rc, out, _ = _run(["history", "add", "EMA-R", trace + "", "--at", "60", "--db", db], capsys)
     assert rc == 0 and out.count("\n") > 3 and "friction" in out       # the table without it
+
+
+def test_a_skipped_inspection_round_trips_through_its_dict():
+    from emaphm.prognosis.history import SkippedInspection
+
+    for t in (12.5, math.nan):
+        s = SkippedInspection(3, "EMA-1", t, "2026-11-26T20:00:00", "time out of range")
+        back = SkippedInspection.from_dict(json.loads(json.dumps(s.to_dict())))
+        assert back.to_dict() == s.to_dict()
+    with pytest.raises(KeyError):
+        SkippedInspection.from_dict({"id": 1, "actuator": "A", "time": 1.0})
