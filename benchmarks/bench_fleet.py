@@ -137,7 +137,7 @@ def _parts(db: Path, n: int = 60) -> dict:
 
     matplotlib.use("Agg")
     from emaphm.fleet.figures import PageFigures
-    from emaphm.fleet.site import FIGURE_DPI, PNG_COMPRESSION
+    from emaphm.fleet.site import FIGURE_DPI
     from emaphm.fleet.status import assess
     from emaphm.prognosis.history import HealthHistory
     from emaphm.prognosis.plots import (interesting_indicators, moved_components, plot_history,
@@ -146,9 +146,9 @@ def _parts(db: Path, n: int = 60) -> dict:
 
     with HealthHistory(db, readonly=True) as h:
         datas = [h.data(a.id) for a in h.actuators()[:n]]
-    figs = PageFigures(dpi=FIGURE_DPI, compress_level=PNG_COMPRESSION)
+    figs = PageFigures(px_per_inch=FIGURE_DPI)
     names = ("prognosis (assess, with the next inspection's plan)",
-             "history figure, as the site draws it", "prognosis figure, as the site draws it",
+             "history figure, as the site draws it (SVG)", "prognosis figure, as the site draws it (SVG)",
              "history figure, reference plot_history", "prognosis figure, reference plot_prognosis")
     parts = dict.fromkeys(names, 0.0)
 
@@ -215,8 +215,8 @@ def _table(fleets: list[dict], parts: dict, when: str, base: str | None, workers
     if parts:
         lines += ["", f"CPU per actuator of the parts of a cold build, one core, in one process "
                   f"(the first {parts['n_actuators']} actuators of the 300-actuator fleet, "
-                  f"{parts['n_prognoses']} with a prognosis; a figure's time includes saving its "
-                  "PNG):", "", "| part | CPU per actuator [ms] |", "|---|---|"]
+                  f"{parts['n_prognoses']} with a prognosis; a figure's time includes writing its "
+                  "file: SVG text for the site's, a PNG at the site's size for matplotlib's):", "", "| part | CPU per actuator [ms] |", "|---|---|"]
         for name, v in parts["per_actuator_cpu_s"].items():
             lines.append(f"| {name} | {1000 * v:.1f} |")
     return "\n".join(lines) + "\n"

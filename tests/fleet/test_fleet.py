@@ -10,7 +10,6 @@ import json
 import math
 import re
 import sqlite3
-import struct
 import tomllib
 from dataclasses import replace
 from pathlib import Path
@@ -228,10 +227,12 @@ def small_site(tmp_path_factory):
     return site, db
 
 
-def _png_size(path: Path) -> tuple[int, int]:
-    head = path.read_bytes()[:24]
-    assert head[:8] == b"\x89PNG\r\n\x1a\n"
-    return struct.unpack(">II", head[16:24])
+def _svg_size(path: Path) -> tuple[int, int]:
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(path.read_bytes())
+    assert root.tag == "{http://www.w3.org/2000/svg}svg"
+    return int(root.get("width")), int(root.get("height"))
 
 
 def test_the_index_lists_every_actuator_in_attention_order(small_site):
@@ -285,7 +286,7 @@ def test_each_actuator_page_has_its_figures_calibration_and_inspections(small_si
         expected = (1 if status.n_inspections else 0) + (status.prognosis is not None)
         assert len(imgs) == expected, status.id
         for src, w, h in imgs:
-            assert _png_size(site.pages[status.id].parent / src) == (int(w), int(h))
+            assert _svg_size(site.pages[status.id].parent / src) == (int(w), int(h))
         assert 'href="../index.html"' in text and 'href="../assets/fleet.css"' in text
     cal = site.pages["EMA-CAL"].read_text(encoding="utf-8")
     assert "calibration of 0 h" in cal and "Calibrations recorded" in cal
@@ -314,23 +315,23 @@ def test_workers_draw_the_same_site_and_a_rebuild_draws_only_what_changed(tmp_pa
     assert (serial.workers, parallel.workers) == (0, 2) and serial.drawn == parallel.drawn == 3
     a, b = (json.loads((s.out / "fleet.json").read_text()) for s in (serial, parallel))
     assert a == b and [r["id"] for r in a["actuators"]] == ["B", "A", "C"]
-    figs = sorted(p.name for p in (tmp_path / "serial" / "actuators").glob("*.png"))
-    assert figs == sorted(p.name for p in (tmp_path / "parallel" / "actuators").glob("*.png"))
+    figs = sorted(p.name for p in (tmp_path / "serial" / "actuators").glob("*.svg"))
+    assert figs == sorted(p.name for p in (tmp_path / "parallel" / "actuators").glob("*.svg"))
     assert len(figs) == 4
     # rebuild after one new inspection of B: only B's figures are drawn again
-    before = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "serial" / "actuators").glob("*.png")}
+    before = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "serial" / "actuators").glob("*.svg")}
     with HealthHistory(db) as h:
         _add_series(h, "B", [400.0], [_k(friction=0.2)])
     again = build_site(db, tmp_path / "serial", workers=0)
     assert again.drawn == 1
-    after = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "serial" / "actuators").glob("*.png")}
+    after = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "serial" / "actuators").glob("*.svg")}
     changed = sorted(n for n in after if after[n] != before[n])
-    assert changed == sorted(f"{page_stem('B')}-{k}.png" for k in ("history", "prognosis"))
+    assert changed == sorted(f"{page_stem('B')}-{k}.svg" for k in ("history", "prognosis"))
     assert build_site(db, tmp_path / "serial", workers=0, actuators=["A"], redraw=True).drawn == 1
     # a deleted figure is drawn again
-    (tmp_path / "serial" / "actuators" / f"{page_stem('C')}-history.png").unlink()
+    (tmp_path / "serial" / "actuators" / f"{page_stem('C')}-history.svg").unlink()
     assert build_site(db, tmp_path / "serial", workers=0).drawn == 1
-    assert (tmp_path / "serial" / "actuators" / f"{page_stem('C')}-history.png").is_file()
+    assert (tmp_path / "serial" / "actuators" / f"{page_stem('C')}-history.svg").is_file()
 
 
 # ----------------------------------------------------------------------------- the demo
@@ -486,7 +487,7 @@ def test_a_site_rebuilt_from_another_history_drops_the_pages_it_no_longer_has(tm
     build_site(first, out, workers=0)
     gone = page_stem("GONE")
     assert (out / "actuators" / f"{gone}.html").is_file()
-    assert (out / "actuators" / f"{gone}-prognosis.png").is_file()
+    assert (out / "actuators" / f"{gone}-prognosis.svg").is_file()
     # a subset keeps the others' pages; the whole of another history does not
     build_site(first, out, workers=0, actuators=["A"])
     assert (out / "actuators" / f"{gone}.html").is_file()

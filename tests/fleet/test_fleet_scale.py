@@ -1,5 +1,5 @@
 """A fleet site that grows: what a rebuild makes again and what it leaves alone, the
-figures drawn on reused matplotlib figures against the reference plots, the pages made
+pages' SVG figures against the reference matplotlib plots, the pages made
 by worker processes and on a Dask cluster, and the index of a large fleet.
 
 The index of 10,000 actuators in a real browser is in ``test_fleet_browser.py``.
@@ -8,7 +8,6 @@ The index of 10,000 actuators in a real browser is in ``test_fleet_browser.py``.
 from __future__ import annotations
 
 import json
-import os
 import re
 import socket
 import subprocess
@@ -154,8 +153,8 @@ def test_a_new_inspection_makes_that_actuators_page_and_figures_again_and_no_oth
     after = _mtimes(out)
     changed = sorted(n for n in after if after[n] != before.get(n))
     stem = page_stem("EMA-OK")
-    assert changed == sorted([f"actuators/{stem}.html", f"actuators/{stem}-history.png",
-                              f"actuators/{stem}-prognosis.png", "actuators/.figures.json",
+    assert changed == sorted([f"actuators/{stem}.html", f"actuators/{stem}-history.svg",
+                              f"actuators/{stem}-prognosis.svg", "actuators/.figures.json",
                               "actuators/.index-key", "fleet.json", "index.html"])
     row = next(r for r in site.rows if r["id"] == "EMA-OK")
     assert row["n_inspections"] == 6 and row["last_time"] == 700.0
@@ -181,12 +180,12 @@ def test_other_settings_a_missing_or_cut_file_and_redraw_make_pages_again(fleet,
     assert build_site(fleet, out, workers=0, seed=1).drawn == 0
     assert build_site(fleet, out, workers=0, seed=1, title="Other").drawn == 5
     stem = page_stem("EMA-SOON")
-    png = out / "actuators" / f"{stem}-prognosis.png"
-    png.write_bytes(png.read_bytes()[:100])                            # cut short
+    fig = out / "actuators" / f"{stem}-prognosis.svg"
+    fig.write_bytes(fig.read_bytes()[:100])                            # cut short
     (out / "actuators" / f"{page_stem('EMA-ECC')}.html").unlink()
     site = build_site(fleet, out, workers=0, seed=1, title="Other")
     assert sorted(s.id for s in site.statuses) == ["EMA-ECC", "EMA-SOON"]
-    assert png.stat().st_size > 1000
+    assert fig.stat().st_size > 1000
     (out / "index.html").unlink()
     site = build_site(fleet, out, workers=0, seed=1, title="Other")
     assert site.drawn == 0 and site.written == 2 and (out / "index.html").is_file()
@@ -205,6 +204,11 @@ def test_a_rebuild_with_nothing_changed_imports_neither_scipy_nor_matplotlib(fle
     out_text = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                               text=True).stdout.split()
     assert out_text == ["0", "0", "[]"]
+    # a cold build draws its figures without matplotlib
+    code = code.replace(repr(str(out)), repr(str(tmp_path / "cold")))
+    out_text = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                              text=True).stdout.split()
+    assert out_text[0] == "5" and out_text[2:] == ["['scipy']"]
 
 
 def test_an_index_longer_than_a_page_holds_the_first_rows_and_all_the_data(fleet, tmp_path,
@@ -262,6 +266,8 @@ def _reference_points(fig, label):
 
 
 def test_the_page_figures_draw_what_the_reference_plots_draw(fleet):
+    """The pages' SVG figures are drawn from panels of data; the panels hold the points,
+    thresholds, RUL bars and medians the reference matplotlib plots draw, and their titles."""
     from emaphm.fleet.figures import PageFigures
     from emaphm.fleet.status import assess
     from emaphm.prognosis.plots import plot_history, plot_prognosis
@@ -269,47 +275,52 @@ def test_the_page_figures_draw_what_the_reference_plots_draw(fleet):
     figs = PageFigures()
     with HealthHistory(fleet, readonly=True) as h:
         data = {aid: h.data(aid) for aid in SERIES}
-    drawn = {"identified": 0, "median": 0, "bar": 0}
+    drawn = {"identified": 0, "median": 0, "rul": 0}
     for aid, d in data.items():
         shown = [0, 2, 5, 6, 7]
-        figs.history(d, components=shown)
-        mine = figs._history[3]
+        mine = figs.history_panels(d, components=shown)
         ref = plot_history(d, components=shown)
+        assert [p.title for p in mine] == [ax.get_title() for ax in ref.axes
+                                           if ax.get_visible()][:len(shown)]
         for state in ("healthy", "faulty", "unexplained"):
             want = _reference_points(ref, state)
-            got = {p.ax.get_title(): sorted(tuple(x) for x in p.points[state].get_xydata())
-                   for p in mine[1][:len(shown)]}
+            got = {p.title: sorted(zip(p.layers[state].x, p.layers[state].y)) for p in mine}
             assert got == {k: v for k, v in want.items() if k in got}, (aid, state)
         hollow = _reference_points(ref, "no eccentricity: phase meaningless")
-        assert sorted(tuple(x) for x in mine[1][3].hollow.get_xydata()) == \
-            hollow.get("k7: eccentricity phase", [])
+        ecc = mine[3].layers["hollow"]
+        assert sorted(zip(ecc.x, ecc.y)) == hollow.get("k7: eccentricity phase", [])
         thr = {ax.get_title(): [line.get_ydata()[0] for line in ax.get_lines()
                                 if line.get_linestyle() == "--"] for ax in ref.axes}
-        for p in mine[1][:len(shown)]:
-            assert [line.get_ydata()[0] for line in p.thr if line.get_visible()] == \
-                thr[p.ax.get_title()]
+        for p in mine:
+            assert list(p.layers["threshold"].y) == thr[p.title]
         s = assess(d, seed=0)
         names = [s.worst] + [n for n in s.prognosis.predictions if n != s.worst][:1]
-        figs.prognosis(s.prognosis, indicators=names)
-        mine = figs._prognosis[2]
+        mine = figs.prognosis_panels(s.prognosis, indicators=names)
         ref = plot_prognosis(s.prognosis, indicators=names)
-        for panel, ax in zip(mine[1], ref.axes):
-            assert panel.ax.get_title() == ax.get_title()
-            for label, line in (("identified", panel.points), ("median", panel.median)):
+        for panel, ax in zip(mine, ref.axes):
+            assert panel.title == ax.get_title()
+            for label in ("identified", "median"):
                 want = [np.asarray(x.get_xydata()) for x in ax.get_lines()
                         if x.get_label() == label]
-                got = np.asarray(line.get_xydata())
+                layer = panel.layers.get(label)
+                got = (np.column_stack([layer.x, layer.y]) if layer is not None
+                       else np.empty((0, 2)))
                 assert (got.size == 0 and not want) or np.allclose(got, want[0])
                 drawn[label] += got.size > 0
             want = [x.get_xydata() for x in ax.get_lines() if x.get_label().startswith("RUL ")]
-            assert (not want and not len(panel.bar.get_xydata())) or \
-                np.allclose(panel.bar.get_xydata(), want[0])
-            drawn["bar"] += bool(want)
-        assert mine[2].get_text() == ref.get_suptitle()
-    assert drawn["median"] >= 2 and drawn["bar"] >= 2 and drawn["identified"] == 8
+            bar = panel.layers.get("rul")
+            assert (not want and bar is None) or np.allclose(
+                np.column_stack([bar.x, bar.y]), want[0])
+            drawn["rul"] += bool(want)
+            assert panel.layers["threshold"].y[0] == pytest.approx(
+                next(x.get_ydata()[0] for x in ax.get_lines() if x.get_linestyle() == "--"))
+        assert figs.prognosis_title(s.prognosis) == ref.get_suptitle()
+    assert drawn["median"] >= 2 and drawn["rul"] >= 2 and drawn["identified"] == 8
 
 
-def test_a_reused_figure_draws_the_same_bytes_as_a_fresh_one(fleet):
+def test_a_page_figure_is_a_pure_function_of_its_data_and_valid_svg(fleet):
+    import xml.etree.ElementTree as ET
+
     from emaphm.fleet.figures import PageFigures
     from emaphm.fleet.status import assess
 
@@ -323,9 +334,15 @@ def test_a_reused_figure_draws_the_same_bytes_as_a_fresh_one(fleet):
     figs.prognosis(assess(ecc, seed=0).prognosis, indicators=["eccentricity"])
     assert figs.history(past, components=[0, 7]) == first
     assert figs.prognosis(assess(past, seed=0).prognosis, indicators=["friction"]) == prog
-    fresh = PageFigures()
-    assert fresh.history(past, components=[0, 7]) == first
-    assert first[0][:8] == b"\x89PNG\r\n\x1a\n" and first[1:] == (1100, 345)
+    assert PageFigures().history(past, components=[0, 7]) == first
+    assert first[1:] == (1100, 345) and prog[1:] == (1000, 380)
+    for svg, w, h in (first, prog):
+        root = ET.fromstring(svg)                        # well-formed XML
+        assert root.tag == "{http://www.w3.org/2000/svg}svg"
+        assert (root.get("width"), root.get("height")) == (str(w), str(h))
+    texts = [t.text for t in ET.fromstring(first[0]).iter("{http://www.w3.org/2000/svg}text")]
+    assert "k1: dry friction" in " ".join(texts) or any(t.startswith("k1:") for t in texts)
+    assert any(t.startswith("health history of EMA-PAST") for t in texts)
     with pytest.raises(ValueError, match="indices of k"):
         figs.history(past, components=[8])
     with pytest.raises(ValueError, match="no prediction for indicator 'x'"):
@@ -413,7 +430,7 @@ def test_a_figure_the_page_no_longer_has_is_removed(fleet, tmp_path):
 
     out = tmp_path / "site"
     build_site(fleet, out, workers=0)
-    prog = out / "actuators" / f"{page_stem('EMA-OK')}-prognosis.png"
+    prog = out / "actuators" / f"{page_stem('EMA-OK')}-prognosis.svg"
     assert prog.is_file()
     with HealthHistory(fleet) as h:            # three of its five inspections taken back:
         for t in T[-3:]:                        # too few for a trend
@@ -421,4 +438,4 @@ def test_a_figure_the_page_no_longer_has_is_removed(fleet, tmp_path):
     site = build_site(fleet, out, workers=0)
     assert site.drawn == 1 and not prog.exists()
     page = site.pages["EMA-OK"].read_text(encoding="utf-8")
-    assert "-prognosis.png" not in page and "-history.png" in page
+    assert "-prognosis.svg" not in page and "-history.svg" in page

@@ -5,8 +5,8 @@
 * :mod:`.markup`: escaping of values written into HTML and inline JSON, safe file names;
 * :mod:`.site`: the static site (:func:`build_site`): an index and a page per actuator,
   made again only where its inputs changed, in worker processes or on a Dask cluster;
-* :mod:`.figures`: the pages' two figures, drawn on matplotlib figures reused from one
-  actuator to the next (:class:`PageFigures`);
+* :mod:`.figures`: the pages' two figures as SVG (:class:`PageFigures`), written by
+  :mod:`.svgplot` (panels of layers in data coordinates, rendered as text);
 * :mod:`.demo`: a simulated fleet to fill a history (:func:`record_demo_fleet`);
 * :mod:`.cli`: ``emaphm fleet report`` and ``emaphm fleet demo``.
 

@@ -11,12 +11,12 @@
     assets/fleet.css, fleet.js  shipped with emaphm: no CDN, works offline and from file://
     actuators/STEM.html         a page per actuator: state, RUL per indicator, figures,
                                 calibration, inspections
-    actuators/STEM-history.png  the components of k that moved, as
+    actuators/STEM-history.svg  the components of k that moved, as
                                 :func:`emaphm.prognosis.plots.plot_history` draws them
-    actuators/STEM-prognosis.png  trend, cone and RUL as :func:`~emaphm.prognosis.plots.
+    actuators/STEM-prognosis.svg  trend, cone and RUL as :func:`~emaphm.prognosis.plots.
                                 plot_prognosis` draws them (from three inspections on);
-                                both drawn by :mod:`emaphm.fleet.figures` on figures it
-                                reuses from one actuator to the next
+                                both written as SVG by :mod:`emaphm.fleet.figures` (the
+                                browser draws them)
 
 ``STEM`` is :func:`emaphm.fleet.markup.page_stem` of the id (a slug and a hash), safe for
 any id. Every value from the store is escaped (:mod:`emaphm.fleet.markup`). The figures
@@ -24,7 +24,7 @@ are only read from the history and its prognosis: nothing is identified or simul
 
 An actuator's page and figures depend on that actuator alone (its inspections,
 calibrations and registration) and on the build's settings (thresholds, seed, level,
-title, and the versions of emaphm and matplotlib and the code of the modules that shape a
+title, and the version of emaphm and the code of the modules that shape a
 page): ``actuators/.figures.json`` keeps, per page stem, the SHA-256 of all of it, the
 sizes of the files it made, and its row of the index. A rebuild into the same folder
 reads every actuator's stored records in one pass without decoding them, hashes them and
@@ -45,8 +45,8 @@ the index and ``fleet.json`` are written (atomically, :mod:`emaphm._files`), so 
 interrupted build never leaves an index that links to a missing page, nor a manifest that
 vouches for a file that is not on disk.
 
-Only the worker's part imports the prognosis (SciPy) and matplotlib: a rebuild in which
-nothing changed imports neither.
+Only the worker's part imports the prognosis (SciPy); no part imports matplotlib: a
+rebuild in which nothing changed imports neither.
 """
 
 from __future__ import annotations
@@ -77,13 +77,9 @@ __all__ = ["FleetSite", "build_site", "ASSETS", "FIGURE_DPI", "PAGE_ROWS"]
 #: The files shipped in ``emaphm/fleet/assets`` and copied to ``OUT/assets``.
 ASSETS = ("fleet.css", "fleet.js")
 
-#: Resolution of the figures on the pages (dots per inch of their matplotlib size).
+#: Pixels per inch of the figures on the pages: their size is the reference plots' size in
+#: inches (:mod:`emaphm.prognosis.plots`) at this scale.
 FIGURE_DPI = 100
-
-#: zlib level of the figures' PNG files: at 1 of 9, encoding a history figure of the demo
-#: fleet took two thirds of the time it takes at Pillow's default 6, for a file a tenth
-#: larger (measured side by side; a few per cent of the time to draw it).
-PNG_COMPRESSION = 1
 
 #: Rows of the index in one page of its table: those the page holds itself (the most
 #: urgent, for a browser without JavaScript) and those its script shows at a time.
@@ -189,7 +185,7 @@ _PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.history", "emaphm.prognosis.plot
               "emaphm.prognosis.trends",
               "emaphm.prognosis.thresholds", "emaphm.prognosis.inspection",
               "emaphm.fleet.status", "emaphm.fleet.site",
-              "emaphm.fleet.markup", "emaphm.fleet.figures")
+              "emaphm.fleet.markup", "emaphm.fleet.figures", "emaphm.fleet.svgplot")
 
 #: Most actuators in one task of a worker process or a Dask worker.
 _BATCH_MAX = 16
@@ -197,16 +193,10 @@ _BATCH_MAX = 16
 
 def _code_fingerprint() -> str:
     import importlib.util
-    from importlib.metadata import PackageNotFoundError, version
 
     from .. import __version__
 
-    try:
-        mpl = version("matplotlib")
-    except PackageNotFoundError:                # pragma: no cover - a dependency
-        mpl = "?"
-    h = hashlib.sha256(f"emaphm {__version__} matplotlib {mpl} dpi {FIGURE_DPI} png "
-                       f"{PNG_COMPRESSION}".encode())
+    h = hashlib.sha256(f"emaphm {__version__} px per inch {FIGURE_DPI} svg".encode())
     for name in _PAGE_CODE:
         spec = importlib.util.find_spec(name)
         if spec is not None and spec.origin and os.path.exists(spec.origin):
@@ -283,7 +273,7 @@ def _remove_others(folder: Path, known: dict, keep: set[str]) -> int:
 
 
 def _figure_names(stem: str) -> tuple[str, str]:
-    return f"{stem}-history.png", f"{stem}-prognosis.png"
+    return f"{stem}-history.svg", f"{stem}-prognosis.svg"
 
 
 def _render(job: _Job, keep: bool = False) -> dict:
@@ -312,14 +302,14 @@ def _render_batch(jobs: Sequence[_Job]) -> list[dict]:
 
 def _draw(status: "ActuatorStatus", data: Any, thresholds: FailureThresholds,
           stem: str) -> tuple[dict, dict]:
-    """The figures of one actuator as PNG bytes (name -> bytes) and as the page shows them
-    (``history``/``prognosis`` -> (name, width, height) in pixels), drawn by this thread's
+    """The figures of one actuator as SVG bytes (name -> bytes) and as the page shows them
+    (``history``/``prognosis`` -> (name, width, height) in pixels), written by
     :class:`~emaphm.fleet.figures.PageFigures`."""
     from ..prognosis.plots import MOVED_SHARE, interesting_indicators, moved_components
     from ..prognosis.thresholds import INDICATOR_COMPONENT
-    from .figures import page_figures
+    from .figures import PageFigures
 
-    draw = page_figures(FIGURE_DPI, PNG_COMPRESSION)
+    draw = PageFigures(px_per_inch=FIGURE_DPI)
     files: dict[str, bytes] = {}
     figures: dict[str, tuple] = {}
     hist_name, prog_name = _figure_names(stem)
@@ -329,17 +319,17 @@ def _draw(status: "ActuatorStatus", data: Any, thresholds: FailureThresholds,
         always = [INDICATOR_COMPONENT[status.worst]] if status.worst in INDICATOR_COMPONENT else []
         shown = moved_components(data, thresholds, always)
         hidden = 8 - len(shown)
-        png, w, h = draw.history(data, components=shown, thresholds=thresholds, note=(
+        svg, w, h = draw.history(data, components=shown, thresholds=thresholds, note=(
             f"; {hidden} other components not shown (each stayed below {MOVED_SHARE:.0%} of "
             "its threshold)" if hidden else ""))
-        files[hist_name], figures["history"] = png, (hist_name, w, h)
+        files[hist_name], figures["history"] = svg, (hist_name, w, h)
     prog = status.prognosis
     if prog is not None:                      # the worst, and up to two more that grow
         span = float(prog.times[-1] - prog.times[0])
         names = [status.worst] + [n for n in interesting_indicators(prog) if n != status.worst
                                   and not prog.predictions[n].no_growth(span)]
-        png, w, h = draw.prognosis(prog, indicators=names[:3])
-        files[prog_name], figures["prognosis"] = png, (prog_name, w, h)
+        svg, w, h = draw.prognosis(prog, indicators=names[:3])
+        files[prog_name], figures["prognosis"] = svg, (prog_name, w, h)
     return files, figures
 
 
