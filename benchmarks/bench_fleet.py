@@ -3,7 +3,7 @@
 Run: ``python benchmarks/bench_fleet.py [--sizes 30,300,1000,10000] [--base REV] [--dask]``
 -> ``benchmarks/results/fleet.md`` and ``fleet.json`` (the table is printed too);
 ``--append`` adds the sizes it measures to the ``fleet.json`` there (a 10,000-actuator
-fleet's cold build takes over an hour on two shared cores: run it apart), each run's date
+fleet's recording and cold build take about 5 minutes on two shared cores: run it apart), each run's date
 in the table.
 
 Each fleet is the demo fleet of ``emaphm fleet demo --synthetic`` (seed 0; true k plus
