@@ -299,6 +299,11 @@ def test_the_page_figures_draw_what_the_reference_plots_draw(fleet):
         ref = plot_prognosis(s.prognosis, indicators=names)
         for panel, ax in zip(mine, ref.axes):
             assert panel.title == ax.get_title()
+            # the cone and its median over every trend draw, as the reference's
+            p = s.prognosis.predictions[panel.title.partition(":")[0]]
+            cone = panel.layers["cone"]
+            np.testing.assert_array_equal(np.vstack([cone.y, panel.layers["trend"].y, cone.y2]),
+                                          p.band(cone.x, (0.05, 0.5, 0.95)))
             for label in ("identified", "median"):
                 want = [np.asarray(x.get_xydata()) for x in ax.get_lines()
                         if x.get_label() == label]

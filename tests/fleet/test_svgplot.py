@@ -34,6 +34,33 @@ def test_tick_labels_show_the_digits_the_step_needs():
     assert _tick_label(-0.1, 0.1) == "\u22120.1"
     assert _tick_label(-1e-17, 0.1) == "0"                    # no "-0.0"
     assert _tick_label(2e6, 1e6) == "2e+06"
+    # large values with a small step, small steps: as many digits as tell the ticks apart
+    for lo, hi in ((1.2e6, 1.25e6), (1e6, 1e6 + 500), (0.50001, 0.50005)):
+        ticks, step = nice_ticks(lo, hi, 5)
+        labels = [_tick_label(v, step) for v in ticks]
+        assert len(set(labels)) == len(labels) > 2, labels
+
+
+def test_a_band_with_a_gap_is_two_closed_polygons_and_bad_limits_still_map():
+    from emaphm.fleet.svgplot import _runs
+
+    assert [(r.start, r.stop) for r in _runs(np.array([1, 1, 0, 1, 0, 0, 1], bool))] == \
+        [(0, 2), (3, 4), (6, 7)]
+    band = Panel(title="", xlim=(0.0, 4.0), ylim=(math.nan, 1.0), layers={
+        "cone": Layer("band", [0, 1, 2, 3, 4], [0.1, 0.1, np.nan, 0.2, 0.2],
+                      [0.5, 0.6, 0.7, 0.8, np.inf])})
+    doc = render(200, 100, [(band, (20, 10, 160, 70))])
+    d = next(p.get("d") for p in ET.fromstring(doc).iter(f"{SVG}path")
+             if p.get("fill-opacity") == "0.18")
+    assert d.count("Z") == 2 and d.count("M") == 2           # [0, 1] and [3]
+    assert b"nan" not in doc and b"inf" not in doc
+
+
+def test_control_characters_in_a_description_leave_the_document_well_formed():
+    panel = Panel(title="ok", xlim=(0.0, 1.0), ylim=(0.0, 1.0), layers={})
+    doc = render(100, 100, [(panel, (10, 10, 80, 80))], title="EMA\x1b[31m \x00 red\ufffe")
+    texts = [t.text for t in ET.fromstring(doc).iter(f"{SVG}text")]
+    assert "EMA\ufffd[31m \ufffd red\ufffd" in texts
 
 
 def test_a_line_breaks_where_its_values_are_not_finite():

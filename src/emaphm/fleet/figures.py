@@ -35,16 +35,11 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..prognosis.history import HistoryData
     from ..prognosis.trends import Prognosis
 
-__all__ = ["PageFigures", "CONE_POINTS", "CONE_DRAWS"]
+__all__ = ["PageFigures", "CONE_POINTS"]
 
 #: Times at which the prognosis cone is drawn (the reference takes 300; the cone is smooth
 #: at a hundred across a page's width).
 CONE_POINTS = 120
-
-#: Trend draws the cone's quantiles are taken over (of the prognosis' 4,000): the 5 %
-#: quantile of 1,000 draws is within 0.7 % (in probability) of the 4,000's, invisible at a
-#: page's size, at a quarter of the time (most of a figure's).
-CONE_DRAWS = 1000
 
 _STATES = (("healthy", "C2"), ("faulty", "C3"), ("unexplained", "0.5"))
 
@@ -87,7 +82,7 @@ def _history_panel(data: "HistoryData", j: int, status: np.ndarray, thr: dict, x
     layers = {
         "errorbars": Layer("errorbars", t[show], np.minimum(lo, K)[show],
                            np.maximum(hi, K)[show], color="0.6"),
-        "trend": Layer("line", t[show], K[show], color="C0"),
+        "trend": Layer("line", t[show], K[show], color="C0", width=1.0),
         "hollow": Layer("hollow", t[~show], K[~show], color="0.6"),
         **{state: Layer("points", t[show & (status[:, j] == state)],
                         K[show & (status[:, j] == state)], color=c) for state, c in _STATES},
@@ -107,7 +102,7 @@ def _cone_panel(prog: "Prognosis", name: str, y: np.ndarray, last: bool) -> Pane
     ends = [x for x in (p.hi, p.median) if math.isfinite(x)]
     h = 0.5 * span if flat or not ends else min(max(ends) * 1.15, 1.5 * span)
     grid = np.linspace(float(t[0]), p.t_now + max(h, 0.05 * span), CONE_POINTS)
-    lo, mid, hi = p.band(grid, (0.05, 0.5, 0.95), max_draws=CONE_DRAWS)
+    lo, mid, hi = p.band(grid, (0.05, 0.5, 0.95))
     layers = {"cone": Layer("band", grid, lo, hi, color="C0", label="trend, 90 % cone"),
               "trend": Layer("line", grid, mid, color="C0", label=f"trend ({p.model})"),
               "identified": Layer("points", t, y, color="k", label="identified"),

@@ -16,6 +16,7 @@ so the pages look like ``emaphm prognose --plot``.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
@@ -53,6 +54,7 @@ class Layer:
     y2: np.ndarray | None = None
     color: str = "C0"
     label: str = ""
+    width: float | None = None                 # a line's width in points (default 1.3)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
@@ -101,8 +103,9 @@ def nice_ticks(lo: float, hi: float, n: int = 6) -> tuple[np.ndarray, float]:
 def _tick_label(v: float, step: float) -> str:
     if abs(v) < step * 1e-9:
         return "0"
-    if abs(v) >= 1e6 or step < 1e-4:
-        return f"{v:.3g}".replace("-", "\u2212")
+    if abs(v) >= 1e6 or step < 1e-4:          # the significant digits the step needs
+        digits = math.floor(math.log10(abs(v))) - math.floor(math.log10(step) + 1e-12) + 1
+        return f"{v:.{max(digits, 1) + 1}g}".replace("-", "\u2212")
     power = math.floor(math.log10(step) + 1e-12)
     decimals = max(0, -power + (round(step / 10.0 ** power, 6) == 2.5))   # 0.25, 2.5: one more
     text = f"{v:.{decimals}f}"
@@ -120,17 +123,22 @@ def _color(c: str) -> str:
     return COLORS.get(c, c)
 
 
+#: Characters XML 1.0 does not allow in a document, even escaped.
+_NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
+
+
 def _text(x: float, y: float, s: str, size: float, *, anchor: str = "start",
           color: str = "#000000", rotate: bool = False, weight: str = "") -> str:
     rot = f' transform="rotate(-90 {_num(x)} {_num(y)})"' if rotate else ""
     bold = f' font-weight="{weight}"' if weight else ""
     return (f'<text x="{_num(x)}" y="{_num(y)}" font-size="{size * _PT:.1f}" '
-            f'text-anchor="{anchor}" fill="{color}"{bold}{rot}>{esc(s)}</text>')
+            f'text-anchor="{anchor}" fill="{color}"{bold}{rot}>'
+            f'{esc(_NOT_XML.sub(chr(0xFFFD), s))}</text>')
 
 
 def _text_width(s: str, size: float) -> float:
     """An estimate of the width in pixels of ``s`` at ``size`` points (DejaVu Sans)."""
-    return 0.58 * size * _PT * len(s)
+    return 0.62 * size * _PT * len(s)
 
 
 class _Box:
@@ -138,12 +146,8 @@ class _Box:
 
     def __init__(self, panel: Panel, box: tuple[float, float, float, float]) -> None:
         self.x0, self.y0, self.w, self.h = box
-        self.xlo, self.xhi = panel.xlim
-        self.ylo, self.yhi = panel.ylim
-        if not self.xhi > self.xlo:
-            self.xhi = self.xlo + 1.0
-        if not self.yhi > self.ylo:
-            self.yhi = self.ylo + 1.0
+        self.xlo, self.xhi = _limits(panel.xlim)
+        self.ylo, self.yhi = _limits(panel.ylim)
 
     def X(self, x: np.ndarray) -> np.ndarray:
         return self.x0 + (np.asarray(x, dtype=float) - self.xlo) / (self.xhi - self.xlo) * self.w
@@ -151,6 +155,20 @@ class _Box:
     def Y(self, y: np.ndarray) -> np.ndarray:
         return self.y0 + self.h - (np.asarray(y, dtype=float) - self.ylo) / (
             self.yhi - self.ylo) * self.h
+
+
+def _limits(lim: tuple[float, float]) -> tuple[float, float]:
+    """Axis limits that map: finite and increasing ((0, 1) where they are not finite)."""
+    lo, hi = (float(v) for v in lim)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return 0.0, 1.0
+    return (lo, hi) if hi > lo else (lo, lo + 1.0)
+
+
+def _runs(ok: np.ndarray) -> list[slice]:
+    """The stretches where ``ok`` is true."""
+    edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
+    return [slice(a, b) for a, b in zip(edges[::2], edges[1::2])]
 
 
 def _path(px: np.ndarray, py: np.ndarray) -> str:
@@ -170,26 +188,27 @@ def _layer(b: _Box, layer: Layer) -> str:
     k = layer.kind
     if k == "line":
         d = _path(x, y)
-        return f'<path d="{d}" fill="none" stroke="{c}" stroke-width="{1.3 * _PT:.2f}"/>' if d else ""
+        w = (1.3 if layer.width is None else layer.width) * _PT
+        return f'<path d="{d}" fill="none" stroke="{c}" stroke-width="{w:.2f}"/>' if d else ""
     if k in ("points", "hollow"):
         fill = "none" if k == "hollow" else c
         return "".join(f'<circle cx="{_num(a)}" cy="{_num(v)}" r="2.8" fill="{fill}" '
                        f'stroke="{c}"/>' for a, v in zip(x, y)
                        if math.isfinite(a) and math.isfinite(v))
     if k == "diamond":
-        return "".join(f'<path d="M{_num(a)} {_num(v - 5)}L{_num(a + 4)} {_num(v)}L{_num(a)} '
-                       f'{_num(v + 5)}L{_num(a - 4)} {_num(v)}Z" fill="{c}"/>'
-                       for a, v in zip(x, y) if math.isfinite(a) and math.isfinite(v))
+        return "".join(_diamond(a, v, c) for a, v in zip(x, y)
+                       if math.isfinite(a) and math.isfinite(v))
     if k == "errorbars":
         y2 = b.Y(layer.y2)
         d = "".join(f"M{_num(a)} {_num(u)}V{_num(v)}M{_num(a - 2.8)} {_num(u)}h5.6"
                     f"M{_num(a - 2.8)} {_num(v)}h5.6" for a, u, v in zip(x, y, y2)
                     if math.isfinite(a) and math.isfinite(u) and math.isfinite(v))
         return f'<path d="{d}" fill="none" stroke="{c}" stroke-width="{_PT:.2f}"/>' if d else ""
-    if k == "band":
+    if k == "band":                     # a closed polygon per stretch where both edges exist
         y2 = b.Y(layer.y2)
-        d = _path(np.r_[x, x[::-1]], np.r_[y, y2[::-1]])
-        return f'<path d="{d}Z" fill="{c}" fill-opacity="0.18" stroke="none"/>' if d else ""
+        d = "".join(_path(np.r_[x[s], x[s][::-1]], np.r_[y[s], y2[s][::-1]]) + "Z"
+                    for s in _runs(np.isfinite(x) & np.isfinite(y) & np.isfinite(y2)))
+        return f'<path d="{d}" fill="{c}" fill-opacity="0.18" stroke="none"/>' if d else ""
     if k == "hline":
         return "".join(f'<path d="M{_num(b.x0)} {_num(v)}h{_num(b.w)}" stroke="{c}" '
                        f'stroke-width="{_PT:.2f}" stroke-dasharray="5 3"/>'
@@ -202,6 +221,13 @@ def _layer(b: _Box, layer: Layer) -> str:
             'fill="none"/>' if d else "")
 
 
+def _diamond(x: float, y: float, c: str) -> str:
+    """matplotlib's ``"D"`` marker at 7 points: a square of 13.7 px diagonal, on its tip."""
+    r = 3.5 * 1.41421356 * _PT
+    return (f'<path d="M{_num(x)} {_num(y - r)}L{_num(x + r)} {_num(y)}L{_num(x)} {_num(y + r)}'
+            f'L{_num(x - r)} {_num(y)}Z" fill="{c}"/>')
+
+
 def legend_key(kind: str, color: str, x: float, y: float) -> str:
     """The small sample of a layer's look that a legend shows, centred at (x, y)."""
     c = _color(color)
@@ -209,7 +235,7 @@ def legend_key(kind: str, color: str, x: float, y: float) -> str:
         return (f'<circle cx="{_num(x)}" cy="{_num(y)}" r="2.8" '
                 f'fill="{"none" if kind == "hollow" else c}" stroke="{c}"/>')
     if kind == "diamond":
-        return f'<path d="M{_num(x)} {_num(y - 5)}l4 5l-4 5l-4-5Z" fill="{c}"/>'
+        return _diamond(x, y, c)
     if kind == "band":
         return (f'<rect x="{_num(x - 10)}" y="{_num(y - 5)}" width="20" height="10" fill="{c}" '
                 'fill-opacity="0.18"/>')

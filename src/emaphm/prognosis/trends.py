@@ -422,17 +422,11 @@ class RULPrediction:
         """Probability that the threshold is reached within ``horizon`` from ``t_now``."""
         return float(np.mean(self.samples <= horizon))
 
-    def band(self, t: Any, quantiles: Sequence[float] = (0.05, 0.5, 0.95), *,
-             max_draws: int | None = None) -> np.ndarray:
+    def band(self, t: Any, quantiles: Sequence[float] = (0.05, 0.5, 0.95)) -> np.ndarray:
         """Quantiles of the trend over the stored parameter draws at times ``t`` (m,):
-        (len(quantiles), m), the prediction cone of the plots. ``max_draws`` takes every
-        n-th draw of each model so that at most about that many are used (each model keeps
-        its share): a cone to look at, at a fraction of the cost."""
+        (len(quantiles), m), the prediction cone of the plots."""
         tau = np.atleast_1d(np.asarray(t, dtype=float))
-        total = sum(th.shape[0] for th in self.theta.values())
-        step = 1 if max_draws is None else max(1, -(-total // max(int(max_draws), 1)))
-        parts = [_model_value(m, th[::step], tau - self.fits[m].t_ref)
-                 for m, th in self.theta.items()]
+        parts = [_model_value(m, th, tau - self.fits[m].t_ref) for m, th in self.theta.items()]
         return np.quantile(np.concatenate(parts), quantiles, axis=0)
 
     def beyond(self, t: Any) -> str:
