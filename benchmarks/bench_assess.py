@@ -91,13 +91,22 @@ def _min_detectable(least: float | None, rows: list[dict]) -> str:
         if all(r["right"] == r["n"] for r in rows) else f"none at {n} units"
 
 
+#: The table's words for a POD fit without an a90, by :attr:`PODFit.status`.
+_NO_A90 = {"every run a hit": "every run a hit: below the sizes tried",
+           "no hit": "no hit at any size", "separated": "hits and misses do not overlap in size",
+           "too few sizes": "fewer than two sizes tried",
+           "not growing": "the fitted POD does not grow with size"}
+
+
 def _fit(fit: dict) -> str:
-    if fit["a90"] is not None:
-        return f"{fit['a90']:.3g}" + ("" if fit["a90_95"] is None else f" ({fit['a90_95']:.3g})")
-    note = fit["note"]
-    if note.startswith("every run a hit"):
-        return "every run a hit: below the sizes tried"
-    return note.split(":")[0].split(" (")[0]
+    from emaphm.assessment.stats import PODFit
+
+    f = PODFit.from_dict(fit)
+    if f.a90 is not None:
+        return f"{f.a90:.3g}" + ("" if f.a90_95 is None else f" ({f.a90_95:.3g})")
+    if f.status == "not recorded":          # a result stored before the status: its note
+        return f.note
+    return _NO_A90[f.status]
 
 
 def report(rows: list[dict]) -> list[str]:

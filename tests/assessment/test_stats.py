@@ -39,14 +39,28 @@ def test_pod_fit_recovers_a_known_logistic_curve_and_bounds_its_a90():
     assert fit.b1 == pytest.approx(b1, rel=0.3)
     assert fit.a90 == pytest.approx(a90_true, rel=0.2)
     assert fit.a90_95 > fit.a90                    # the 95 % bound lies above the estimate
+    assert fit.status == "fitted" and fit.note == ""
     assert fit.pod(np.array([fit.a90]))[0] == pytest.approx(0.9)
 
 
 def test_pod_fit_says_why_there_is_no_curve():
-    assert "every run a hit" in pod_fit([0.1, 0.2, 0.3], [1, 1, 1]).note
-    assert "no hit" in pod_fit([0.1, 0.2, 0.3], [0, 0, 0]).note
+    allhit = pod_fit([0.1, 0.2, 0.3], [1, 1, 1])
+    assert "every run a hit" in allhit.note and allhit.status == "every run a hit"
+    nohit = pod_fit([0.1, 0.2, 0.3], [0, 0, 0])
+    assert "no hit" in nohit.note and nohit.status == "no hit"
     sep = pod_fit([0.1, 0.1, 0.2, 0.3], [0, 0, 1, 1])
     assert sep.a90 is None and "perfect separation" in sep.note and "0.1 and 0.2" in sep.note
-    assert "two sizes" in pod_fit([0.1, 0.1, 0.1], [0, 1, 1]).note
+    assert sep.status == "separated"
+    few = pod_fit([0.1, 0.1, 0.1], [0, 1, 1])
+    assert "two sizes" in few.note and few.status == "too few sizes"
+    # the record round-trips; one written before the status reads "not recorded"
+    from emaphm.assessment.stats import PODFit
+
+    for f in (allhit, nohit, sep, few):
+        assert PODFit.from_dict(f.to_dict()) == f
+    old = {k: v for k, v in sep.to_dict().items() if k != "status"}
+    assert PODFit.from_dict(old).status == "not recorded"
+    with pytest.raises(ValueError, match="status must be one of"):
+        PODFit(None, None, None, None, 3, "", "maybe")
     with pytest.raises(ValueError, match="no POD curve"):
         sep.pod(np.array([0.1]))

@@ -293,7 +293,7 @@ def pod_figure(rows: Sequence[Mapping[str, Any]], fit: Mapping[str, Any], title:
     ax.errorbar(s, pci, yerr=err, fmt="o", capsize=3, label="right mode named alone (95 %)")
     ax.plot(s, [r["pod"] for r in rs], "s", mfc="none", label="any fault named")
     if fit.get("b0") is not None and rs:
-        f = PODFit(fit["b0"], fit["b1"], fit["a90"], fit["a90_95"], fit["n"], fit["note"])
+        f = PODFit.from_dict(fit)
         mags = np.array([r["magnitude"] for r in rs])
         order = np.argsort(mags)
         grid = np.linspace(mags.min(), mags.max(), 100)

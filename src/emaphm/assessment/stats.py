@@ -70,6 +70,13 @@ def proportion(k: int, n: int) -> Proportion:
     return Proportion(int(k), int(n), (k / n) if n else float("nan"), lo, hi)
 
 
+#: What :func:`pod_fit` found, :attr:`PODFit.status`: a curve with its bound; a curve whose
+#: bound lies beyond the sizes tried; or why there is no curve. ``"not recorded"``: a fit
+#: read from a record written before the status was (:meth:`PODFit.from_dict`).
+POD_STATUS = ("fitted", "bound beyond", "too few sizes", "no hit", "every run a hit",
+              "separated", "not growing", "not recorded")
+
+
 @dataclass(frozen=True)
 class PODFit:
     """A hit/miss POD curve ``POD(a) = logistic(b0 + b1 ln a)``, or why there is none.
@@ -77,6 +84,8 @@ class PODFit:
     ``a90``: the size detected with probability 0.9; ``a90_95``: its one-sided 95 % upper
     confidence bound (profile likelihood); None where the fit does not exist (``note``
     says why) or the bound lies beyond the sizes tried (``a90_95`` None, ``note`` says so).
+    ``status``: which of these it is, one of :data:`POD_STATUS` (for programs; ``note``
+    is for people).
     """
 
     b0: float | None
@@ -85,6 +94,18 @@ class PODFit:
     a90_95: float | None
     n: int
     note: str = ""
+    status: str = "fitted"
+
+    def __post_init__(self) -> None:
+        if self.status not in POD_STATUS:
+            raise ValueError(f"status must be one of {', '.join(POD_STATUS)}, got "
+                             f"{self.status!r}")
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "PODFit":
+        """The fit :meth:`to_dict` wrote (a record without ``status``: "not recorded")."""
+        return cls(d["b0"], d["b1"], d["a90"], d["a90_95"], int(d["n"]), d.get("note", ""),
+                   d.get("status", "not recorded"))
 
     def pod(self, a: np.ndarray) -> np.ndarray:
         """The fitted POD at sizes ``a``."""
@@ -94,7 +115,7 @@ class PODFit:
 
     def to_dict(self) -> dict[str, float | int | str | None]:
         return {"b0": self.b0, "b1": self.b1, "a90": self.a90, "a90_95": self.a90_95,
-                "n": self.n, "note": self.note}
+                "n": self.n, "note": self.note, "status": self.status}
 
 
 #: logit(0.9)
@@ -119,23 +140,24 @@ def pod_fit(sizes: Sequence[float], hits: Sequence[bool]) -> PODFit:
     a, y = a[keep], y[keep]
     n = int(a.size)
     if n < 3 or np.unique(a).size < 2:
-        return PODFit(None, None, None, None, n, "fewer than two sizes tried")
+        return PODFit(None, None, None, None, n, "fewer than two sizes tried", "too few sizes")
     if y.sum() == 0:
-        return PODFit(None, None, None, None, n, "no hit at any size: no curve")
+        return PODFit(None, None, None, None, n, "no hit at any size: no curve", "no hit")
     if y.sum() == n:
         return PODFit(None, None, None, None, n,
                       f"every run a hit (the smallest size tried, {a.min():g}, is detected "
-                      "every time): no curve, a90 is below the sizes tried")
+                      "every time): no curve, a90 is below the sizes tried", "every run a hit")
     x = np.log(a)
     if x[y == 1].min() > x[y == 0].max():
         return PODFit(None, None, None, None, n,
                       "hits and misses do not overlap in size (perfect separation): "
                       f"a90 lies between {np.exp(x[y == 0].max()):g} and "
-                      f"{np.exp(x[y == 1].min()):g}")
+                      f"{np.exp(x[y == 1].min()):g}", "separated")
     res = optimize.minimize(_nll, np.array([0.0, 1.0]), args=(x, y), method="BFGS")
     b0, b1 = (float(v) for v in res.x)
     if not (math.isfinite(b0) and math.isfinite(b1)) or b1 <= 0:
-        return PODFit(b0, b1, None, None, n, "the fitted POD does not grow with size")
+        return PODFit(b0, b1, None, None, n, "the fitted POD does not grow with size",
+                      "not growing")
     l_max = -_nll(res.x, x, y)
     a90 = math.exp((_LOGIT90 - b0) / b1)
 
@@ -149,6 +171,7 @@ def pod_fit(sizes: Sequence[float], hits: Sequence[bool]) -> PODFit:
     hi = float(x.max()) + math.log(4.0)      # search the bound up to 4x the largest size
     if deficit(hi) < 0:
         return PODFit(b0, b1, a90, None, n,
-                      f"the 95 % bound of a90 lies beyond 4x the largest size tried ({a.max():g})")
+                      f"the 95 % bound of a90 lies beyond 4x the largest size tried ({a.max():g})",
+                      "bound beyond")
     log_bound = optimize.brentq(deficit, lo, hi, xtol=1e-6)
     return PODFit(b0, b1, a90, math.exp(log_bound), n)
