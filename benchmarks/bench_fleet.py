@@ -3,8 +3,8 @@
 Run: ``python benchmarks/bench_fleet.py [--sizes 30,300,1000,10000] [--base REV] [--dask]``
 -> ``benchmarks/results/fleet.md`` and ``fleet.json`` (the table is printed too);
 ``--append`` adds the sizes it measures to the ``fleet.json`` there (a 10,000-actuator
-fleet's recording and cold build take about 5 minutes on two shared cores: run it apart), each run's date
-in the table.
+fleet's recording and cold build take about 5 minutes on two shared cores: run it apart),
+each run's date in the table.
 
 Each fleet is the demo fleet of ``emaphm fleet demo --synthetic`` (seed 0; true k plus
 identification-sized noise: the site draws the same kind of figures as for a diagnosed
@@ -148,7 +148,8 @@ def _parts(db: Path, n: int = 60) -> dict:
         datas = [h.data(a.id) for a in h.actuators()[:n]]
     figs = PageFigures(px_per_inch=FIGURE_DPI)
     names = ("prognosis (assess, with the next inspection's plan)",
-             "history figure, as the site draws it (SVG)", "prognosis figure, as the site draws it (SVG)",
+             "history figure, as the site draws it (SVG)",
+             "prognosis figure, as the site draws it (SVG)",
              "history figure, reference plot_history", "prognosis figure, reference plot_prognosis")
     parts = dict.fromkeys(names, 0.0)
 
@@ -216,7 +217,8 @@ def _table(fleets: list[dict], parts: dict, when: str, base: str | None, workers
         lines += ["", f"CPU per actuator of the parts of a cold build, one core, in one process "
                   f"(the first {parts['n_actuators']} actuators of the 300-actuator fleet, "
                   f"{parts['n_prognoses']} with a prognosis; a figure's time includes writing its "
-                  "file: SVG text for the site's, a PNG at the site's size for matplotlib's):", "", "| part | CPU per actuator [ms] |", "|---|---|"]
+                  "file: SVG text for the site's, a PNG at the site's size for matplotlib's):",
+                  "", "| part | CPU per actuator [ms] |", "|---|---|"]
         for name, v in parts["per_actuator_cpu_s"].items():
             lines.append(f"| {name} | {1000 * v:.1f} |")
     return "\n".join(lines) + "\n"

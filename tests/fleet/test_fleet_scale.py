@@ -346,7 +346,9 @@ def test_a_page_figure_is_a_pure_function_of_its_data_and_valid_svg(fleet):
         assert root.tag == "{http://www.w3.org/2000/svg}svg"
         assert (root.get("width"), root.get("height")) == (str(w), str(h))
     texts = [t.text for t in ET.fromstring(first[0]).iter("{http://www.w3.org/2000/svg}text")]
-    assert "k1: dry friction" in " ".join(texts) or any(t.startswith("k1:") for t in texts)
+    from emaphm.faults import K_LABELS
+
+    assert f"k1: {K_LABELS[0]}" in texts and f"k8: {K_LABELS[7]}" in texts
     assert any(t.startswith("health history of EMA-PAST") for t in texts)
     with pytest.raises(ValueError, match="indices of k"):
         figs.history(past, components=[8])

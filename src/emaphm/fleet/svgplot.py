@@ -103,10 +103,10 @@ def nice_ticks(lo: float, hi: float, n: int = 6) -> tuple[np.ndarray, float]:
 def _tick_label(v: float, step: float) -> str:
     if abs(v) < step * 1e-9:
         return "0"
-    if abs(v) >= 1e6 or step < 1e-4:          # the significant digits the step needs
-        digits = math.floor(math.log10(abs(v))) - math.floor(math.log10(step) + 1e-12) + 1
-        return f"{v:.{max(digits, 1) + 1}g}".replace("-", "\u2212")
     power = math.floor(math.log10(step) + 1e-12)
+    if abs(v) >= 1e6 or step < 1e-4:          # the significant digits the step needs
+        digits = math.floor(math.log10(abs(v))) - power + 1
+        return f"{v:.{max(digits, 1) + 1}g}".replace("-", "\u2212")
     decimals = max(0, -power + (round(step / 10.0 ** power, 6) == 2.5))   # 0.25, 2.5: one more
     text = f"{v:.{decimals}f}"
     return "0" if float(text) == 0 else text.replace("-", "\u2212")
@@ -128,11 +128,10 @@ _NOT_XML = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\ud800-\udfff\ufffe\uffff]")
 
 
 def _text(x: float, y: float, s: str, size: float, *, anchor: str = "start",
-          color: str = "#000000", rotate: bool = False, weight: str = "") -> str:
+          color: str = "#000000", rotate: bool = False) -> str:
     rot = f' transform="rotate(-90 {_num(x)} {_num(y)})"' if rotate else ""
-    bold = f' font-weight="{weight}"' if weight else ""
     return (f'<text x="{_num(x)}" y="{_num(y)}" font-size="{size * _PT:.1f}" '
-            f'text-anchor="{anchor}" fill="{color}"{bold}{rot}>'
+            f'text-anchor="{anchor}" fill="{color}"{rot}>'
             f'{esc(_NOT_XML.sub(chr(0xFFFD), s))}</text>')
 
 

@@ -311,7 +311,7 @@ def _fit_exponential(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
         A = np.clip(ey / ee, a_lo, a_hi)
         return A, yy - 2.0 * A * ey + A * A * ee
 
-    A, cost = profile(_RATE_GRID)
+    cost = profile(_RATE_GRID)[1]
     i = int(np.argmin(cost))
     lo, hi = _RATE_GRID[max(i - 1, 0)], _RATE_GRID[min(i + 1, _RATE_GRID.size - 1)]
     res = optimize.minimize_scalar(lambda r: float(profile(np.array([r]))[1][0]),
