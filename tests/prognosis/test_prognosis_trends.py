@@ -45,6 +45,7 @@ def test_linear_fit_known_answer_and_covariance():
     ("linear", lambda t: 0.01 + 5e-4 * t),
     ("exponential", lambda t: 0.02 * np.exp(t / 200.0)),
     ("quadratic", lambda t: 0.01 + 1e-4 * t + 1e-6 * t ** 2),
+    ("onset", lambda t: 0.01 + 8e-4 * np.maximum(t - 130.0, 0.0)),
 ])
 def test_noiseless_fits_recover_the_law_and_its_crossing(model, truth):
     y = truth(T)
@@ -100,6 +101,50 @@ def test_the_exponential_fit_finds_the_least_squares_minimum_of_a_trust_region_s
             np.testing.assert_allclose(theta, ref, rtol=1e-4, atol=1e-6 / (tau[-1] - tau[0]))
 
 
+def test_the_onset_fit_recovers_the_onset_and_is_the_least_squares_minimum():
+    """Known answer: a noise-free hinge at 130 h (between the 2nd and 3rd inspection)
+    gives back its level, slope and onset, with the straight line's crossing after it.
+    Oracle: on noisy hinges, lines and flat series the fit's residual is never above the
+    least of a fine brute-force scan of the onset (and never above the straight line's)."""
+    from emaphm.prognosis.trends import _fit_onset, _model_value
+
+    f = fit_trend(T, 0.01 + 8e-4 * np.maximum(T - 130.0, 0.0), "onset")
+    np.testing.assert_allclose(f.theta, [0.01 + 8e-4 * 370.0, 8e-4, 130.0 - 500.0], rtol=1e-6)
+    assert f.crossing_time(0.5)[0] == pytest.approx(130.0 + 0.49 / 8e-4, rel=1e-9)
+    assert fit_trend(T, 0.01 + 8e-4 * np.maximum(T - 130.0, 0.0), "linear").rss > 1e-4
+    rng = np.random.default_rng(20261127)
+    for trial in range(60):
+        t = np.unique(np.sort(rng.uniform(0.0, 2000.0, int(rng.integers(5, 30)))))
+        noise = rng.normal(0.0, 0.007, t.size)
+        onset = rng.uniform(0.0, 1500.0)
+        y = (np.abs(2e-4 * np.maximum(t - onset, 0.0) + noise), 0.1 + 1e-4 * t + noise,
+             np.abs(noise))[trial % 3]
+        tau = t - t[-1]
+        theta = _fit_onset(tau, y)
+        rss = float(np.sum((_model_value("onset", theta, tau) - y) ** 2))
+        scan = np.linspace(tau[0], tau[-3], 20001)
+        X = np.maximum(tau[None, :], scan[:, None])
+        best = min(float(np.sum((y - np.polyval(np.polyfit(x, y, 1), x)) ** 2)) for x in X[::40])
+        assert rss <= best * (1 + 1e-9) + 1e-15, (trial, theta)
+        assert rss <= fit_trend(t, y, "linear").rss * (1 + 1e-9) + 1e-15
+        assert tau[0] <= theta[2] <= tau[-3]
+
+
+def test_an_onset_after_a_healthy_stretch_is_not_read_as_acceleration():
+    """A fault that starts growing linearly after a healthy stretch (the indicator at 0,
+    scattering, before it): without the onset model the flat inspections bend the fit into
+    a convex curve whose median RUL is far too short; with it the median is near the truth."""
+    t = np.arange(0.0, 1300.0, 150.0)                       # 9 inspections, onset at 700 h
+    rng = np.random.default_rng(3)
+    y = np.abs(6e-4 * np.maximum(t - 700.0, 0.0) + rng.normal(0.0, 0.007, t.size))
+    true_rul = 700.0 + 0.5 / 6e-4 - t[-1]
+    with_onset = predict_rul(t, y, 0.5, seed=0)
+    without = predict_rul(t, y, 0.5, seed=0, models=("linear", "exponential", "quadratic"))
+    assert with_onset.weights["onset"] > 0.5
+    assert abs(with_onset.median - true_rul) < 0.15 * true_rul
+    assert without.median < 0.75 * true_rul
+
+
 def test_crossing_time_edge_cases():
     f = fit_trend(T, 0.5 + 0.0 * T, "linear")
     assert f.crossing_time(0.4)[0] == T[-1]                  # already past: fails now
@@ -124,7 +169,7 @@ def test_model_selection_prefers_the_true_shape():
 def test_models_join_once_their_aicc_is_finite():
     t = T[:4]
     assert set(fit_trends(t, 1e-3 * t)) == {"linear", "exponential"}     # quadratic needs 5
-    assert set(fit_trends(T[:5], 1e-3 * T[:5])) == {"linear", "exponential", "quadratic"}
+    assert set(fit_trends(T[:5], 1e-3 * T[:5])) == {"linear", "exponential", "quadratic", "onset"}
 
 
 # ----------------------------------------------------------------------------- RUL
@@ -449,9 +494,10 @@ def test_draws_whose_threshold_the_discrepancy_moves_past_k_1_are_extrapolated()
 
 def test_beyond_names_the_bound_where_the_whole_cone_leaves_it():
     """Known answer: a noise-free 0.002 t (sigma floor 1e-4) is 1 at 500 h and -0.2 at
-    -100 h; the cone is too narrow to hold either bound there, and holds both near them."""
+    -100 h; the cone is too narrow to hold either bound there, and holds both near them.
+    (The straight line alone: the onset model stays flat before its onset, 0 at -20 h.)"""
     p = predict_rul(T, 0.002 * T, 0.5, seed=0, bounds=(0.0, 1.0), indicator="backlash",
-                    sigma_floor=1e-4)
+                    sigma_floor=1e-4, models=("linear",))
     assert p.beyond([0.0, 250.0, 499.0]) == ""
     assert p.beyond([250.0, 520.0]) == "extrapolated beyond k = 1"
     assert p.beyond([-20.0, 250.0]) == "extrapolated below k = 0"
@@ -478,4 +524,4 @@ def test_the_rul_figure_says_when_its_trend_leaves_k_1():
     assert notes(plot_prognosis(prognose(T, K, seed=0), indicators=["friction"])) == []
     # drawn far enough, the median trend itself passes k = 1
     assert "extrapolated beyond k = 1" in notes(plot_prognosis(prognose(T, K, seed=0),
-                                                              indicators=["friction"], horizon=900))
+                                                              indicators=["friction"], horizon=1200))

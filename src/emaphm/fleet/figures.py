@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from ..faults import K_LABELS
+from ..prognosis.plots import STATE_COLORS, component_status
 from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT,
                                     FailureThresholds)
 from .svgplot import Layer, Panel, render
@@ -41,7 +42,6 @@ __all__ = ["PageFigures", "CONE_POINTS"]
 #: at a hundred across a page's width).
 CONE_POINTS = 120
 
-_STATES = (("healthy", "C2"), ("faulty", "C3"), ("unexplained", "0.5"))
 
 
 def _unit(unit: str) -> str:
@@ -85,7 +85,7 @@ def _history_panel(data: "HistoryData", j: int, status: np.ndarray, thr: dict, x
         "trend": Layer("line", t[show], K[show], color="C0", width=1.0),
         "hollow": Layer("hollow", t[~show], K[~show], color="0.6"),
         **{state: Layer("points", t[show & (status[:, j] == state)],
-                        K[show & (status[:, j] == state)], color=c) for state, c in _STATES},
+                        K[show & (status[:, j] == state)], color=c) for state, c in STATE_COLORS},
         "threshold": Layer("hline", [], levels, color="C3"),
     }
     return Panel(title=f"k{j + 1}: {K_LABELS[j]}", xlim=xlim,
@@ -149,8 +149,6 @@ class PageFigures:
                        thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS
                        ) -> list[Panel]:
         """A :class:`~emaphm.fleet.svgplot.Panel` per component in ``components``."""
-        from ..prognosis.plots import component_status
-
         shown = sorted({int(c) for c in components})
         if not shown or not all(0 <= c < 8 for c in shown):
             raise ValueError(f"components must be indices of k in 0..7, got {components!r}")
@@ -178,7 +176,7 @@ class PageFigures:
         w, h = round(1100 * s), round((150 + 195 * nrows) * s)
         boxes = _grid(nrows, 2, w, h, left=80 * s, right=20 * s, top=95 * s, bottom=60 * s,
                       wgap=85 * s, hgap=40 * s)
-        keys = [("points", c, state) for state, c in _STATES] + [
+        keys = [("points", c, state) for state, c in STATE_COLORS] + [
             ("hline", "C3", "failure threshold"), ("hollow", "0.6", "phase without eccentricity")]
         return render(w, h, list(zip(panels, boxes)), title=self.history_title(data, note),
                       legend=keys, legend_y=52 * s), w, h

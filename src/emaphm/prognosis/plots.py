@@ -20,7 +20,12 @@ if TYPE_CHECKING:  # pragma: no cover
     from .trends import Prognosis, RULTrack
 
 __all__ = ["plot_history", "plot_prognosis", "plot_alpha_lambda", "ALPHA_LAMBDA_Y_MAX",
-           "interesting_indicators", "moved_components", "component_status", "MOVED_SHARE"]
+           "interesting_indicators", "moved_components", "component_status", "MOVED_SHARE",
+           "STATE_COLORS"]
+
+#: The colour of an inspection's point by what it named (:func:`component_status`), in
+#: Matplotlib's colour notation; the fleet's SVG figures use the same.
+STATE_COLORS = (("healthy", "C2"), ("faulty", "C3"), ("unexplained", "0.5"))
 
 
 def _figure(width: float, height: float) -> "Figure":
@@ -89,7 +94,7 @@ def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT
             if show.any():
                 ax.errorbar(t[show], data.K[show, j], yerr=np.clip(err[:, show], 0, None), fmt="-",
                             color="C0", lw=1.0, ecolor="0.6", capsize=2)
-            for state, color in (("healthy", "C2"), ("faulty", "C3"), ("unexplained", "0.5")):
+            for state, color in STATE_COLORS:
                 sel = show & (status[:, j] == state)
                 if sel.any():
                     ax.plot(t[sel], data.K[sel, j], "o", color=color, ms=4, label=state)

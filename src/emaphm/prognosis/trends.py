@@ -11,14 +11,22 @@ model        y(t), tau = t - t_ref                 parameters theta
 linear       a + b tau                             (a, b)
 exponential  exp(alpha + b tau)                    (alpha = ln a, b)
 quadratic    a + b tau + c tau^2                   (a, b, c)
+onset        a + b max(tau, c)                     (a, b, c = t_onset - t_ref)
 ===========  ====================================  ==========================
 
 Linear growth (wear) and exponential growth (self-accelerating damage) are the
 two classic degradation shapes; the quadratic is a local second-order trend
 that follows growth which is neither, such as a power law ``t^2``: without it a
 power-law history is fitted by a curve of the wrong shape and the intervals
-miss the truth (``docs/prognosis.md`` has the numbers). All three are fitted
-by default; a model needs ``p + 2`` inspections (a finite AICc) to take part.
+miss the truth (``docs/prognosis.md`` has the numbers). ``onset`` is linear
+growth that began at an unknown time ``t_onset`` between two inspections, the
+indicator flat before it (segmented regression with one breakpoint): a fault
+that appears after a healthy stretch of service. Without it the flat
+inspections before the onset bend every other model into a convex curve whose
+extrapolation reaches the threshold far too early (the inspection planner then
+chases a trend that is not there: ``docs/inspection-planning.md``). All four
+are fitted by default; a model needs ``p + 2`` inspections (a finite AICc) to
+take part.
 
 Each fit carries its parameter covariance ``s^2 (J^T J)^-1`` (Gauss-Newton at
 the optimum, ``J`` the Jacobian) with the residual variance
@@ -71,8 +79,8 @@ __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_tren
            "MIN_INSPECTIONS", "DEFAULT_MODELS", "RULTrack", "rul_track", "growth_rate",
            "indicator_state", "MODEL_DISCREPANCY", "INDICATOR_BOUNDS"]
 
-TREND_MODELS = ("linear", "exponential", "quadratic")
-_N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3}
+TREND_MODELS = ("linear", "exponential", "quadratic", "onset")
+_N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3, "onset": 3}
 #: The models fitted by default.
 DEFAULT_MODELS = TREND_MODELS
 from .choices import SELECTION_RULES  # noqa: E402  (the CLI reads it without SciPy)
@@ -114,6 +122,8 @@ def _model_value(model: str, theta: np.ndarray, tau: np.ndarray) -> np.ndarray:
         return a + b * tau
     if model == "quadratic":
         return a + b * tau + theta[..., 2:3] * tau * tau
+    if model == "onset":
+        return a + b * np.maximum(tau, theta[..., 2:3])
     return np.exp(np.clip(a + b * tau, -700.0, 700.0))
 
 
@@ -122,6 +132,9 @@ def _jacobian(model: str, theta: np.ndarray, tau: np.ndarray) -> np.ndarray:
         return np.column_stack([np.ones_like(tau), tau])
     if model == "quadratic":
         return np.column_stack([np.ones_like(tau), tau, tau * tau])
+    if model == "onset":
+        b, c = float(theta[1]), float(theta[2])
+        return np.column_stack([np.ones_like(tau), np.maximum(tau, c), b * (tau < c)])
     y = _model_value(model, theta, tau)
     return np.column_stack([y, tau * y])
 
@@ -133,6 +146,12 @@ def _crossing_tau(model: str, theta: np.ndarray, threshold: Any) -> np.ndarray:
     a, b = theta[:, 0], theta[:, 1]
     if model == "linear":
         level, gap = a, threshold - a
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tau = np.where(b > 0, gap / b, np.inf)
+    elif model == "onset":
+        # flat until the onset c (a draw may put it after t_ref), linear after it: below
+        # the threshold at max(0, c), a rising line reaches it beyond there
+        level, gap = a + b * np.maximum(theta[:, 2], 0.0), threshold - a
         with np.errstate(divide="ignore", invalid="ignore"):
             tau = np.where(b > 0, gap / b, np.inf)
     elif model == "quadratic":
@@ -259,13 +278,15 @@ def fit_trend(t: Any, y: Any, model: str = "linear", *, sigma_floor: float = 0.0
     t, y = _check_series(t, y)
     t_ref = float(t[-1])
     tau = t - t_ref
-    p = 3 if model == "quadratic" else 2
+    p = _N_PARAMS[model]
     n = t.size
     if n < p + 1:
         raise ValueError(f"the {model} trend needs at least {p + 1} inspections, got {n}")
     if model in ("linear", "quadratic"):
         X = _jacobian(model, np.zeros(p), tau)
         theta = np.linalg.lstsq(X, y, rcond=None)[0]
+    elif model == "onset":
+        theta = _fit_onset(tau, y)
     else:
         theta = _fit_exponential(tau, y)
     r = y - _model_value(model, theta, tau)
@@ -320,6 +341,57 @@ def _fit_exponential(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
     r = float(res.x) if res.fun <= cost[i] else float(_RATE_GRID[i])
     level = float(profile(np.array([r]))[0][0])
     return np.array([math.log(level), r / span])
+
+
+def _onset_profile(tau: np.ndarray, y: np.ndarray, c: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For each onset in ``c`` (m,): the least-squares level ``a`` and slope ``b`` of
+    ``y = a + b max(tau, c)`` and its residual sum of squares, each (m,)."""
+    X = np.maximum(tau[None, :], c[:, None])
+    xm = X.mean(axis=1)
+    dx = X - xm[:, None]
+    dy = y - y.mean()
+    sxx = np.einsum("ij,ij->i", dx, dx)
+    sxy = dx @ dy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b = np.where(sxx > 0, sxy / sxx, 0.0)
+    a = y.mean() - b * xm
+    rss = np.maximum(float(dy @ dy) - b * sxy, 0.0)
+    return a, b, rss
+
+
+def _fit_onset(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """(a, b, c) of ``y = a + b max(tau, c)`` by least squares, the onset ``c`` between the
+    first inspection and the third from last (at least three inspections on the slope, the
+    one at the onset included; ``c`` at the first is the linear trend).
+
+    Exact, in closed form: with the onset between inspections ``j`` and ``j + 1`` the
+    ``m = j + 1`` first regressors are ``c``, so the centred sums are ``s_xy = alpha c +
+    beta`` and ``s_xx = A c^2 + B c + C``, and the residual ``s_yy - s_xy^2 / s_xx`` is
+    least where ``s_xy^2 / s_xx`` is greatest: at the stretch's ends or at its one
+    stationary point ``c* = (beta B - 2 alpha C) / (alpha B - 2 beta A)``. Every candidate
+    of every stretch is evaluated and the least residual kept.
+    """
+    n = tau.size
+    edges = tau[:max(n - 2, 1)]
+    cand = [edges]
+    if edges.size >= 2:
+        m = np.arange(1, edges.size, dtype=float)               # points at or before c
+        ys, ts = float(y.sum()), tau.sum()
+        yh = np.cumsum(y)[:m.size]
+        st = ts - np.cumsum(tau)[:m.size]                        # sums over the rest
+        qt = float(tau @ tau) - np.cumsum(tau * tau)[:m.size]
+        pt = float(tau @ y) - np.cumsum(tau * y)[:m.size]
+        alpha, beta = yh - m * ys / n, pt - st * ys / n
+        A, B, C = m * (1.0 - m / n), -2.0 * m * st / n, qt - st * st / n
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cs = (beta * B - 2.0 * alpha * C) / (alpha * B - 2.0 * beta * A)
+        cs = np.clip(np.where(np.isfinite(cs), cs, edges[:-1]), edges[:-1], edges[1:])
+        cand.append(cs)
+    c = np.concatenate(cand)
+    a, b, rss = _onset_profile(tau, y, c)
+    i = int(np.argmin(rss))
+    return np.array([float(a[i]), float(b[i]), float(c[i])])
 
 
 def fit_trends(t: Any, y: Any, models: Sequence[str] = DEFAULT_MODELS, *,
@@ -683,7 +755,7 @@ def growth_rate(fit: TrendFit) -> tuple[float, float]:
     """``(rate, standard error)`` of a trend at its reference time (the last inspection):
     its derivative there and the delta-method error from the fit's covariance."""
     a, b = float(fit.theta[0]), float(fit.theta[1])
-    if fit.model in ("linear", "quadratic"):
+    if fit.model in ("linear", "quadratic", "onset"):   # the onset is before t_ref
         grad = np.zeros(fit.n_params)
         grad[1] = 1.0
         rate = b
