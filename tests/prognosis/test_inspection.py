@@ -203,12 +203,30 @@ def test_a_degrading_actuator_is_flagged_after_a_handful_of_inspections_and_not_
     assert run.n_inspections <= 15 and run.rules[-1] == "act now"
     gaps = np.diff(run.times)
     assert gaps.min() >= INTERVAL_DEFAULTS["h"].min - 1e-9
+    # each plan's predicted risk: none before a trend, at most the risk where the risk
+    # rule set the time, above it where a trend too short to act on asked to confirm
+    # (here 0.126 and 0.054); their sum over the planned intervals is what a calibrated
+    # risk expects this actuator to miss
+    assert len(run.risks) == run.n_inspections and run.risks[0] is None
+    for r, rule in zip(run.risks, run.rules):
+        assert (r is None) == (rule in ("too few inspections", "healthy")), (r, rule)
+        assert rule not in ("risk", "max interval") or r <= 0.01 + 1e-12
+        assert rule != "confirm" or r > 0.01
+    assert "confirm" in run.rules
+    assert run.expected_misses == pytest.approx(sum(
+        r for r, rule in zip(run.risks, run.rules) if r is not None and rule != "act now"))
+    assert run.to_dict()["expected_misses"] == run.expected_misses
     # a fixed interval sees the same noise at its i-th inspection and is flagged by the
     # same criterion: the chance of a crossing before its next inspection
     fixed = simulate_policy(sc, InspectionPolicy(risk=0.01), seed=4, fixed_interval=100.0,
                             discrepancy={})
     np.testing.assert_allclose(np.diff(fixed.times), 100.0)
     assert fixed.flagged_at is not None or fixed.missed
+    # its risks are those of its own next inspection, 100 h on: within the risk where the
+    # trend did not ask to confirm
+    assert all(r <= 0.01 + 1e-12 for r, rule in zip(fixed.risks, fixed.rules)
+               if rule in ("risk", "max interval"))
+    assert any(rule in ("risk", "max interval") for rule in fixed.rules)
     # a healthy actuator is inspected at the default interval to the horizon, never flagged
     healthy = simulate_policy(None, InspectionPolicy(risk=0.01), seed=4, horizon=1500.0)
     assert healthy.flagged_at is None and not healthy.missed

@@ -513,6 +513,10 @@ class PolicyRun:
     flagged_at      the inspection that flagged the actuator (act now), or None
     missed          the threshold was crossed before the next planned inspection
     planned         the inspection planned after the last one (None when flagged)
+    risks           (n,) the predicted chance of a crossing by each plan's inspection
+                    (:attr:`NextInspection.risk`; None where a plan has none: too few
+                    inspections, healthy). Their sum over the intervals planned is the
+                    number of misses a calibrated risk expects of this actuator
     ==============  ==================================================================
     """
 
@@ -522,6 +526,14 @@ class PolicyRun:
     flagged_at: float | None
     missed: bool
     planned: float | None = None
+    risks: tuple = ()
+
+    @property
+    def expected_misses(self) -> float:
+        """The chance of a miss the plans predicted, summed over the intervals planned
+        (not the flagging plan's): what a calibrated risk expects this actuator to miss."""
+        return float(sum(r for r, rule in zip(self.risks, self.rules)
+                         if r is not None and rule != "act now"))
 
     @property
     def n_inspections(self) -> int:
@@ -535,7 +547,8 @@ class PolicyRun:
 
     def to_dict(self) -> dict[str, Any]:
         return {"eol": self.eol, "times": self.times.tolist(), "rules": list(self.rules),
-                "flagged_at": self.flagged_at, "missed": self.missed, "planned": self.planned}
+                "flagged_at": self.flagged_at, "missed": self.missed, "planned": self.planned,
+                "risks": list(self.risks), "expected_misses": self.expected_misses}
 
 
 def simulate_policy(scenario: Any, policy: InspectionPolicy = InspectionPolicy(), *, seed: int,
@@ -575,19 +588,32 @@ def simulate_policy(scenario: Any, policy: InspectionPolicy = InspectionPolicy()
     noise_seed = int(noise_ss.generate_state(1)[0])
     times: list[float] = [0.0]
     rules: list[str] = []
+    risks: list[float | None] = []
     while True:
         t = np.asarray(times)
         K = (observe(scenario, t, seed=noise_seed, noise=noise) if observer is None
              else np.asarray(observer(t), dtype=float))
         plan_seed = int(plan_ss.spawn(1)[0].generate_state(1)[0])
-        _, plan = next_inspection(t, K, seed=plan_seed, policy=policy, **kwargs)
+        prog, plan = next_inspection(t, K, seed=plan_seed, policy=policy, **kwargs)
         rules.append(plan.rule)
-        if plan.rule == "act now":
-            return PolicyRun(eol, t, tuple(rules), float(t[-1]), False)
         nxt = t[-1] + fixed_interval if fixed_interval is not None else plan.at
+        risks.append(plan.risk if fixed_interval is None or plan.rule == "act now" else
+                     _risk_by(prog, nxt))
+        if plan.rule == "act now":
+            return PolicyRun(eol, t, tuple(rules), float(t[-1]), False, risks=tuple(risks))
         if nxt >= eol or nxt > end or len(times) >= max_inspections:
-            return PolicyRun(eol, t, tuple(rules), None, bool(nxt >= eol), float(nxt))
+            return PolicyRun(eol, t, tuple(rules), None, bool(nxt >= eol), float(nxt),
+                             tuple(risks))
         times.append(float(nxt))
+
+
+def _risk_by(prog: "Prognosis | None", t: float) -> float | None:
+    """The chance that an indicator of ``prog`` taking part has crossed by ``t`` (None
+    without a prognosis or with none taking part)."""
+    part = taking_part(prog) if prog is not None else {}
+    if not part:
+        return None
+    return float(first_crossing_cdf([prog.predictions[n] for n in part], t))
 
 
 def observe(scenario: Any, times: Any, *, seed: int, noise: float = 0.007) -> np.ndarray:
