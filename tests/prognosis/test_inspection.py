@@ -135,8 +135,18 @@ def test_healthy_indicators_scatter_into_crossings_so_they_take_no_part():
                                               1000.0 + INTERVAL_DEFAULTS["h"].default)))
     assert np.mean(f_all) > 0.1, f_all
     # the one left: the gain's scatter rose by more than two standard errors at the last
-    # inspection (the fleet's "growing"), the false flag docs/inspection-planning.md counts
-    assert rules.count("healthy") == 9 and rules.count("act now") == 1, rules
+    # inspection (the fleet's "growing"); at the one before it took no part, so the rise
+    # is confirmed at the minimum interval, not flagged
+    assert rules.count("healthy") == 9 and rules.count("confirm") == 1, rules
+    k = rules.index("confirm")
+    rng = np.random.default_rng(8)
+    for i in range(k + 1):
+        K = np.clip(K_NOMINAL + 0.007 * rng.standard_normal((t.size, 8)), 0.0, 1.0)
+    _, plan = next_inspection(t, K, seed=k, discrepancy={})
+    assert plan.at == t[-1] + INTERVAL_DEFAULTS["h"].min and plan.risk > 0.01
+    assert "at this inspection alone" in plan.reason and plan.indicator == "gain_drift"
+    # the same history without that last reading: healthy (nothing took part)
+    assert next_inspection(t[:-1], K[:-1], seed=k, discrepancy={})[1].rule == "healthy"
 
 
 def test_a_slow_growth_is_capped_by_the_maximum_interval_and_a_fast_one_by_its_risk():

@@ -24,6 +24,11 @@ rule                        the next inspection
 ``too few inspections``     fewer than :data:`MIN_INSPECTIONS` (3): ``t_last`` + the default
                             interval (no trend yet)
 ``healthy``                 no indicator *takes part* (below): ``t_last`` + the default interval
+``confirm``                 the risk would act now, but on a trend of fewer than
+                            :data:`MIN_FLAG_INSPECTIONS` inspections, or on indicators that
+                            were at their healthy level at the inspection before the last
+                            (a rise seen once: the scatter of a healthy unit does that now
+                            and then): ``t_now`` + the minimum interval
 ``act now``                 ``F(t_now) > risk`` (an indicator is past its threshold), or
                             ``t* - t_now`` under the minimum interval: ``at = t_now``. A
                             degrading actuator is flagged, not chased with ever shorter
@@ -397,7 +402,7 @@ def plan_inspection(times: Any, prognosis: "Prognosis | None" = None, *,
                                      f"{_t(iv.default, unit)}", **base)
     preds = [prognosis.predictions[n] for n in part]
     t_star = risk_time(preds, policy.risk)
-    return _risk_plan(preds, part, t_star, policy, base, int(times.size))
+    return _risk_plan(preds, part, t_star, policy, base, int(times.size), prognosis)
 
 
 def _past_at_last(K: Any, thresholds: Any, indicators: Sequence[str] | None):
@@ -430,24 +435,67 @@ def _check_resolution(prognosis: "Prognosis", risk: float) -> None:
                          f"n_samples=n_samples_for({risk:g})")
 
 
+def _soon(preds: Sequence["RULPrediction"], t_now: float, risk: float, iv: IntervalDefaults
+          ) -> bool:
+    """The risk comes within the minimum interval: crossed already more likely than the
+    risk, or ``t*`` under the minimum interval."""
+    return bool(preds) and (float(first_crossing_cdf(preds, t_now)) > risk
+                            or risk_time(preds, risk) - t_now < iv.min)
+
+
+def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]:
+    """The indicators of ``part`` that did not take part at the inspection before the
+    last (:func:`taking_part` of the history without its last inspection, predicted with
+    the same seed, draws, thresholds and model discrepancy, the default trend models and
+    sigma floor)."""
+    from .trends import MIN_INSPECTIONS, prognose
+
+    if prognosis.times.size - 1 < MIN_INSPECTIONS:
+        return set(part)
+    p0 = prognosis.predictions[next(iter(part))]
+    before = prognose(prognosis.times[:-1], prognosis.K[:-1],
+                      seed=0 if p0.seed is None else int(p0.seed),
+                      thresholds=prognosis.thresholds, indicators=list(part),
+                      discrepancy={m: prognosis.predictions[m].discrepancy for m in part},
+                      n_samples=int(p0.samples.size))
+    return set(part) - set(taking_part(before))
+
+
+def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, why: str
+             ) -> NextInspection:
+    """The rule ``confirm``: inspect again at the minimum interval; ``why`` is said after
+    the lead indicator and its chance of a crossing by then."""
+    iv, unit, t_now = base["intervals"], base["time_unit"], base["t_now"]
+    at = t_now + iv.min
+    p_each = _p_each(preds, at)
+    lead = max(p_each, key=lambda k: (p_each[k], -list(p_each).index(k)))
+    f_at = float(first_crossing_cdf(preds, at))
+    reason = (f"{lead} {part[lead]}: probability {f_at:.2g} of a crossing within the minimum "
+              f"interval {_t(iv.min, unit)}, above the risk, but {why}: inspect again at the "
+              "minimum interval to confirm")
+    return NextInspection(at=at, risk=f_at, indicator=lead, rule="confirm", reason=reason,
+                          p_indicator=p_each, t_star=t_star, **base)
+
+
 def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: InspectionPolicy,
-               base: dict, n: int) -> NextInspection:
+               base: dict, n: int, prognosis: "Prognosis") -> NextInspection:
     """The rules ``act now``, ``confirm``, ``risk`` and ``max interval`` (module docstring)."""
     iv, unit, t_now, t_last = base["intervals"], base["time_unit"], base["t_now"], base["t_last"]
     risk = policy.risk
     f_now = float(first_crossing_cdf(preds, t_now))
     past = [p for p in preds if p.median <= 0.0]
-    if (f_now > risk or t_star - t_now < iv.min) and n < MIN_FLAG_INSPECTIONS and not past:
-        at = t_now + iv.min
-        p_each = _p_each(preds, at)
-        lead = max(p_each, key=lambda k: (p_each[k], -list(p_each).index(k)))
-        f_at = float(first_crossing_cdf(preds, at))
-        why = (f"{lead} {part[lead]}: probability {f_at:.2g} of a crossing within the minimum "
-               f"interval {_t(iv.min, unit)}, above the risk {risk:g}, but a trend of {n} "
-               f"inspections is too uncertain to act on (from {MIN_FLAG_INSPECTIONS}): "
-               "inspect again at the minimum interval to confirm")
-        return NextInspection(at=at, risk=f_at, indicator=lead, rule="confirm", reason=why,
-                              p_indicator=p_each, t_star=t_star, **base)
+    soon = f_now > risk or t_star - t_now < iv.min
+    if soon and n < MIN_FLAG_INSPECTIONS and not past:
+        return _confirm(preds, part, t_star, base,
+                        f"a trend of {n} inspections is too uncertain to act on (from "
+                        f"{MIN_FLAG_INSPECTIONS})")
+    if soon and not past:
+        new = _new_since_last(prognosis, part)
+        settled = [p for p in preds if p.indicator not in new]
+        if new and not _soon(settled, t_now, risk, iv):
+            return _confirm(preds, part, t_star, base,
+                            f"{' and '.join(sorted(new))} rose from its healthy level at this "
+                            "inspection alone (one reading is no trend to act on)")
     if f_now > risk or t_star - t_now < iv.min:
         lead = max(preds, key=lambda p: (float(crossing_cdf(p, min(t_star, t_now + iv.min))),
                                          _level_at_last(p) / p.threshold))
