@@ -375,11 +375,14 @@ def main() -> None:
     RESULTS.mkdir(parents=True, exist_ok=True)
     (RESULTS / "prognosis.json").write_text(json.dumps({"meta": meta, "stats": stats, "real": real},
                                                        indent=1))
+    from emaphm.prognosis.trends import DEFAULT_MODELS
+
     md = [f"## Prognosis: RUL statistics ({meta['date']}, {meta['cpus']} CPUs, "
           f"{meta['elapsed_s']:.0f} s)", "",
           f"{N_INSPECTIONS} inspections from 0 to 950 h, true end of life 1000 h; a prediction at "
-          "every inspection from the 3rd on. 90 % intervals (trend models linear, exponential, "
-          "quadratic mixed by Akaike weight; Monte Carlo over the fit; for real identifications "
+          "every inspection from the 3rd on. 90 % intervals (trend models "
+          f"{', '.join(DEFAULT_MODELS)} mixed by Akaike weight; Monte Carlo over the fit; for "
+          "real identifications "
           "also over each indicator's model discrepancy, `emaphm.prognosis.trends."
           "MODEL_DISCREPANCY`, measured with `--tune-discrepancy` on seeds 100+).", "",
           "### Synthetic k histories (true k + N(0, 0.007) per component, no identification)", ""]
