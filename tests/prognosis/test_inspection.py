@@ -243,6 +243,35 @@ def test_a_degrading_actuator_is_flagged_after_a_handful_of_inspections_and_not_
     assert set(healthy.rules) <= {"too few inspections", "healthy"}
 
 
+def test_the_single_rise_check_predicts_the_shorter_history_alike(monkeypatch):
+    """The check that an indicator took part at the inspection before the last predicts
+    the history without its last reading with the prognosis's own seed and options."""
+    from emaphm.faults import K_NOMINAL
+    from emaphm.prognosis import inspection, trends
+
+    t = np.arange(7) * 150.0
+    K = np.tile(K_NOMINAL, (t.size, 1))
+    K[:, 0] = np.maximum(0.0, 4e-4 * (t - 300.0))
+    prog = trends.prognose(t, K, seed=3, models=("linear", "onset"), sigma_floor=0.004,
+                           n_samples=900, discrepancy={})
+    assert dict(prog.options) == {"sigma_floor": 0.004, "models": ("linear", "onset"),
+                                  "n_samples": 900}
+    seen = {}
+    real = trends.prognose
+
+    def spy(times, K, **kw):
+        seen.update(kw, n=len(times))
+        return real(times, K, **kw)
+
+    monkeypatch.setattr(trends, "prognose", spy)
+    part = inspection.taking_part(prog)
+    assert "friction" in part
+    assert inspection._new_since_last(prog, part) == set()      # growing at both
+    assert seen["n"] == t.size - 1 and seen["seed"] == 3
+    assert seen["models"] == ("linear", "onset") and seen["sigma_floor"] == 0.004
+    assert seen["n_samples"] == 900 and seen["indicators"] == list(part)
+
+
 # ----------------------------------------------------------------------------- misuse
 @pytest.mark.parametrize("kw, message", [
     (dict(risk=0.0), r"risk must be a probability in \(0, 1\)"),

@@ -446,18 +446,19 @@ def _soon(preds: Sequence["RULPrediction"], t_now: float, risk: float, iv: Inter
 def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]:
     """The indicators of ``part`` that did not take part at the inspection before the
     last (:func:`taking_part` of the history without its last inspection, predicted with
-    the same seed, draws, thresholds and model discrepancy, the default trend models and
-    sigma floor)."""
+    the same seed, draws, thresholds, model discrepancy and options,
+    :attr:`~emaphm.prognosis.trends.Prognosis.options`)."""
     from .trends import MIN_INSPECTIONS, prognose
 
     if prognosis.times.size - 1 < MIN_INSPECTIONS:
         return set(part)
     p0 = prognosis.predictions[next(iter(part))]
+    options = {"n_samples": int(p0.samples.size), **prognosis.options}
     before = prognose(prognosis.times[:-1], prognosis.K[:-1],
                       seed=0 if p0.seed is None else int(p0.seed),
                       thresholds=prognosis.thresholds, indicators=list(part),
                       discrepancy={m: prognosis.predictions[m].discrepancy for m in part},
-                      n_samples=int(p0.samples.size))
+                      **options)
     return set(part) - set(taking_part(before))
 
 

@@ -805,6 +805,10 @@ class Prognosis:
     thresholds: FailureThresholds
     times: np.ndarray = field(repr=False)
     K: np.ndarray = field(repr=False)
+    #: the options it was predicted with beyond the history and the seed (``sigma_floor``
+    #: and what went to :func:`predict_rul`: ``models``, ``selection``, ``n_samples``...),
+    #: so that it can be predicted again alike
+    options: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     @property
     def first(self) -> RULPrediction | None:
@@ -863,7 +867,8 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
         preds[name] = _with_seed(preds[name], seed)
     return Prognosis(actuator=actuator, t_now=float(times[-1] if t_now is None else t_now),
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
-                     times=times, K=np.atleast_2d(np.asarray(K, dtype=float)))
+                     times=times, K=np.atleast_2d(np.asarray(K, dtype=float)),
+                     options={"sigma_floor": sigma_floor, **kwargs})
 
 
 def _with_seed(p: RULPrediction, seed: int) -> RULPrediction:
