@@ -462,8 +462,8 @@ def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]
     return set(part) - set(taking_part(before))
 
 
-def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, why: str
-             ) -> NextInspection:
+def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, risk: float,
+             why: str) -> NextInspection:
     """The rule ``confirm``: inspect again at the minimum interval; ``why`` is said after
     the lead indicator and its chance of a crossing by then."""
     iv, unit, t_now = base["intervals"], base["time_unit"], base["t_now"]
@@ -472,8 +472,8 @@ def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, wh
     lead = max(p_each, key=lambda k: (p_each[k], -list(p_each).index(k)))
     f_at = float(first_crossing_cdf(preds, at))
     reason = (f"{lead} {part[lead]}: probability {f_at:.2g} of a crossing within the minimum "
-              f"interval {_t(iv.min, unit)}, above the risk, but {why}: inspect again at the "
-              "minimum interval to confirm")
+              f"interval {_t(iv.min, unit)}, above the risk {risk:g}, but {why}: inspect again "
+              "at the minimum interval to confirm")
     return NextInspection(at=at, risk=f_at, indicator=lead, rule="confirm", reason=reason,
                           p_indicator=p_each, t_star=t_star, **base)
 
@@ -487,17 +487,17 @@ def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: Insp
     past = [p for p in preds if p.median <= 0.0]
     soon = f_now > risk or t_star - t_now < iv.min
     if soon and n < MIN_FLAG_INSPECTIONS and not past:
-        return _confirm(preds, part, t_star, base,
+        return _confirm(preds, part, t_star, base, risk,
                         f"a trend of {n} inspections is too uncertain to act on (from "
                         f"{MIN_FLAG_INSPECTIONS})")
     if soon and not past:
         new = _new_since_last(prognosis, part)
         settled = [p for p in preds if p.indicator not in new]
         if new and not _soon(settled, t_now, risk, iv):
-            return _confirm(preds, part, t_star, base,
+            return _confirm(preds, part, t_star, base, risk,
                             f"{' and '.join(sorted(new))} rose from its healthy level at this "
                             "inspection alone (one reading is no trend to act on)")
-    if f_now > risk or t_star - t_now < iv.min:
+    if soon:
         lead = max(preds, key=lambda p: (float(crossing_cdf(p, min(t_star, t_now + iv.min))),
                                          _level_at_last(p) / p.threshold))
         if f_now > risk:
@@ -563,9 +563,10 @@ class PolicyRun:
     missed          the threshold was crossed before the next planned inspection
     planned         the inspection planned after the last one (None when flagged)
     risks           (n,) the predicted chance of a crossing by each plan's inspection
-                    (:attr:`NextInspection.risk`; None where a plan has none: too few
-                    inspections, healthy). Their sum over the intervals planned is the
-                    number of misses a calibrated risk expects of this actuator
+                    (:attr:`NextInspection.risk`; with a fixed interval, by the next
+                    fixed inspection; None where a plan has none: too few inspections,
+                    healthy). Their sum over the intervals planned is the number of
+                    misses a calibrated risk expects of this actuator
     ==============  ==================================================================
     """
 
