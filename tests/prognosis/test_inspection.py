@@ -272,6 +272,43 @@ def test_the_single_rise_check_predicts_the_shorter_history_alike(monkeypatch):
     assert seen["n_samples"] == 900 and seen["indicators"] == list(part)
 
 
+def test_a_flat_indicator_below_the_noise_floor_is_not_flagged_by_onset_draws():
+    """Friction flat at 0.2 (taking part: 40 % of its threshold) with a slope far under the
+    noise floor: the onset's variance is huge, and onsets drawn after the last inspection
+    held the flat level past the threshold (act now, p_failed 0.375). Drawn no later than
+    the last inspection, none is past."""
+    from emaphm.faults import K_NOMINAL
+
+    t = np.arange(8) * 150.0
+    K = np.tile(K_NOMINAL, (t.size, 1))
+    K[:, 0] = 0.2 + np.r_[np.zeros(6), 1e-9, 2e-9]
+    prog, plan = next_inspection(t, K, seed=0, discrepancy={})
+    assert plan.rule != "act now" and prog.predictions["friction"].p_failed == 0.0
+    assert np.all(prog.predictions["friction"].theta["onset"][:, 2] <= 0.0)
+
+
+def test_a_confirming_plan_is_anchored_to_the_last_inspection_and_a_big_jump_acts():
+    """A rise seen once is confirmed at the minimum interval after the last inspection:
+    planned later than that, it is due now (not pushed on). A jump to 0.45 of a 0.5
+    threshold, whose crossing before the confirming inspection is more likely than not,
+    is acted on at once."""
+    from emaphm.faults import K_NOMINAL
+
+    rng = np.random.default_rng(0)
+    t = np.arange(8) * 150.0
+    K = np.tile(K_NOMINAL, (t.size, 1))
+    K[:, 0] = np.abs(0.01 + rng.normal(0.0, 0.003, t.size))
+    K[-1, 0] = 0.06
+    iv = INTERVAL_DEFAULTS["h"]
+    _, plan = next_inspection(t, K, seed=1, t_now=1250.0)
+    assert plan.rule == "confirm" and plan.at == t[-1] + iv.min
+    _, later = next_inspection(t, K, seed=1, t_now=t[-1] + 2 * iv.min)
+    assert later.at <= later.t_now
+    K[-1, 0] = 0.45
+    _, jump = next_inspection(t, K, seed=1)
+    assert jump.rule == "act now", jump.reason
+
+
 # ----------------------------------------------------------------------------- misuse
 @pytest.mark.parametrize("kw, message", [
     (dict(risk=0.0), r"risk must be a probability in \(0, 1\)"),

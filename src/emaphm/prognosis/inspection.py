@@ -28,7 +28,8 @@ rule                        the next inspection
                             :data:`MIN_FLAG_INSPECTIONS` inspections, or on indicators that
                             were at their healthy level at the inspection before the last
                             (a rise seen once: the scatter of a healthy unit does that now
-                            and then): ``t_now`` + the minimum interval
+                            and then) while a crossing before the confirming inspection is
+                            less likely than not: ``t_last`` + the minimum interval
 ``act now``                 ``F(t_now) > risk`` (an indicator is past its threshold), or
                             ``t* - t_now`` under the minimum interval: ``at = t_now``. A
                             degrading actuator is flagged, not chased with ever shorter
@@ -464,10 +465,11 @@ def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]
 
 def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, risk: float,
              why: str) -> NextInspection:
-    """The rule ``confirm``: inspect again at the minimum interval; ``why`` is said after
-    the lead indicator and its chance of a crossing by then."""
-    iv, unit, t_now = base["intervals"], base["time_unit"], base["t_now"]
-    at = t_now + iv.min
+    """The rule ``confirm``: inspect again at the minimum interval after the last
+    inspection (due now where a plan made later has passed it); ``why`` is said after the
+    lead indicator and its chance of a crossing by then."""
+    iv, unit = base["intervals"], base["time_unit"]
+    at = base["t_last"] + iv.min
     p_each = _p_each(preds, at)
     lead = max(p_each, key=lambda k: (p_each[k], -list(p_each).index(k)))
     f_at = float(first_crossing_cdf(preds, at))
@@ -490,7 +492,7 @@ def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: Insp
         return _confirm(preds, part, t_star, base, risk,
                         f"a trend of {n} inspections is too uncertain to act on (from "
                         f"{MIN_FLAG_INSPECTIONS})")
-    if soon and not past:
+    if soon and not past and float(first_crossing_cdf(preds, t_last + iv.min)) < 0.5:
         new = _new_since_last(prognosis, part)
         settled = [p for p in preds if p.indicator not in new]
         if new and not _soon(settled, t_now, risk, iv):

@@ -215,11 +215,17 @@ class TrendFit:
         return _model_value(self.model, self.theta, tau)
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
-        """``n`` parameter draws (n, p) from the multivariate Student t of the fit."""
+        """``n`` parameter draws (n, p) from the multivariate Student t of the fit. An
+        onset is drawn no later than the last inspection, as it is fitted (where the slope
+        is lost in the noise its variance is huge, and an onset drawn far ahead would hold
+        the level of the flat part there: ``a + b c`` past any threshold)."""
         chol = _chol(self.cov)
         z = rng.standard_normal((n, self.n_params))
         w = np.sqrt(self.dof / rng.chisquare(self.dof, size=n))
-        return self.theta[None, :] + (z @ chol.T) * w[:, None]
+        theta = self.theta[None, :] + (z @ chol.T) * w[:, None]
+        if self.model == "onset":
+            theta[:, 2] = np.minimum(theta[:, 2], 0.0)
+        return theta
 
     def crossing_time(self, threshold: Any, theta: np.ndarray | None = None) -> np.ndarray:
         """Absolute time(s) where the trend reaches ``threshold`` (a number, or one per row
