@@ -436,12 +436,11 @@ def _check_resolution(prognosis: "Prognosis", risk: float) -> None:
                          f"n_samples=n_samples_for({risk:g})")
 
 
-def _soon(preds: Sequence["RULPrediction"], t_now: float, risk: float, iv: IntervalDefaults
+def _soon(f_now: float, t_star: float, t_now: float, risk: float, iv: IntervalDefaults
           ) -> bool:
-    """The risk comes within the minimum interval: crossed already more likely than the
-    risk, or ``t*`` under the minimum interval."""
-    return bool(preds) and (float(first_crossing_cdf(preds, t_now)) > risk
-                            or risk_time(preds, risk) - t_now < iv.min)
+    """The risk comes within the minimum interval: crossed already (``f_now``, the chance
+    at ``t_now``) more likely than the risk, or ``t*`` under the minimum interval."""
+    return f_now > risk or t_star - t_now < iv.min
 
 
 def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]:
@@ -487,7 +486,7 @@ def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: Insp
     risk = policy.risk
     f_now = float(first_crossing_cdf(preds, t_now))
     past = [p for p in preds if p.median <= 0.0]
-    soon = f_now > risk or t_star - t_now < iv.min
+    soon = _soon(f_now, t_star, t_now, risk, iv)
     if soon and n < MIN_FLAG_INSPECTIONS and not past:
         return _confirm(preds, part, t_star, base, risk,
                         f"a trend of {n} inspections is too uncertain to act on (from "
@@ -495,7 +494,8 @@ def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: Insp
     if soon and not past and float(first_crossing_cdf(preds, t_last + iv.min)) < 0.5:
         new = _new_since_last(prognosis, part)
         settled = [p for p in preds if p.indicator not in new]
-        if new and not _soon(settled, t_now, risk, iv):
+        if new and not (settled and _soon(float(first_crossing_cdf(settled, t_now)),
+                                          risk_time(settled, risk), t_now, risk, iv)):
             return _confirm(preds, part, t_star, base, risk,
                             f"{' and '.join(sorted(new))} rose from its healthy level at this "
                             "inspection alone (one reading is no trend to act on)")

@@ -149,8 +149,9 @@ def _crossing_tau(model: str, theta: np.ndarray, threshold: Any) -> np.ndarray:
         with np.errstate(divide="ignore", invalid="ignore"):
             tau = np.where(b > 0, gap / b, np.inf)
     elif model == "onset":
-        # flat until the onset c (a draw may put it after t_ref), linear after it: below
-        # the threshold at max(0, c), a rising line reaches it beyond there
+        # flat until the onset c, linear after it: below the threshold at max(0, c), a
+        # rising line reaches it beyond there (fits and draws keep c <= 0; a theta given
+        # to crossing_time by hand may not)
         level, gap = a + b * np.maximum(theta[:, 2], 0.0), threshold - a
         with np.errstate(divide="ignore", invalid="ignore"):
             tau = np.where(b > 0, gap / b, np.inf)
