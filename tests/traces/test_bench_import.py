@@ -377,6 +377,51 @@ def test_mdf_group_with_a_gap_in_its_clock_is_read_whole_and_still_right(tmp_pat
 
 
 @needs_bench
+@pytest.mark.parametrize("motion_hz", [5000.0, 1000.0])
+def test_mdf_import_keeps_the_whole_master_when_another_group_is_slower(reference, tmp_path,
+                                                                         motion_hz):
+    """Currents at the trace's rate, motion at a lower one (half, a tenth: fewer records in
+    their group): the import keeps every record of the currents' master, the motion
+    interpolated onto it (held within one of its steps at the end), not the shorter group's
+    count of records (it kept half the recording, silently)."""
+    from asammdf import MDF, Signal
+
+    trace, _ = reference
+    t = trace.t + 2.0
+    step = int(round((1.0 / motion_hz) / (t[1] - t[0])))
+    m = MDF(version="4.10")
+    m.append([Signal(trace.i_a, t, name="IU", unit="A"), Signal(trace.i_b, t, name="IV", unit="A")],
+             acq_name="currents")
+    m.append([Signal(trace.theta_ref[::step], t[::step], name="ref", unit="rad"),
+              Signal(trace.theta_m[::step], t[::step], name="pos", unit="rad")], acq_name="motion")
+    m.save(tmp_path / "rates.mf4", overwrite=True)
+    m.close()
+    cmap = _map('[channels]\ni_a = { name = "IU" }\ni_b = { name = "IV" }\n'
+                'theta_ref = { name = "ref" }\ntheta_m = { name = "pos" }\n')
+    got = import_trace(tmp_path / "rates.mf4", cmap)
+    assert got.t.size == trace.t.size
+    np.testing.assert_allclose(got.t, trace.t, atol=1e-9)
+    np.testing.assert_array_equal(got.i_a, trace.i_a)
+    last = (trace.t.size - 1) // step * step                # the motion's last record
+    np.testing.assert_allclose(got.theta_m[:last + 1][::step], trace.theta_m[:last + 1][::step],
+                               atol=1e-12)
+    np.testing.assert_array_equal(got.theta_m[last:], trace.theta_m[last])
+
+
+@needs_bench
+def test_mdf_window_outside_the_recording_names_its_span(reference, tmp_path):
+    """No record is read for a window outside an MDF recording (its rows come from the
+    master's rate): the span is the master's, not 'inf to -inf'."""
+    from benchfiles import mdf4
+
+    trace, _ = reference
+    source, text = mdf4(trace, tmp_path / "bench.mf4", start=1000.0)
+    with pytest.raises(TraceError, match=r"no samples in the window 0.1:0.3 s; the recording "
+                                         r"spans 1000 to 1000.49988 s"):
+        import_trace(source, _map(text), window=Window(0.1, 0.3))
+
+
+@needs_bench
 def test_mdf_group_that_does_not_cover_the_first_is_refused(tmp_path):
     _two_clocks(tmp_path / "late.mf4", 5.1 + np.arange(1300) / 2000.0)
     with pytest.raises(TraceError, match=r"channel motion/pos covers 5.1 to 5.7495 s, not the 5 to "

@@ -111,6 +111,8 @@ def _check_lengths(chans: dict[str, ChannelInfo], base: _TimeBase, where: str) -
     known = {t: c.samples for t, c in chans.items() if c.samples is not None}
     if not known:
         return None
+    if base.mode == "own":         # the master of the first channel's group: the others are
+        return chans[_first(chans)].samples     # resampled onto it, whatever their length
     if len(set(known.values())) > 1 and base.mode != "own":
         same_base = {(c.rate, c.start) for c in chans.values()}
         if base.mode == "rate" and len(same_base) == 1 and None not in next(iter(same_base)):
@@ -150,8 +152,10 @@ def _nan_runs(name: str, target: str, x: np.ndarray, t: np.ndarray, where: str) 
 class _Collector:
     """The window's rows, block by block, with the checks that need the whole stream."""
 
-    def __init__(self, targets: Sequence[str], window: Window, limit: int, where: str) -> None:
+    def __init__(self, targets: Sequence[str], window: Window, limit: int, where: str,
+                 span: tuple[float, float] | None = None) -> None:
         self.targets, self.window, self.limit, self.where = list(targets), window, limit, where
+        self.known_span = span           # the recording's span where its rate tells it
         self.parts: dict[str, list[np.ndarray]] = {t: [] for t in targets}
         self.times: list[np.ndarray] = []
         self.kept = 0
@@ -193,6 +197,8 @@ class _Collector:
     def arrays(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         if not self.kept:
             lo, hi = self.span
+            if self.known_span is not None and not lo <= hi:    # no row read: outside it
+                lo, hi = self.known_span
             raise TraceError(f"{self.where}: no samples in the window {self.window.start}:"
                              f"{self.window.end} s; the recording spans {lo:.9g} to {hi:.9g} s")
         t = np.concatenate(self.times)
@@ -214,7 +220,9 @@ def _read(source, cmap: ChannelMap, chans: dict[str, ChannelInfo], conv: dict[st
                 else f"{(stop or n) - first:,} samples in the window")
         raise too_many_samples(where, f"the recording holds {what}", limit)
     signals = [t for t in order if t != "t"]
-    collect = _Collector(signals, window, limit, where)
+    span = ((base.start, base.start + (n - 1) / base.rate)
+            if base.mode in ("rate", "own") and base.rate and n else None)
+    collect = _Collector(signals, window, limit, where, span)
     for block in source.blocks([chans[t] for t in order], first, stop):
         cols = {t: conv[t].apply(x) for t, x in zip(order, block.columns)}
         if base.mode == "channel":

@@ -67,16 +67,20 @@ class MdfSource:
                 np.asarray(sig.samples, dtype=np.float64))
 
     def _on(self, info: ChannelInfo, t: np.ndarray) -> np.ndarray:
-        """``info``'s samples (another group) interpolated onto the times ``t``."""
+        """``info``'s samples (another group) interpolated onto the times ``t``; up to one of
+        its own sample steps past its first or last record, its edge value is held (a group
+        at a lower rate ends up to a step before the master's last record)."""
         n = info.samples or 0
+        slack = 1.0 / info.rate if info.rate else 0.0
         if info.rate and info.start is not None:
             a = max(0, int(math.floor((t[0] - info.start) * info.rate)) - 2)
             b = min(n, int(math.ceil((t[-1] - info.start) * info.rate)) + 3)
             ts, x = self._read(info, a, b)
-            if ts.size and ts[0] <= t[0] and ts[-1] >= t[-1]:
+            if ts.size and ts[0] <= t[0] + slack and ts[-1] >= t[-1] - slack \
+                    and (a == 0 or ts[0] <= t[0]) and (b == n or ts[-1] >= t[-1]):
                 return np.interp(t, ts, x)
         ts, x = self._read(info, 0, n)
-        if not ts.size or ts[0] > t[0] or ts[-1] < t[-1]:
+        if not ts.size or ts[0] > t[0] + slack or ts[-1] < t[-1] - slack:
             raise TraceError(f"{self.path}: channel {info.label} covers {ts[0] if ts.size else 0:.6g} "
                              f"to {ts[-1] if ts.size else 0:.6g} s, not the {t[0]:.6g} to "
                              f"{t[-1]:.6g} s of the master time base; cut the window inside "
