@@ -235,36 +235,42 @@ class _Identified:
     inspection's index) diagnosed by :func:`emaphm.prognosis.inspect` as ``emaphm history
     add`` does (data-sheet parameters, no commissioning), recorded in ``store``."""
 
-    def __init__(self, scenario, seed: int, store) -> None:
+    def __init__(self, scenario, seed: int, store, params=None) -> None:
         self.scenario, self.seed, self.store, self.n = scenario, seed, store, 0
+        self.params = params
 
     def __call__(self, times: np.ndarray) -> np.ndarray:
         from emaphm.prognosis import inspect, simulate_degradation
 
         for t in times[self.n:]:
             noise = int(np.random.SeedSequence([self.seed, 7, self.n]).generate_state(1)[0])
-            trace = simulate_degradation(self.scenario, [float(t)], seed=noise).traces[0]
-            inspect(self.store, "EMA", trace, float(t), seed=self.seed)
+            trace = simulate_degradation(self.scenario, [float(t)], seed=noise,
+                                         params=self.params).traces[0]
+            inspect(self.store, "EMA", trace, float(t), seed=self.seed, params=self.params)
             self.n += 1
         return self.store.data("EMA").K
 
 
 def real_task(task: tuple) -> dict:
     """One actuator inspected on the reference plant by a policy (``("risk", seed, risk,
-    None)`` or ``("fixed", seed, risk, D)``), the trends carrying the model discrepancy."""
+    None, params_file)`` or ``("fixed", seed, risk, D, params_file)``; ``params_file`` None:
+    the preset), the trends carrying the model discrepancy."""
     import tempfile
 
     from emaphm.prognosis import HealthHistory
     from emaphm.prognosis.inspection import InspectionPolicy, simulate_policy
 
-    kind, seed, risk, spec = task
+    from emaphm.params import load_params
+
+    kind, seed, risk, spec, params_file = task
+    params = None if params_file is None else load_params(params_file)
     sc = fleet_path(seed)
     t0 = time.process_time()
     with tempfile.TemporaryDirectory() as tmp, HealthHistory(Path(tmp) / "h.sqlite") as h:
         h.register("EMA")
         run = simulate_policy(sc, InspectionPolicy(risk=risk), seed=seed,
                               fixed_interval=spec if kind == "fixed" else None,
-                              observer=_Identified(sc, seed, h))
+                              observer=_Identified(sc, seed, h, params))
     return {"kind": kind, "seed": seed, "x": risk, "spec": spec, "eol": sc.eol, "name": sc.name,
             "n": run.n_inspections, "missed": run.missed, "flagged_at": run.flagged_at,
             "last": float(run.times[-1]), "rules": list(run.rules),
@@ -448,6 +454,10 @@ def main() -> None:
                     help="only: the first N actuators inspected on the reference plant (each "
                          "inspection identified) by the risk policy at 0.01 and the best fixed "
                          "interval of the synthetic run; added to inspection.json and .md")
+    ap.add_argument("--params", type=Path, default=None, metavar="FILE",
+                    help="with --real: the actuator's parameters (TOML, e.g. "
+                         "examples/actuators/ema-270v-750w.toml; default the preset), its "
+                         "results kept beside the preset's")
     ap.add_argument("--figures-only", action="store_true",
                     help="redraw the figures and write the report again from "
                          "benchmarks/results/inspection.json")
@@ -459,7 +469,7 @@ def main() -> None:
         print(json.dumps(res["chosen"]), res["in_code"])
         return
     if args.real:
-        real(args.real, args.workers)
+        real(args.real, args.workers, args.params)
         return
     if args.figures_only:
         res = json.loads((RESULTS / "inspection.json").read_text())
@@ -492,23 +502,35 @@ def main() -> None:
     print((RESULTS / "inspection.md").read_text())
 
 
-def real(n: int, workers: int) -> None:
-    """The plant-trace check (``--real N``), added to the synthetic run's results."""
+def real(n: int, workers: int, params_file: Path | None = None) -> None:
+    """The plant-trace check (``--real N [--params FILE]``), added to the synthetic run's
+    results: the preset's under ``real``, another actuator's under ``real_actuators[name]``."""
     res = json.loads((RESULTS / "inspection.json").read_text())
     best = res["comparison"]["best_fixed"]
     wall0 = time.perf_counter()
     load0 = os.getloadavg()
-    tasks = [("risk", s, FIXED_RISK, None) for s in range(n)]
-    tasks += [("fixed", s, FIXED_RISK, best) for s in range(n)]
+    name = None
+    if params_file is not None:
+        from emaphm.params import load_params
+
+        params_file = params_file.resolve()
+        name = load_params(params_file).name or params_file.stem
+    tasks = [("risk", s, FIXED_RISK, None, params_file) for s in range(n)]
+    tasks += [("fixed", s, FIXED_RISK, best, params_file) for s in range(n)]
     runs = _map(real_task, tasks, workers, "plant traces")
     stats = policy_stats(runs)
     synthetic = {k: policy_stats([r for r in res["policy_runs"] if r["seed"] in range(n)
                                   and r["kind"] == v["kind"] and r["x"] == v["x"]
                                   and r["spec"] == v["spec"]])[k] for k, v in stats.items()}
-    res["real"] = {"paths": n, "stats": stats, "synthetic_same_paths": synthetic, "runs": runs,
-                   "wall_s": time.perf_counter() - wall0,
-                   "cpu_s_workers": float(sum(r["cpu_s"] for r in runs)),
-                   "load_before": list(load0), "load_after": list(os.getloadavg())}
+    out = {"paths": n, "stats": stats, "synthetic_same_paths": synthetic, "runs": runs,
+           "wall_s": time.perf_counter() - wall0,
+           "cpu_s_workers": float(sum(r["cpu_s"] for r in runs)),
+           "load_before": list(load0), "load_after": list(os.getloadavg()),
+           "actuator": name or "preset", "date": _dt.date.today().isoformat()}
+    if name is None:
+        res["real"] = out
+    else:
+        res.setdefault("real_actuators", {})[name] = out
     (RESULTS / "inspection.json").write_text(json.dumps(res, allow_nan=False) + "\n")
     (RESULTS / "inspection.md").write_text(report(res))
     print((RESULTS / "inspection.md").read_text())
@@ -700,12 +722,19 @@ def report(res: dict) -> str:
     md += ["", "![policy](docs/figures/inspection/policy.png)", ""]
     if "real" in res:
         md += _real_report(res["real"])
+    for other in res.get("real_actuators", {}).values():
+        md += _real_report(other)
     return "\n".join(md)
 
 
 def _real_report(real: dict) -> list[str]:
-    md = ["### The same policies on plant traces (a check, not statistics)", "",
-          f"The first {real['paths']} of the actuators above, every inspection a reference-plant "
+    who = real.get("actuator", "preset")
+    md = ["### The same policies on plant traces (a check, not statistics)" if who == "preset"
+          else f"### The same policies on another actuator's plant traces: {who}", "",
+          f"The first {real['paths']} of the actuators above"
+          + ("" if who == "preset" else f", {who}'s reference plant and data sheet "
+             f"(`examples/actuators/{who}.toml`; {real.get('date', '')})")
+          + ", every inspection a reference-plant "
           "trace (switching PWM, Stribeck friction, sensor noise) identified by the default "
           "pipeline on the data sheet (no commissioning), the trends carrying the model "
           f"discrepancy (`MODEL_DISCREPANCY`). {real['wall_s']:.0f} s wall, "
