@@ -8,6 +8,7 @@ the ``emaphm`` entry point. Importing it is cheap (no NumPy, no model).
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
 from pathlib import Path
@@ -84,10 +85,16 @@ def budget_option(text: str | None) -> Any:
     return value
 
 
-def out_path(path: str, suffixes: tuple[str, ...], what: str) -> Path:
-    """An output file named by an option: its suffix one of ``suffixes``, its folder there
-    and not the path itself a folder (else :class:`UsageError`)."""
+def out_path(path: str, suffixes: tuple[str, ...], what: str,
+             inputs: Sequence[Any] = ()) -> Path:
+    """An output file named by an option: its suffix one of ``suffixes``, its folder there,
+    not the path itself a folder and not one of the command's ``inputs`` (paths; None is
+    skipped): writing it would destroy what the command reads (else :class:`UsageError`)."""
     p = Path(path)
+    for source in inputs:
+        if source is not None and _same_file(p, Path(source)):
+            raise UsageError(f"{what} {shown(p.name)} is the command's input (the same file): "
+                             "writing it would overwrite what is read; give another file name")
     if p.suffix.lower() not in suffixes:
         raise UsageError(f"{what} {shown(path)} must end in {' or '.join(suffixes)}")
     if p.is_dir():
@@ -97,6 +104,14 @@ def out_path(path: str, suffixes: tuple[str, ...], what: str) -> Path:
         raise UsageError(f"{what} {shown(path)}: folder {p.parent} does not exist; create it first")
     writable_folder(p.parent, what)
     return p
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    """Whether ``a`` and ``b`` name one file (links followed); False when either is not there."""
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 def writable_folder(folder: Path, what: str) -> Path:

@@ -82,7 +82,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             (args.k is None and args.scenario is None and not args.fault):
         raise UsageError("give exactly one of --k K1,...,K8 or --scenario NAME (see `emaphm "
                          "scenarios`), or faults with --fault MODE:... on the nominal actuator")
-    out = out_path(args.out, (".csv", ".parquet"), "--out")
+    out = out_path(args.out, (".csv", ".parquet"), "--out", inputs=[args.params])
     plot = plot_path(args.plot)
     k = as_k(args.k) if args.k is not None else scenario(args.scenario or "nominal")
     faults = _fault_options(args.fault)
@@ -356,7 +356,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from .params import save_params
     from .progress import CountProgress, compile_notice
 
-    out = out_path(args.out, (".toml",), "--out")
+    out = out_path(args.out, (".toml",), "--out", inputs=[*args.traces, args.params])
     plot = plot_path(args.plot)
     params = _load_params(args.params)
     traces = [_trace_file(name) for name in args.traces]
@@ -395,7 +395,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_params(args: argparse.Namespace) -> int:
     from .params import save_params, siemens_1fk7060
 
-    out = out_path(args.out, (".toml",), "--out")
+    out = out_path(args.out, (".toml",), "--out", inputs=[args.datasheet])
     if args.datasheet is None:
         save_params(siemens_1fk7060(), out)
         print(f"wrote {out}: the reconstructed Siemens 1FK7060-2AC71 preset in SI units; edit it "

@@ -614,6 +614,26 @@ def _(d, b):
     return _import(d, _bench_csv(b, d / "bench.csv")) + ["--window", "10-11"]
 
 
+@case("import-out-is-its-source", "--out", "bench.csv", "is the command's input",
+      "would overwrite what is read; give another file name")
+def _(d, b):
+    argv = _import(d, _bench_csv(b, d / "bench.csv"))
+    return argv[:-1] + [str(d / "bench.csv")]
+
+
+@case("params-out-is-its-datasheet", "--out", "np.toml", "is the command's input")
+def _(d, b):
+    _toml(d / "np.toml", "[datasheet]\npoles = 8\n")
+    return ["params", "--datasheet", str(d / "np.toml"), "--out", str(d / "np.toml")]
+
+
+@case("calibrate-out-is-its-params", "--out", "p.toml", "is the command's input")
+def _(d, b):
+    _toml(d / "p.toml", 'name = "unit"\n')
+    return ["calibrate", str(_bench_csv(b, d / "bench.csv")), "--params", str(d / "p.toml"),
+            "--out", str(d / "p.toml")]
+
+
 @case("import-without-a-map", "give --map MAP.toml and --out", "or --inspect")
 def _(d, b):
     return ["import", str(_bench_csv(b, d / "bench.csv")), "--out", str(d / "o.csv")]

@@ -36,7 +36,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     if cmap is None or args.out is None:
         raise UsageError("give --map MAP.toml and --out TRACE.csv|.parquet (or --inspect to list "
                          f"the channels of {source.name} and print a starter map)")
-    out = out_path(args.out, (".csv", ".parquet"), "--out")
+    out = out_path(args.out, (".csv", ".parquet"), "--out", inputs=[source, args.map])
     window = Window.parse(args.window)
     t0 = time.perf_counter()
     trace = import_trace(source, cmap, window=window, map_name=str(args.map))
