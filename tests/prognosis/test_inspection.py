@@ -10,6 +10,7 @@ plan, the policy simulated to a flag, the misuse messages, and the command line.
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 
@@ -22,7 +23,7 @@ from emaphm.prognosis.history import HealthHistory
 from emaphm.prognosis.inspection import (INTERVAL_DEFAULTS, MIN_FLAG_INSPECTIONS,
                                          InspectionPolicy, crossing_cdf, first_crossing_cdf,
                                          n_samples_for, next_inspection, plan_inspection,
-                                         risk_time, simulate_policy)
+                                         risk_time, simulate_policy, taking_part)
 from emaphm.prognosis.simulator import DegradationLaw, DegradationScenario
 from emaphm.prognosis.trends import predict_rul, prognose
 
@@ -398,6 +399,85 @@ def test_prognose_risk_under_three_inspections_falls_back(history, capsys):
     assert "inspect EMA-0 now: it has never been inspected" in capsys.readouterr().out
     # without --risk the refusal stands: a trend needs three inspections
     assert main(["prognose", "EMA-2", "--db", history]) == 2
+
+
+def _one_reading_jump():
+    """A fleet unit's history (seven inspections, friction growing) whose short_b, at zero
+    all along, reads 0.016 at the last inspection: an exponential through that one reading
+    has its rate at the fit's bound and reaches any level a few days on."""
+    t = np.array([0.0, 293.8, 587.7, 881.5, 1175.3, 1469.1, 1763.0])
+    K = _friction_k([0.0001, 0.0152, 0.0937, 0.1422, 0.2106, 0.2909, 0.3498])
+    K[:, 2] = [0.0, 0.0075, 0.0026, 0.0, 0.0, 0.0, 0.0084]
+    K[:, 3] = [0.0, 0.0009, 0.0, 0.0, 0.0, 0.0, 0.0158]
+    K[:, 7] = [0.4971, 0.5062, 0.5038, 0.4969, 0.4907, 0.5035, 0.4847]
+    return t, K
+
+
+def test_a_plan_made_after_the_last_inspection_does_not_act_on_a_jump_carried_forward():
+    """Planned at 1900 h (after the last inspection, 1763 h), the exponential through
+    short_b's one reading has crossed by then in half its draws (median RUL 0). That is a
+    prediction, not a reading: short_b rises by no more than its scatter and was at 5 % of
+    its threshold at the last inspection, so it is at its healthy level and the plan is the
+    friction's, as at 1763 h. (It read 'act now: short_b past its threshold'.)"""
+    from emaphm.prognosis.trends import indicator_state
+
+    t, K = _one_reading_jump()
+    policy = InspectionPolicy(risk=0.01)
+    prog, plan = next_inspection(t, K, seed=0, policy=policy, t_now=1900.0)
+    p = prog.predictions["short_b"]
+    assert p.median == 0.0 and p.current > 1.0                 # the carried-forward trend
+    assert indicator_state(p, 1763.0)[0] == "no growth"
+    assert "short_b" not in taking_part(prog) and prog.first.indicator == "friction"
+    assert plan.rule != "act now" and plan.indicator == "friction" and plan.at > 1900.0
+    _, at_last = next_inspection(t, K, seed=0, policy=policy)
+    assert at_last.indicator == "friction" and at_last.at == pytest.approx(plan.at, abs=60.0)
+    # a reading past its threshold at the last inspection stays past, whenever planned
+    K[-1, 3] = 0.35
+    prog, plan = next_inspection(t, K, seed=0, policy=policy, t_now=1900.0)
+    assert indicator_state(prog.predictions["short_b"], 1763.0)[0] == "past threshold"
+    assert plan.rule == "act now"
+
+
+def test_prognose_table_marks_a_trend_carried_past_its_range(tmp_path, capsys):
+    """The table at 1900 h: short_b's trend is past k = 1 there (shown at the bound, marked,
+    said below the table) and reads no growth, as the planner treats it."""
+    t, K = _one_reading_jump()
+    db = str(tmp_path / "h.sqlite")
+    with HealthHistory(db) as h:
+        h.register("EMA-1")
+        for ti, k in zip(t, K):
+            h.add("EMA-1", float(ti), k)
+    assert main(["prognose", "EMA-1", "--db", db, "--at", "1900", "--risk", "0.01"]) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("short_b"))
+    assert ">1.000" in row and "no growth" in row and "in the noise" in row
+    assert "past the range its indicator can take, shown at the bound" in out
+    assert "first to fail: friction" in out and "act now" not in out
+
+
+def test_prognose_risk_under_three_inspections_acts_on_an_indicator_past_its_threshold(
+        tmp_path, capsys):
+    """One inspection with friction 0.76 (threshold 0.5): act now, as the fleet's schedule
+    says; a --threshold above the reading plans the default interval. (The command planned
+    the default interval: it did not pass the k history to the planner.)"""
+    db = str(tmp_path / "h.sqlite")
+    with HealthHistory(db) as h:
+        h.register("X-1")
+        h.add("X-1", 10.0, _friction_k([0.76])[0])
+    assert main(["prognose", "X-1", "--db", db, "--risk", "0.05", "--json"]) == 0
+    nxt = json.loads(capsys.readouterr().out)["next_inspection"]
+    assert (nxt["at"], nxt["rule"], nxt["indicator"]) == (10.0, "act now", "friction")
+    assert main(["prognose", "X-1", "--db", db, "--risk", "0.05"]) == 0
+    assert "act now: X-1: friction past its failure threshold" in capsys.readouterr().out
+    out = tmp_path / "plan.csv"
+    assert main(["fleet", "schedule", "--db", db, "--risk", "0.05", "--out", str(out)]) == 0
+    capsys.readouterr()
+    row = next(csv.DictReader(out.open()))
+    assert float(row["inspect_by"]) == nxt["at"]
+    assert main(["prognose", "X-1", "--db", db, "--risk", "0.05", "--json",
+                 "--threshold", "friction=0.9"]) == 0
+    nxt = json.loads(capsys.readouterr().out)["next_inspection"]
+    assert nxt["rule"] == "too few inspections"
 
 
 @pytest.mark.parametrize("argv, needle", [

@@ -287,6 +287,8 @@ def threshold_option(items: list[str] | None):
 
 
 def _prognosis_table(prog: Any) -> str:
+    from .trends import indicator_state
+
     unit = prog.time_unit
     lines = [f"prognosis of {prog.actuator} at {prog.t_now:g} {unit} from {prog.times.size} "
              f"inspections (seed {next(iter(prog.predictions.values())).seed})",
@@ -299,10 +301,16 @@ def _prognosis_table(prog: Any) -> str:
         far = 10.0 * max(span, 1e-9)
         if p.no_growth(span):
             rul, iv = "no growth", f"P(within {far:.0f} {unit}) {p.p_fail_within(far):.2f}"
+        elif indicator_state(p, span)[0] == "no growth":   # a finite fit of the scatter
+            rul, iv = "no growth", f"fitted {_fmt_time(p.median, unit)}, in the noise"
         else:
             rul = _fmt_time(p.median, unit)
             iv = f"[{_fmt_time(p.lo, unit)}, {_fmt_time(p.hi, unit) if math.isfinite(p.hi) else 'inf'}]"
-        lines.append(f"{name:13s} {p.current:7.3f} {p.threshold:9.3f}  {model:24s} {rul:>12s}  {iv:>22s}")
+        lines.append(f"{name:13s} {_now_text(p):>7s} {p.threshold:9.3f}  {model:24s} {rul:>12s}  "
+                     f"{iv:>22s}")
+    if any(not p.bounds[0] <= p.current <= p.bounds[1] for p in prog.predictions.values()):
+        lines.append(f"(now: > or < marks a trend carried to {prog.t_now:g} {unit} past the range "
+                     "its indicator can take, shown at the bound)")
     lines += [f"{n}: {p.extrapolated}" for n, p in prog.predictions.items() if p.extrapolated]
     first = prog.first
     if first is not None and math.isfinite(first.median):
@@ -318,6 +326,17 @@ def _prognosis_table(prog: Any) -> str:
         lines.append("intervals include the identification's model discrepancy measured on the "
                      "reference plant (" + ", ".join(carried) + " of the indicator)")
     return "\n".join(lines)
+
+
+def _now_text(p: Any) -> str:
+    """The trend's value at t_now, or the bound it passed with > or < (a trend carried past
+    the last inspection can leave the range its indicator can take)."""
+    lo, hi = p.bounds
+    if p.current > hi:
+        return f">{hi:.3f}"
+    if p.current < lo:
+        return f"<{lo:.3f}"
+    return f"{p.current:.3f}"
 
 
 def inspection_policy(args: argparse.Namespace):
@@ -412,7 +431,8 @@ def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, ind
         prog = prognose(data.times, data.K, n_samples=n_samples_for(policy.risk), **common)
     t_now = args.at if args.at is not None else None
     return prog, plan_inspection(data.times, prog, policy=policy, t_now=t_now,
-                                 time_unit=data.actuator.time_unit)
+                                 time_unit=data.actuator.time_unit, K=data.K,
+                                 thresholds=thresholds, indicators=indicators)
 
 
 def _no_trend_dict(data: Any, args: argparse.Namespace, thresholds: Any) -> dict:

@@ -792,10 +792,18 @@ def indicator_state(p: RULPrediction, span: float) -> tuple[str, int, float]:
     standard errors at the last inspection, and its RUL median is finite and not
     :meth:`RULPrediction.no_growth`) or ``no growth``. The rise keeps a healthy component
     out: an exponential fitted to the scatter of a k that sits at zero can cross a
-    distant threshold at a finite time without any real growth."""
+    distant threshold at a finite time without any real growth. Predicted at a ``t_now``
+    after the last inspection, a median of 0 is a crossing in between, which is a
+    prediction like any other: past the threshold only where the trend was there at the
+    last inspection or rises beyond its scatter (an exponential through one reading above
+    the scatter of zeros can reach any level a few days on)."""
     sign, rate = _trend_sign(p)
     if p.median <= 0.0:
-        return "past threshold", sign, rate
+        top = p.fits[max(p.weights, key=p.weights.get)]
+        if p.t_now <= top.t_ref or sign > 0 \
+                or float(top.crossing_time(p.threshold)[0]) <= top.t_ref:
+            return "past threshold", sign, rate
+        return "no growth", sign, rate
     if sign > 0 and math.isfinite(p.median) and not p.no_growth(span):
         return "predicted", sign, rate
     return "no growth", sign, rate
