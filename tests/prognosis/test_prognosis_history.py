@@ -260,6 +260,9 @@ def test_cli_errors_leave_history_unchanged(tmp_path, capsys, mm_trace, monkeypa
         (["prognose", "EMA-1"], "a trend needs at least 3"),
         (["prognose", "EMA-1", "--threshold", "friction"], "MODE=VALUE"),
         (["prognose", "EMA-1", "--threshold", "wear=0.3"], "unknown fault mode"),
+        # times as given, every digit: 100.0000001 is not the inspection at 100
+        (["history", "remove", "EMA-1", "--at", "100.0000001"],
+         "no inspection at 100.0000001 cycles"),
     ]
     for argv, match in cases:
         rc, _, err = _run(argv + ["--db", db], capsys)

@@ -204,11 +204,11 @@ def cmd_add(args: argparse.Namespace) -> int:
     faults = (ins.diagnosis or {}).get("faults", [])
     if args.quiet:                                # the record in one line, as fleet demo's
         modes = sorted({str(f.get("mode")) for f in faults})
-        print(f"recorded inspection of {args.actuator} at {ins.time:g} {unit}: {verdict}"
+        print(f"recorded inspection of {args.actuator} at {ins.time:.15g} {unit}: {verdict}"
               + (f" ({', '.join(modes)})" if modes else ""))
         return 0
     print(a.interval.table())
-    print(f"\nrecorded inspection of {args.actuator} at {ins.time:g} {unit}: {verdict}"
+    print(f"\nrecorded inspection of {args.actuator} at {ins.time:.15g} {unit}: {verdict}"
           f" ({a.evaluations} evaluations, {a.elapsed_s:.1f} s)")
     for f in faults:
         print(f"  - {f['mode']}: {f['reading']}")
@@ -224,7 +224,7 @@ def cmd_remove(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(gone.to_dict()))
         return 0
-    print(f"removed inspection {gone.id} of {gone.actuator} at {gone.time:g} {unit}"
+    print(f"removed inspection {gone.id} of {gone.actuator} at {gone.time:.15g} {unit}"
           + (f" ({gone.verdict})" if gone.verdict else "")
           + (f", recorded {gone.recorded_utc[:19].replace('T', ' ')} UTC" if gone.recorded_utc else "")
           + (f" from {gone.source}" if gone.source else ""))

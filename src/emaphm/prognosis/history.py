@@ -317,7 +317,9 @@ def skipped_note(actuator: Actuator, skipped: Sequence[SkippedInspection]) -> st
 
 
 def _fmt(t: float) -> str:
-    return f"{t:g}" if isinstance(t, (int, float)) else repr(t)
+    """A time as it was given: every digit a float holds (587.7000001 is not 587.7), no
+    exponent below 1e16."""
+    return f"{t:.15g}" if isinstance(t, (int, float)) else repr(t)
 
 
 @dataclass(frozen=True)
@@ -648,7 +650,8 @@ class HealthHistory:
                 if known else " (none registered yet)"
             raise UnknownActuatorError(
                 f"actuator {shown(actuator_id)} is not registered in {self.path}{hint}"
-                + (f"; register it first: emaphm history register {actuator_id} --db {self.path}"
+                + (f"; to record it, register it first (emaphm history register {actuator_id} "
+                   f"--db {self.path}); emaphm history list --db {self.path} lists the others"
                    if isinstance(actuator_id, str) and _ID.fullmatch(actuator_id) else
                    "; an actuator id is 1-64 characters of letters, digits and . _ : / -"))
         return Actuator(*row)
@@ -798,7 +801,7 @@ class HealthHistory:
             raise HistoryError("say which inspection to remove: its time (--at T) or its id (--id N)")
         act = self.actuator(actuator_id)
         if at is not None:
-            where, arg, which = "time = ?", float(at), f"at {float(at):g} {act.time_unit}"
+            where, arg, which = "time = ?", float(at), f"at {_fmt(float(at))} {act.time_unit}"
         else:
             where, arg, which = "id = ?", int(inspection_id), f"with id {inspection_id}"
         with self._transaction() as con:

@@ -645,7 +645,8 @@ def predict_rul(t: Any, y: Any, threshold: float, *, seed: Any, t_now: float | N
     t_ref = float(np.asarray(t, dtype=float)[-1])
     t_now = t_ref if t_now is None else float(t_now)
     if t_now < t_ref:
-        raise ValueError(f"t_now = {t_now:g} is before the last inspection ({t_ref:g})")
+        raise ValueError(f"the time predicted at (t_now, --at) {t_now:.15g} is before the last "
+                         f"inspection ({t_ref:.15g}); give a time at or after it")
     weights = select(fits)
     if selection == "aicc":
         best = min(fits, key=lambda m: (fits[m].aicc, list(fits).index(m)))
