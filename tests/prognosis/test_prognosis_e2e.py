@@ -135,6 +135,27 @@ def test_spread_methods(run):
         identify_with_spread(trace, seed=None)
 
 
+def test_demo_degradation_into_a_history_says_so_and_refuses_a_repeat(capsys, tmp_path):
+    """--db of a history that holds other actuators: the demo's is added, and said; the same
+    demo again is refused before any work, with a fix that works (it said 'already
+    registered: record its inspections with emaphm history add')."""
+    from emaphm.prognosis.history import HealthHistory
+
+    db = tmp_path / "fleet.sqlite"
+    with HealthHistory(db) as h:
+        h.register("EMA-1")
+    argv = ["demo-degradation", "--scenario", "gain-drift", "--synthetic", "--inspections", "5",
+            "--db", str(db), "--json"]
+    assert main(argv) == 0
+    assert f"adding demo-gain-drift-0 to {db}, beside its 1 actuator(s)" in capsys.readouterr().err
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "holds demo-gain-drift-0 already" in err and "--seed" in err
+    assert main(argv + ["--seed", "1"]) == 0
+    with HealthHistory(db, readonly=True) as h:
+        assert [a.id for a in h.actuators()] == ["EMA-1", "demo-gain-drift-0", "demo-gain-drift-1"]
+
+
 def test_demo_degradation_cli_synthetic(capsys, tmp_path):
     out = tmp_path / "new" / "figures"          # created where missing
     rc = main(["demo-degradation", "--scenario", "gain-drift", "--synthetic", "--inspections", "10",

@@ -286,6 +286,16 @@ def test_cli_show_and_list(store, capsys, tmp_path):
     assert len(json.loads(out)["inspections"]) == 2
 
 
+def test_cli_list_keeps_one_row_per_actuator(tmp_path, capsys):
+    db = str(tmp_path / "h.sqlite")
+    with HealthHistory(db) as h:
+        h.register("EMA-1", description="left aileron\nline 2\tbay 3")
+        h.register("EMA-2")
+    rc, out, _ = _run(["history", "list", "--db", db], capsys)
+    rows = out.splitlines()
+    assert rc == 0 and len(rows) == 3 and rows[1].endswith("left aileron line 2 bay 3")
+
+
 def test_default_db_from_environment(tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("EMAPHM_HISTORY", str(tmp_path / "env.sqlite"))
     assert _run(["history", "register", "EMA-E"], capsys)[0] == 0

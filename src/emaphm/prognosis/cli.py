@@ -145,8 +145,10 @@ def cmd_list(args: argparse.Namespace) -> int:
         return 0
     print(f"{'actuator':20s} {'unit':6s} {'inspections':>11s} {'last':>10s}  description")
     for a in acts:
-        last = "-" if a.last_time is None else f"{a.last_time:g}"
-        print(f"{a.id:20s} {a.time_unit:6s} {a.n_inspections:11d} {last:>10s}  {a.description}")
+        last = "-" if a.last_time is None else f"{a.last_time:.15g}"
+        # one row per actuator: a description's line breaks and tabs read as spaces
+        print(f"{a.id:20s} {a.time_unit:6s} {a.n_inspections:11d} {last:>10s}  "
+              f"{' '.join(a.description.split())}")
     return 0
 
 
@@ -455,6 +457,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         raise _usage("--inspections must be at least 3 (a trend needs three points)")
     if args.db is not None:
         db_path(args)                        # an empty name or :memory: is refused
+        _demo_ids_free(Path(args.db), [f"demo-{n}-{args.seed + i}" for i, n in enumerate(names)])
     plot_dir = Path(args.plot_dir) if args.plot_dir else None
     if plot_dir is not None:                 # created where missing, as report --out is
         if plot_dir.exists() and not plot_dir.is_dir():
@@ -479,6 +482,26 @@ def cmd_demo(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(results))
     return 0
+
+
+def _demo_ids_free(db: Path, ids: list[str]) -> None:
+    """Refuse a demo whose actuators a history ``db`` holds already (an earlier demo of the
+    same scenario and seed), before any simulation; say which ones are added to a history
+    that holds others."""
+    if not db.exists():
+        return
+    from .history import HealthHistory
+
+    with HealthHistory(db, readonly=True) as h:
+        have = {a.id for a in h.actuators()}
+    taken = [i for i in ids if i in have]
+    if taken:
+        raise _usage(f"{db} holds {', '.join(taken)} already (an earlier demo-degradation with "
+                     "this scenario and seed); give another --seed, or another --db (the demo "
+                     "records into a history of its own without --db)")
+    if have:
+        print(f"adding {', '.join(ids)} to {db}, beside its {len(have)} actuator(s)",
+              file=sys.stderr)
 
 
 # ----------------------------------------------------------------------------- wiring
