@@ -501,3 +501,14 @@ def test_prognose_risk_of_an_unknown_actuator_is_one_line(history, capsys):
     assert main(["prognose", "EMA-9", "--db", history, "--risk", "0.05"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "'EMA-9' is not registered" in err
+
+
+def test_reasons_never_print_a_number_equal_to_the_one_it_is_compared_with():
+    """'probability 0.05 ..., above the risk 0.05' and 'within 100 h, under the minimum
+    interval 100 h' (0.0501 and 99.99 rounded) read as contradictions: digits are added
+    until the two differ on paper."""
+    from emaphm.prognosis.inspection import _apart
+
+    assert _apart(0.0501, 0.05) == "0.0501" and _apart(0.0500001, 0.05) == "0.0500001"
+    assert _apart(0.2, 0.05) == "0.2" and _apart(0.05, 0.05) == "0.05"
+    assert _apart(99.99, 100.0, 3) == "99.99" and _apart(150.0, 100.0, 3) == "150"

@@ -353,6 +353,17 @@ def _t(x: float, unit: str) -> str:
     return f"{x:.0f} {unit}" if abs(x) >= 10 else f"{x:.2g} {unit}"
 
 
+def _apart(x: float, ref: float, digits: int = 2) -> str:
+    """``x`` with as many significant digits (from ``digits``, up to 9) as it takes not to
+    read as ``ref`` when they differ: a reason that says "0.05, above the risk 0.05" or
+    "within 100 h, under 100 h" contradicts itself on paper."""
+    for d in range(digits, 10):
+        text = f"{x:.{d}g}"
+        if x == ref or text != f"{ref:.{d}g}":
+            return text
+    return f"{x!r}"
+
+
 def plan_inspection(times: Any, prognosis: "Prognosis | None" = None, *,
                     policy: InspectionPolicy = InspectionPolicy(), t_now: float | None = None,
                     time_unit: str | None = None, K: Any = None,
@@ -472,7 +483,7 @@ def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, ri
     p_each = _p_each(preds, at)
     lead = max(p_each, key=lambda k: (p_each[k], -list(p_each).index(k)))
     f_at = float(first_crossing_cdf(preds, at))
-    reason = (f"{lead} {part[lead]}: probability {f_at:.2g} of a crossing within the minimum "
+    reason = (f"{lead} {part[lead]}: probability {_apart(f_at, risk)} of a crossing within the minimum "
               f"interval {_t(iv.min, unit)}, above the risk {risk:g}, but {why}: inspect again "
               "at the minimum interval to confirm")
     return NextInspection(at=at, risk=f_at, indicator=lead, rule="confirm", reason=reason,
@@ -503,11 +514,14 @@ def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: Insp
         lead = max(preds, key=lambda p: (float(crossing_cdf(p, min(t_star, t_now + iv.min))),
                                          _level_at_last(p) / p.threshold))
         if f_now > risk:
-            why = (f"{lead.indicator} {part[lead.indicator]}: probability {f_now:.2g} that it "
-                   f"has crossed its failure threshold already, above the risk {risk:g}")
+            why = (f"{lead.indicator} {part[lead.indicator]}: probability {_apart(f_now, risk)} "
+                   f"that it has crossed its failure threshold already, above the risk {risk:g}")
         else:
+            dt = t_star - t_now
+            within = _t(dt, unit) if _t(dt, unit) != _t(iv.min, unit) else \
+                f"{_apart(dt, iv.min, 3)} {unit}"
             why = (f"{lead.indicator} {part[lead.indicator]} would reach its failure threshold "
-                   f"with probability {risk:g} within {_t(t_star - t_now, unit)}, under the "
+                   f"with probability {risk:g} within {within}, under the "
                    f"minimum interval {_t(iv.min, unit)}")
         return NextInspection(at=t_now, risk=f_now, indicator=lead.indicator, rule="act now",
                               reason=why, p_indicator=_p_each(preds, t_now), t_star=t_star, **base)
