@@ -22,6 +22,11 @@ nameplate field           catalogue convention       emaphm field
 ``n_max`` (optional)      rpm                        ``Controller.omega_max`` [rad/s]
 ========================  =========================  ===================================
 
+A value is a number with its unit (``"1.3 kg cm^2"``, ``"7.6 mH"``); a bare number is read
+in V/krpm for ``ke`` (the catalogue's unit) and in SI for every other field (``j_rotor``
+in kg m^2, ``l_ll`` in H, ``f_pwm`` in Hz): give the unit where the catalogue prints
+another (:data:`ACCELERATION_RANGE` catches a rotor inertia read 1e4 times too large).
+
 The rest comes from the template (the preset, :func:`emaphm.params.siemens_1fk7060`),
 scaled to the motor where it is a design default of ours: dry and viscous friction in
 proportion to the peak torque, the backlash contact's stiffness and damping in proportion
@@ -57,6 +62,10 @@ _FIELDS = {
     "j_load": ("inertia", "kg m^2"), "n_max": ("angular speed", "rpm"),
 }
 _REQUIRED = ("poles", "ke", "j_rotor", "t_max", "i_max")
+#: The rotor's acceleration at peak torque, ``t_max / j_rotor`` [rad/s^2], of servo motors
+#: from about 0.3 to 300 N m (catalogues: about 3e3 for the largest, 1e5 for the smallest);
+#: outside it a warning asks for the inertia's unit (a bare 1.3 is 1.3 kg m^2, not kg cm^2).
+ACCELERATION_RANGE = (300.0, 1e6)
 
 
 @dataclass(frozen=True)
@@ -92,8 +101,11 @@ class Nameplate:
                                  f"{', '.join(_FIELDS)}")
         missing = [f for f in _REQUIRED if f not in table]
         for pair in (("r_ll", "r_ph"), ("l_ll", "l_ph")):
-            if (pair[0] in table) == (pair[1] in table):
-                missing.append(f"{pair[0]} (or {pair[1]}, not both)")
+            if pair[0] in table and pair[1] in table:
+                raise ParameterError(f"{source}: [datasheet] gives both {pair[0]} (line to line) "
+                                     f"and {pair[1]} (per phase); give one of them")
+            if pair[0] not in table and pair[1] not in table:
+                missing.append(f"{pair[0]} (or {pair[1]})")
         if missing:
             raise ParameterError(f"{source}: [datasheet] is missing {', '.join(missing)}")
         kw = {}
@@ -257,4 +269,9 @@ def _warnings(plate: Nameplate, p: ActuatorParams) -> tuple[str, ...]:
     if not 1e-7 <= m.J_m <= 1.0:
         out.append(f"j_rotor = {m.J_m:.3g} kg m^2 is unlike a servo motor's (1e-7 to 1 kg m^2): "
                    "give its unit, e.g. \"1.1 kg cm^2\"")
+    elif not ACCELERATION_RANGE[0] <= m.T_max / m.J_m <= ACCELERATION_RANGE[1]:
+        out.append(f"t_max / j_rotor = {m.T_max / m.J_m:.3g} rad/s^2 is unlike a servo motor's "
+                   f"({ACCELERATION_RANGE[0]:g} to {ACCELERATION_RANGE[1]:g} rad/s^2): check "
+                   f"j_rotor = {m.J_m:.3g} kg m^2 (a bare number is kg m^2; catalogues print kg "
+                   "cm^2: give the unit, e.g. \"1.3 kg cm^2\")")
     return tuple(out)

@@ -610,6 +610,11 @@ class ActuatorParams:
         if not isinstance(data, dict):
             raise ParameterError(f"{source}: expected a table of sections, got {type(data).__name__}")
         unknown = set(data) - set(_SECTIONS) - {"name", "thresholds"}
+        if "datasheet" in unknown:
+            raise ParameterError(
+                f"{source}: a [datasheet] table is a motor's catalogue page, not parameters; "
+                "convert it first: emaphm params --datasheet FILE --out PARAMS.toml, and give "
+                "PARAMS.toml")
         if unknown:
             raise ParameterError(
                 f"{source}: unknown section(s) {sorted(unknown)}; expected "

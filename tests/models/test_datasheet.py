@@ -86,7 +86,9 @@ def test_per_phase_values_and_other_units_are_read():
 
 @pytest.mark.parametrize("fields, match", [
     (dict(poles=5), r"5 poles is odd; poles counts the magnet poles .*poles = 10"),
-    (dict(r_ph=1.0), r"missing r_ll \(or r_ph, not both\)"),
+    (dict(r_ph=1.0), r"gives both r_ll \(line to line\) and r_ph \(per phase\); give one of "
+                     r"them"),
+    (dict(r_ll=None), r"missing r_ll \(or r_ph\)$"),
     (dict(ke="57 V/A"), r"unknown unit 'V/A' for a back-EMF constant"),
     (dict(j_rotor="1.1 kg"), r"unknown unit 'kg' for a inertia"),
     (dict(colour="red"), r"unknown field\(s\) \['colour'\]"),
@@ -96,7 +98,7 @@ def test_nameplate_errors_name_the_field(fields, match):
     base = dict(poles=8, ke=135, r_ll=6.3, l_ll="44 mH", j_rotor="7.7 kg cm^2", t_max=18,
                 i_max=10)
     with pytest.raises(ParameterError, match=match):
-        _plate(**{**base, **fields})
+        _plate(**{k: v for k, v in {**base, **fields}.items() if v is not None})
 
 
 def test_implausible_values_are_warned_about():
@@ -105,6 +107,27 @@ def test_implausible_values_are_warned_about():
     text = " ".join(sheet.warnings)
     assert "t_max = 60 N m is more than the 22.3 N m that i_max = 10 A rms gives" in text
     assert "back-EMF at omega_max = 628.3 rad/s is 661.4 V peak per phase" in text
+
+
+def test_a_bare_rotor_inertia_meant_in_kg_cm2_is_warned_about():
+    """j_rotor = 0.45 (meant 0.45 kg cm^2) is 0.45 kg m^2, within 1e-7 to 1 kg m^2, but a
+    3.6 N m motor would accelerate at 8 rad/s^2: said, with the unit to give. The two
+    actuators we ship are far inside the range."""
+    base = dict(poles=8, ke=135, r_ll=6.3, l_ll="44 mH", t_max=3.6, i_max=2)
+    text = " ".join(convert(_plate(**base, j_rotor=0.45)).warnings)
+    assert "t_max / j_rotor = 8 rad/s^2 is unlike a servo motor's (300 to 1e+06 rad/s^2)" in text
+    assert 'catalogues print kg cm^2: give the unit, e.g. "1.3 kg cm^2"' in text
+    assert not any("t_max / j_rotor" in w for w in
+                   convert(_plate(**base, j_rotor="0.45 kg cm^2")).warnings)
+    plate = load_nameplate(EXAMPLES / "ema-270v-750w.nameplate.toml")
+    assert not any("t_max / j_rotor" in w for w in convert(plate).warnings)
+
+
+def test_a_nameplate_given_as_parameters_says_to_convert_it(tmp_path):
+    with pytest.raises(ParameterError, match=r"a \[datasheet\] table is a motor's catalogue "
+                                             r"page, not parameters; convert it first: emaphm "
+                                             r"params --datasheet FILE --out PARAMS.toml"):
+        load_params(EXAMPLES / "ema-270v-750w.nameplate.toml")
 
 
 def test_cli_writes_the_parameters_and_prints_the_warnings(tmp_path, capsys):
