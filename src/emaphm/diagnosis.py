@@ -208,7 +208,12 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
                 f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
                 "differs from its parameters, or has a fault the model lacks; calibrate it on "
                 "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
-                "load the bench applies and the current sensor chain")
+                "load the bench applies and the current sensor chain"
+                + ("" if p.name == siemens_1fk7060().name else
+                   f"; the limit was measured on the preset, not on {p.name}: physics the model "
+                   "lacks (the Stribeck drop of a large dry friction) can weigh more on another "
+                   "design, and emaphm assess measures how often its healthy and faulty units "
+                   "read unexplained"))
     sc = k[2:5]
     if unexplained is None and np.all(sc > thresholds.short_circuit) and sc.min() >= 0.5 * sc.max():
         unexplained = Unexplained(

@@ -269,6 +269,12 @@ def test_a_fit_far_above_what_the_model_reaches_is_unexplained_not_faulty():
     assert bad.unexplained.p_value == pytest.approx(misfit_p_value(1.2 * lim))
     assert bad.unexplained.p_value < 1e-4 < misfit_p_value(0.9 * lim)
     assert "emaphm calibrate" in bad.unexplained.hint
+    assert "measured on the preset" not in bad.unexplained.hint       # the preset's own limit
+    from emaphm.params import siemens_1fk7060
+
+    other = dataclasses.replace(siemens_1fk7060(), name="my-ema")
+    hint = diagnose(k, fit_ratio=1.2 * lim, params=other).unexplained.hint
+    assert "the limit was measured on the preset, not on my-ema" in hint and "emaphm assess" in hint
     assert [f.mode for f in bad.suspected] == ["friction"]
     d = bad.to_dict()
     assert d["verdict"] == "unexplained" and d["healthy"] is False and d["faults"] == []
