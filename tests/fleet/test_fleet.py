@@ -679,7 +679,8 @@ def test_the_index_shows_when_to_inspect_each_actuator_sortable_and_due_in_red(s
     assert [r["inspect_now"] for r in keys] == sorted((r["inspect_now"] for r in keys),
                                                       reverse=True)
     assert {r["id"] for r in keys[-2:]} == {"EMA-CAL", "EMA-NEW"}   # a default interval ahead
-    assert keys[-1]["sort"]["inspect"] == keys[-2]["sort"]["inspect"] == 300.0
+    assert keys[-1]["inspect_left"] == keys[-2]["inspect_left"] == 300.0
+    assert sorted(r["sort"]["inspect"] for r in keys) == [1, 2, 3, 4, 5]  # places, as shown
     html = site.index.read_text(encoding="utf-8")
     assert '<button type="button" data-key="inspect">Inspect by</button>' in html
     assert '<option value="inspect">Inspect by</option>' in html
@@ -688,7 +689,7 @@ def test_the_index_shows_when_to_inspect_each_actuator_sortable_and_due_in_red(s
                      r'act now</strong><small>([^<]*)</small>', html)
     assert ("short_a" in {ind for _, ind in due}) and all(t for t, _ in due)
     assert re.search(r'<td class="c-inspect"[^>]*><div><span title="[^"]*">900 h</span>'
-                     r'<small>default interval</small>', html)
+                     r'<small>in 300 h \u00b7 default interval</small>', html)
     assert ".due { color: var(--red); }" in (site.out / "assets" / "fleet.css").read_text()
     page = site.pages["EMA-CAL"].read_text(encoding="utf-8")
     assert "<dt>Inspect by</dt>" in page and "every indicator at its healthy level" in page

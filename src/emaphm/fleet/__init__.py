@@ -8,7 +8,8 @@
 * :mod:`.figures`: the pages' two figures as SVG (:class:`PageFigures`), written by
   :mod:`.svgplot` (panels of layers in data coordinates, rendered as text);
 * :mod:`.demo`: a simulated fleet to fill a history (:func:`record_demo_fleet`);
-* :mod:`.cli`: ``emaphm fleet report`` and ``emaphm fleet demo``.
+* :mod:`.schedule`: the next inspection of every actuator as CSV or iCalendar;
+* :mod:`.cli`: ``emaphm fleet report``, ``emaphm fleet demo`` and ``emaphm fleet schedule``.
 
 This layer reads the prognosis layer and draws with its figures; it never identifies a
 trace again, except :mod:`.demo`, which makes the inspections it records.

@@ -1,6 +1,7 @@
 """``emaphm fleet``: the fleet health site (registered by :func:`emaphm.cli.build_parser`).
 
     emaphm fleet report --db fleet.sqlite --out site/ [--actuator ID ...] [--threshold MODE=V]
+                        [--risk 0.01 --max-interval H --min-interval H --default-interval H]
                         [--workers N | --scheduler tcp://HOST:PORT]
     emaphm fleet demo --db demo.sqlite [--actuators 30] [--seed S] [--synthetic]
     emaphm fleet schedule --db fleet.sqlite --out plan.csv|plan.ics [--risk 0.01]
@@ -33,7 +34,8 @@ def _usage(msg: str) -> Exception:
 
 def _site_folder(text: str) -> Path:
     """The ``--out`` folder of the site: a folder this process can write in, or one it can
-    create (its nearest existing parent writable); else a :class:`UsageError` before any
+    create (its nearest existing parent writable), that is new, empty or an earlier site
+    (:func:`~emaphm.fleet.site.check_site_folder`); else a :class:`UsageError` before any
     work is done or announced."""
     out = Path(text)
     if not text.strip():
@@ -48,7 +50,33 @@ def _site_folder(text: str) -> Path:
     if existing.exists() and not existing.is_dir():
         raise _usage(f"--out {out}: {existing} is a file, not a folder; give a folder for the site")
     writable_folder(existing, "--out")
+    if out.is_dir():
+        from .site import check_site_folder
+
+        try:
+            check_site_folder(out)
+        except ValueError as exc:
+            raise _usage(str(exc)) from None
     return out
+
+
+def _planning_policy(args: argparse.Namespace, units: Any):
+    """The :class:`~emaphm.prognosis.inspection.InspectionPolicy` of the planning options
+    (``--risk``, default :data:`~emaphm.prognosis.inspection.DEFAULT_RISK`, and the
+    intervals), checked against each time unit of ``units``: one helper for ``fleet
+    report`` and ``fleet schedule``, so both plan alike."""
+    from ..prognosis.cli import inspection_policy, option_words
+    from ..prognosis.inspection import DEFAULT_RISK
+
+    if args.risk is None:
+        args.risk = DEFAULT_RISK
+    policy = inspection_policy(args)
+    for unit in sorted(set(units)):
+        try:
+            policy.intervals(unit)
+        except ValueError as exc:
+            raise _usage(option_words(str(exc))) from None
+    return policy
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -77,6 +105,7 @@ def cmd_report(args: argparse.Namespace) -> int:
         if not n:
             raise _usage(f"the health history {db} has no actuators; register them first "
                          f"(emaphm history register ID --db {db})")
+        policy = _planning_policy(args, (a.time_unit for a in h.actuators()))
         if not args.quiet:
             print(f"building the fleet site of {n} actuator{'s' if n != 1 else ''} from {db} "
                   f"into {out}/", file=sys.stderr)
@@ -87,7 +116,7 @@ def cmd_report(args: argparse.Namespace) -> int:
             site = build_site(h, out, actuators=args.actuator, thresholds=thresholds,
                               seed=args.seed, level=args.level, workers=args.workers,
                               title=args.title, redraw=args.redraw, executor=executor,
-                              progress=lambda text: line.show(text))
+                              policy=policy, progress=lambda text: line.show(text))
         finally:
             line.close()
     skipped = site.skipped
@@ -99,7 +128,8 @@ def cmd_report(args: argparse.Namespace) -> int:
                                       if others else ""))
     if args.json:
         print(json.dumps({"index": str(site.index), "actuators": len(site.rows),
-                          "elapsed_s": site.elapsed_s, "workers": site.workers,
+                          "risk": policy.risk, "elapsed_s": site.elapsed_s,
+                          "workers": site.workers,
                           "drawn": site.drawn, "written": site.written,
                           "pages": {k: str(v) for k, v in site.pages.items()}}))
     else:
@@ -107,7 +137,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         predicted = sum(r["rul_state"] == "predicted" for r in site.rows)
         kept = len(site.rows) - site.drawn
         print(f"wrote {site.index} ({len(site.rows)} actuators: {past} past a threshold, "
-              f"{predicted} with a predicted failure) in {site.elapsed_s:.1f} s"
+              f"{predicted} with a predicted failure; inspections planned at risk "
+              f"{policy.risk:g}) in {site.elapsed_s:.1f} s"
               + (f"; the pages of {kept} were up to date" if kept else ""))
         for r in site.rows[:3]:
             if r["rul_state"] in ("past threshold", "predicted"):
@@ -187,9 +218,8 @@ def _calendar(args: argparse.Namespace):
 
 def cmd_schedule(args: argparse.Namespace) -> int:
     from .._cli_common import out_path
-    from ..prognosis.cli import option_words, db_path, inspection_policy, threshold_option, warn
+    from ..prognosis.cli import db_path, threshold_option, warn
     from ..prognosis.history import HealthHistory, skipped_note
-    from ..prognosis.inspection import DEFAULT_RISK
 
     thresholds = threshold_option(args.threshold)
     out = out_path(args.out, (".csv", ".ics"), "--out")
@@ -199,28 +229,38 @@ def cmd_schedule(args: argparse.Namespace) -> int:
                      "operating time (flight hours or cycles): give --start DATE (the date of "
                      "the plan) and --per-day H (operating hours or cycles a day), or write "
                      "a .csv")
-    if args.risk is None:
-        args.risk = DEFAULT_RISK
-    policy = inspection_policy(args)
-    from .schedule import assess_fleet, rows_from, write_csv, write_ics
+    from .schedule import assess_fleet, rows_from, units_message, write_csv, write_ics
 
     db = db_path(args)
     with HealthHistory(db, readonly=True) as h:
         for actuator in args.actuator or ():
             h.actuator(actuator)
-        for unit in {a.time_unit for a in h.actuators()}:
-            try:
-                policy.intervals(unit)
-            except ValueError as exc:
-                raise _usage(option_words(str(exc))) from None
+        every = h.actuators()
+        policy = _planning_policy(args, (a.time_unit for a in every))
+        chosen = set(args.actuator or ())
+        units: dict[str, int] = {}
+        for a in every:
+            if not chosen or a.id in chosen:
+                units[a.time_unit] = units.get(a.time_unit, 0) + 1
+        if calendar is not None and len(units) > 1:        # before the fleet is assessed
+            raise _usage(units_message(units))
         statuses = assess_fleet(h, policy=policy, thresholds=thresholds, seed=args.seed,
                                 actuators=args.actuator)
-    rows = rows_from(statuses, base=args.site, calendar=calendar)
+    try:
+        rows = rows_from(statuses, base=args.site, calendar=calendar)
+    except ValueError as exc:                        # a date past 9999-12-31
+        raise _usage(str(exc)) from None
     skipped = [s for s in statuses if s.data.skipped]
     if skipped:
         warn("fleet schedule", skipped_note(skipped[0].actuator, skipped[0].data.skipped)
              + (f"; and {len(skipped) - 1} other actuator(s)" if len(skipped) > 1 else ""))
-    (write_ics if out.suffix.lower() == ".ics" else write_csv)(rows, out)
+    try:
+        if out.suffix.lower() == ".ics":
+            write_ics(rows, out, source=str(db.resolve()))
+        else:
+            write_csv(rows, out)
+    except ValueError as exc:                        # an event on 9999-12-31 ends past it
+        raise _usage(str(exc)) from None
     if args.json:
         print(json.dumps({"out": str(out), "risk": policy.risk,
                           "rows": [r.to_dict() for r in rows]}))
@@ -228,9 +268,17 @@ def cmd_schedule(args: argparse.Namespace) -> int:
     now = sum(r.due_now for r in rows)
     print(f"wrote {out}: {len(rows)} actuator{'s' if len(rows) != 1 else ''}, {now} due now "
           f"(risk {policy.risk:g})")
-    for r in rows[:3]:
-        when = f"{r.inspect_by:.0f} {r.time_unit}" + (f" ({r.date})" if r.date else "")
+    from .markup import fmt_deadline
+
+    shown = 3
+    for r in rows[:shown]:
+        when = fmt_deadline(r.inspect_by, r.time_unit) + (f" ({r.date})" if r.date else "")
         print(f"  {r.actuator}: {'now, ' if r.due_now else ''}by {when}: {r.reason}")
+    rest = rows[shown:]
+    if rest:
+        due = sum(r.due_now for r in rest)
+        print(f"  and {len(rest)} more" + (f" ({due} of them due now)" if due else "")
+              + f": see {out}")
     return 0
 
 
@@ -241,6 +289,8 @@ _workers = arg_type(int, lambda w: w >= 0, "workers must be a non-negative integ
 
 def register(subparsers: Any) -> None:
     """Add ``fleet report``, ``fleet demo`` and ``fleet schedule`` to the ``emaphm`` parser."""
+    from ..prognosis.cli import planning_options
+
     fp = subparsers.add_parser("fleet", help="the fleet health site: every actuator at a glance")
     fs = fp.add_subparsers(dest="fleet_command", required=True)
 
@@ -250,10 +300,18 @@ def register(subparsers: Any) -> None:
                     "nearest its threshold, RUL median and interval, trend), units needing "
                     "attention first, sortable and filterable; and a page per actuator with "
                     "its figures, calibration and inspections. It opens from disk (no server, "
-                    "no network).")
+                    "no network). Its \"Inspect by\" column plans the next inspection of each "
+                    "actuator with the options of emaphm fleet schedule (--risk and the "
+                    "intervals, the same defaults): give both commands the same, and the "
+                    "pages a schedule links to show the times it plans. --out must be a new "
+                    "or empty folder, or one an earlier fleet report wrote (updated: only "
+                    "what changed is made again; a change of these options makes every "
+                    "page again).")
     r.add_argument("--db", help="health history database (default $EMAPHM_HISTORY or "
                                 "emaphm-history.sqlite)")
-    r.add_argument("--out", required=True, help="folder of the site (created if missing)")
+    r.add_argument("--out", required=True,
+                   help="folder of the site: new (created), empty, or the folder of an earlier "
+                        "fleet report (updated); a folder holding other files is refused")
     r.add_argument("--actuator", action="append", metavar="ID",
                    help="only this actuator (repeatable; default: all)")
     r.add_argument("--threshold", action="append", metavar="MODE=VALUE",
@@ -262,6 +320,7 @@ def register(subparsers: Any) -> None:
                    help="seed of the RUL Monte Carlo draws (default 0)")
     r.add_argument("--level", type=float, default=0.9,
                    help="probability of the RUL interval (default 0.9)")
+    planning_options(r, default_risk=True)        # the "Inspect by" column, as fleet schedule
     r.add_argument("--workers", type=_workers, default=None,
                    help="processes making the pages (default: every core; 0: this process)")
     r.add_argument("--scheduler", help="make the pages on a Dask cluster: its scheduler's "
@@ -310,10 +369,16 @@ def _register_schedule(fs: Any) -> None:
         "schedule", help="write the fleet's next inspections (CSV, or iCalendar with dates)",
         description="Plan the next inspection of every actuator at a stated risk (as emaphm "
                     "prognose --risk does) and write the schedule: one row (.csv) or all-day "
-                    "calendar event (.ics) per actuator, soonest first, with the driving "
-                    "indicator, the predicted risk, the reason and a link to its page on the "
-                    "fleet site. Times are operating time; --start and --per-day map them "
-                    "onto dates (a .ics needs them).")
+                    "calendar event (.ics) per actuator, with the driving indicator, the "
+                    "predicted risk, the reason and a link to its page on the fleet site "
+                    "(made by emaphm fleet report with the same --risk and intervals). "
+                    "Order: those due now first; then, per time unit (flight hours, then "
+                    "cycles: the two are not compared), the operating time left, soonest "
+                    "first. Times are operating time; --start and --per-day map them onto "
+                    "dates (a .ics needs them), for actuators timed in one unit: a history "
+                    "with both hours and cycles is planned with dates one unit at a time "
+                    "(--actuator). A calendar event keeps its UID from plan to plan "
+                    "(actuator and history), so importing an updated plan moves it.")
     s.add_argument("--db", help="health history database (default $EMAPHM_HISTORY or "
                                 "emaphm-history.sqlite)")
     s.add_argument("--out", required=True, help="the schedule: plan.csv or plan.ics")
@@ -323,11 +388,13 @@ def _register_schedule(fs: Any) -> None:
                         "inspection's operating time then")
     s.add_argument("--per-day", type=_per_day, metavar="H",
                    help="operating time an actuator accrues per day, in its history's unit "
-                        "(e.g. 8 flight hours)")
+                        "(e.g. 8 flight hours); one number for one unit: the actuators planned "
+                        "with dates must all be timed in h, or all in cycles (else refused)")
     s.add_argument("--site", default="fleet-site/",
                    help="where the fleet site lives (folder or URL; default fleet-site/, as "
                         "emaphm fleet report --out fleet-site/ writes it): the rows link to "
-                        "SITE/actuators/<page>.html")
+                        "SITE/actuators/<page>.html (a URL's path is percent-encoded, its "
+                        "?query kept at the end)")
     s.add_argument("--actuator", action="append", metavar="ID",
                    help="only this actuator (repeatable; default: all)")
     s.add_argument("--threshold", action="append", metavar="MODE=VALUE",

@@ -3,6 +3,11 @@ inline JSON through :func:`script_json`, every file name through :func:`page_ste
 
 Actuator ids and descriptions come from users (and a history file may have been written
 by another tool), so nothing read from a store reaches a page unescaped.
+
+Numbers as the fleet shows them: a deadline (an "inspect by" time) through
+:func:`fmt_deadline`, rounded *down* (:func:`floor_deadline`: shown, it is never later
+than computed); a number in a table meant for programs (the schedule's CSV) through
+:func:`plain_number`, every digit of the float, never in exponent notation.
 """
 
 from __future__ import annotations
@@ -10,10 +15,16 @@ from __future__ import annotations
 import hashlib
 import html
 import json
+import math
 import re
+from decimal import Decimal
 from typing import Any
 
-__all__ = ["esc", "script_json", "slug", "page_stem"]
+__all__ = ["esc", "script_json", "slug", "page_stem", "floor_deadline", "fmt_deadline",
+           "plain_number", "UNIT_ORDER"]
+
+#: The order of the time units when a fleet's rows are grouped by unit (flight hours first).
+UNIT_ORDER = ("h", "cycles")
 
 _SLUG_DROP = re.compile(r"[^a-z0-9]+")
 
@@ -57,3 +68,47 @@ def page_stem(actuator_id: str, digits: int = 10) -> str:
     same on every build and every platform."""
     digest = hashlib.sha256(str(actuator_id).encode("utf-8")).hexdigest()[:digits]
     return f"{slug(actuator_id)}-{digest}"
+
+
+# ----------------------------------------------------------------------------- numbers
+#: Relative distance within which a deadline counts as the nearest whole number: the float
+#: noise of a sum (``100/3 * 9`` is 299.99999999999994) is not a deadline an hour earlier.
+_NOISE = 1e-13
+
+
+def floor_deadline(x: float) -> tuple[float, int]:
+    """``x`` rounded down as :func:`fmt_deadline` shows it, and the decimals shown: whole
+    units from 10 on, else two significant digits (float noise below a relative
+    :data:`_NOISE` rounds up, not down). Not finite: ``(x, 0)``."""
+    x = float(x)
+    if not math.isfinite(x) or x == 0.0:
+        return (x + 0.0, 0)
+    decimals = 0 if abs(x) >= 10 else 1 - math.floor(math.log10(abs(x)))
+    scale = 10.0 ** decimals
+    y = x * scale
+    near = round(y)
+    v = (near if abs(y - near) <= _NOISE * max(1.0, abs(y)) else math.floor(y)) / scale
+    return (v + 0.0, 0 if abs(v) >= 10 else decimals)
+
+
+def fmt_deadline(x: float | None, unit: str) -> str:
+    """An inspect-by time as shown: rounded down (:func:`floor_deadline`), with its unit;
+    a dash when there is none."""
+    if x is None or math.isnan(x):
+        return "\u2013"
+    if math.isinf(x):
+        return "\u221e"
+    v, decimals = floor_deadline(x)
+    return f"{v:.{decimals}f} {unit}"
+
+
+def plain_number(x: float) -> str:
+    """``x`` with every digit of the float (the shortest text that reads back as ``x``),
+    as a plain decimal, never in exponent notation: ``3456788.8``, ``0.00001``, ``300``."""
+    x = float(x)
+    if not math.isfinite(x):
+        return repr(x)
+    text = format(Decimal(repr(x)), "f")
+    if "." in text:
+        text = text.rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text

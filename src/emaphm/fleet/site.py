@@ -24,8 +24,8 @@ are only read from the history and its prognosis: nothing is identified or simul
 
 An actuator's page and figures depend on that actuator alone (its inspections,
 calibrations and registration) and on the build's settings (thresholds, seed, level,
-title, and the version of emaphm and the code of the modules that shape a
-page): ``actuators/.figures.json`` keeps, per page stem, the SHA-256 of all of it, the
+title, the inspection policy of the "Inspect by" column, and the version of emaphm and
+the code of the modules that shape a page): ``actuators/.figures.json`` keeps, per page stem, the SHA-256 of all of it, the
 sizes of the files it made, and its row of the index. A rebuild into the same folder
 reads every actuator's stored records in one pass without decoding them, hashes them and
 stats each actuator's files: one whose digest and files are unchanged costs nothing more;
@@ -35,6 +35,18 @@ changed (``actuators/.index-key``); ``redraw=True`` makes every page again.
 A build of the whole history removes the pages and figures of actuators an earlier build
 into the folder wrote that the history no longer has; a build of some ``actuators`` keeps
 the others'.
+
+The folder is new, empty, or one a build wrote before (its ``actuators/.figures.json``,
+written first of all, marks it): a folder holding anything else is refused
+(:func:`check_site_folder`), so a site never overwrites an ``index.html`` it did not write.
+
+The "Inspect by" column is the next inspection of each actuator at the build's
+``policy`` (:class:`~emaphm.prognosis.inspection.InspectionPolicy`; default
+:data:`~emaphm.fleet.status.FLEET_POLICY`), as ``emaphm fleet schedule`` plans it with the
+same options; the index and the pages say the risk. Its times are shown rounded down
+(:func:`~emaphm.fleet.markup.fmt_deadline`) with the operating time left until them,
+and the column sorts as the schedule does: due now first, then per time unit the time
+left, soonest first, ties by id.
 
 The pages are made in ``workers`` processes (default: every core), or on a Dask cluster
 (``executor``: :class:`emaphm.campaign.DaskExecutor`), a few actuators per task; a task
@@ -67,12 +79,13 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 from .._files import atomic_write, atomic_write_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
-from .markup import esc, page_stem, script_json
+from .markup import UNIT_ORDER, esc, floor_deadline, fmt_deadline, page_stem, script_json
 
 if TYPE_CHECKING:  # pragma: no cover - .status imports the prognosis (SciPy): see _render
+    from ..prognosis.inspection import InspectionPolicy
     from .status import ActuatorStatus
 
-__all__ = ["FleetSite", "build_site", "ASSETS", "FIGURE_DPI", "PAGE_ROWS"]
+__all__ = ["FleetSite", "build_site", "check_site_folder", "ASSETS", "FIGURE_DPI", "PAGE_ROWS"]
 
 #: The files shipped in ``emaphm/fleet/assets`` and copied to ``OUT/assets``.
 ASSETS = ("fleet.css", "fleet.js")
@@ -171,6 +184,7 @@ class _Job:
     title: str
     stem: str
     key: str
+    policy: Any = None             # InspectionPolicy; None: FLEET_POLICY
 
 
 #: What an earlier build made, per page stem (module docstring).
@@ -280,9 +294,10 @@ def _render(job: _Job, keep: bool = False) -> dict:
     """One actuator's status, page, figures and index row: the whole task of a worker.
     The files come back as bytes (name -> bytes) for the caller to write; ``keep`` keeps
     the :class:`ActuatorStatus` too (in this process only: it is half a megabyte)."""
-    from .status import assess, attention_key
+    from .status import FLEET_POLICY, assess, attention_key
 
-    status = assess(job.data, thresholds=job.thresholds, seed=job.seed, level=job.level)
+    status = assess(job.data, thresholds=job.thresholds, seed=job.seed, level=job.level,
+                    policy=FLEET_POLICY if job.policy is None else job.policy)
     files, figures = _draw(status, job.data, job.thresholds, job.stem)
     page = f"{job.stem}.html"
     files[page] = _actuator_html(status, figures, job.records,
@@ -452,7 +467,7 @@ def _row(s: ActuatorStatus, rank: int, page: str) -> dict:
         "sort": {"rank": rank, "id": a.id.lower(), "description": a.description.lower(),
                  "last": _num(s.last_time), "verdict": VERDICTS.index(s.verdict),
                  "worst": None if ratio is None else -ratio, "rul": rank,
-                 "inspect": _inspect_sort(s),
+                 "inspect": None,          # its place in the fleet: _inspect_order
                  "trend": None if s.trend is None else -s.trend, "n": -s.n_inspections},
         "text": " ".join([a.id, a.description, s.verdict, " ".join(s.faults),
                           s.worst or "", s.rul_state]).lower(),
@@ -464,29 +479,50 @@ def _inspect_fields(s: ActuatorStatus) -> dict:
     p = s.plan
     if p is None:
         return {"inspect_by": None}
-    return {"inspect_by": _num(p.at), "inspect_now": p.act_now, "inspect_rule": p.rule,
+    return {"inspect_by": _num(p.at), "inspect_left": _num(p.at - p.t_now),
+            "inspect_now": p.act_now, "inspect_rule": p.rule,
             "inspect_indicator": p.indicator, "inspect_risk": _num(p.risk),
             "inspect_target": p.target, "inspect_reason": p.reason}
 
 
-def _inspect_sort(s: ActuatorStatus) -> float | None:
-    """Sort key of the "inspect by" column: operating time left until the next inspection
-    is due (negative: past due; never inspected first), nulls last."""
-    from .status import inspect_key
+def _inspect_order(rows: Sequence[dict]) -> dict[str, int]:
+    """The place (1, 2, ...) of each row's id when the "Inspect by" column is sorted: due
+    now first, then, per time unit (flight hours, then cycles), the operating time left
+    until the inspection as the cell shows it ("in 300 h", rounded down, so float noise
+    ties), soonest first -- the order of ``emaphm fleet schedule``
+    (:func:`~emaphm.fleet.status.inspect_key`); ties by id; rows without a plan last. (The
+    inspect-by times themselves do not order the fleet: its actuators are at different
+    operating times.) The script sorts on it: one number per row."""
+    def key(r: dict) -> tuple:
+        left, unit = r.get("inspect_left"), str(r.get("time_unit"))
+        if r.get("inspect_by") is None:
+            return (2, 0, "", 0.0, r["id"])
+        if r.get("inspect_now"):
+            return (0, 0, "", 0.0 if left is None else left, r["id"])
+        return (1, UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit,
+                floor_deadline(left)[0], r["id"])
 
-    key = inspect_key(s)
-    return None if key[0] else (-1e300 if math.isinf(key[1]) else float(key[1]))
+    return {r["id"]: i for i, r in enumerate(sorted(rows, key=key), start=1)}
 
 
-def _plan_risk(rows: Sequence[dict]) -> str:
-    """The risk the rows' next inspections were planned at, in words."""
-    risks = sorted({r["inspect_target"] for r in rows if r.get("inspect_target") is not None})
-    return ", ".join(f"{x:g}" for x in risks) or "\u2013"
+def _policy_words(policy: InspectionPolicy, units: Iterable[str]) -> str:
+    """The intervals of ``policy`` for each time unit of ``units``, in words."""
+    out = []
+    for unit in sorted(set(units), key=lambda u: (UNIT_ORDER.index(u) if u in UNIT_ORDER
+                                                  else len(UNIT_ORDER), u)):
+        try:
+            iv = policy.intervals(unit)
+        except ValueError:
+            continue
+        out.append(f"default {iv.default:g}, minimum {iv.min:g}, maximum {iv.max:g} {unit}")
+    return "; ".join(out)
 
 
-def _ranked(row: dict, rank: int) -> dict:
-    """``row`` (:func:`_row`) at place ``rank`` of the order of attention."""
-    return {**row, "rank": rank, "sort": {**row["sort"], "rank": rank, "rul": rank}}
+def _ranked(row: dict, rank: int, inspect: int | None = None) -> dict:
+    """``row`` (:func:`_row`) at place ``rank`` of the order of attention and ``inspect``
+    of the order of the "Inspect by" column (:func:`_inspect_order`)."""
+    return {**row, "rank": rank, "sort": {**row["sort"], "rank": rank, "rul": rank,
+                                          "inspect": inspect}}
 
 
 # ----------------------------------------------------------------------------- HTML pieces
@@ -545,8 +581,8 @@ def _inspect_cell(s: ActuatorStatus) -> str:
                 + (f"<small>{esc(p.indicator)}</small>" if p.indicator else ""))
     why = p.indicator or ("default interval" if p.rule in ("healthy", "too few inspections")
                           else p.rule)
-    return (f"<span title=\"{title}\">{esc(_fmt_time(p.at, unit))}</span>"
-            f"<small>{esc(why)}</small>")
+    return (f"<span title=\"{title}\">{esc(fmt_deadline(p.at, unit))}</span>"
+            f"<small>in {esc(fmt_deadline(p.at - p.t_now, unit))} \u00b7 {esc(why)}</small>")
 
 
 def _worst_cell(s: ActuatorStatus) -> str:
@@ -592,7 +628,8 @@ _SCRIPT_FIELDS = ("rank", "id", "description", "sort", "text", "tags")
 
 
 def _index_html(rows: list[dict], trs: list[str], *, title: str, source: str,
-                thresholds: FailureThresholds, seed: int, level: float) -> str:
+                thresholds: FailureThresholds, seed: int, level: float,
+                policy: InspectionPolicy) -> str:
     """The index of ``rows`` (ranked, in order), whose table rows are ``trs``."""
     from .. import __version__
 
@@ -600,6 +637,7 @@ def _index_html(rows: list[dict], trs: list[str], *, title: str, source: str,
     for r in rows:
         counts[r["rul_state"]] = counts.get(r["rul_state"], 0) + 1
     n_ins = sum(r["n_inspections"] for r in rows)
+    units = [str(r["time_unit"]) for r in rows]
     now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     head = "".join(
         f"<th scope=\"col\" class=\"{cls}\" data-key=\"{key}\">"
@@ -632,7 +670,8 @@ def _index_html(rows: list[dict], trs: list[str], *, title: str, source: str,
         "<body class=\"index\">\n<header class=\"top\">\n"
         f"<h1>{esc(title)}</h1>\n"
         f"<p class=\"meta\">{len(rows)} actuators \u00b7 {n_ins} inspections \u00b7 "
-        f"history <code>{esc(source)}</code> \u00b7 built {esc(now)} by emaphm "
+        f"history <code>{esc(source)}</code> \u00b7 inspections planned at risk "
+        f"<b id=\"risk\">{policy.risk:g}</b> \u00b7 built {esc(now)} by emaphm "
         f"{esc(__version__)}</p>\n"
         f"<p class=\"summary\">{summary}</p>\n</header>\n<main>\n"
         "<form class=\"controls\" id=\"controls\" role=\"search\" autocomplete=\"off\">\n"
@@ -666,11 +705,13 @@ def _index_html(rows: list[dict], trs: list[str], *, title: str, source: str,
         "history.</li>\n"
         "<li><b>Inspect by</b>: the next inspection, the latest operating time at which the "
         "chance that an indicator has crossed its failure threshold stays under a risk of "
-        f"{_plan_risk(rows)} (as <code>emaphm prognose --risk</code>), and the indicator that "
+        f"{policy.risk:g} (as <code>emaphm prognose --risk</code>), and the indicator that "
         "sets it; <i>act now</i> (red): that chance is reached within the minimum interval, "
         "or already; a default interval under three inspections or with every indicator at "
-        "its healthy level. Sort by it to see what is due first; <code>emaphm fleet "
-        "schedule</code> writes it as a table or a calendar.</li>\n"
+        f"its healthy level (intervals: {esc(_policy_words(policy, units))}). Times are "
+        "rounded down. Sort by it to see what is due first (then, per time unit, the "
+        "soonest); <code>emaphm fleet schedule</code> with the same <code>--risk</code> and "
+        "intervals writes it as a table or a calendar.</li>\n"
         "<li><b>Trend</b>: the sign of the fitted growth rate of that indicator at the last "
         "inspection (\u2192 when within two standard errors of zero).</li>\n"
         f"<li>Failure thresholds: {esc(thr)}.</li>\n</ul></section>\n</main>\n"
@@ -865,8 +906,9 @@ def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *,
         ("Nearest its threshold", _worst_cell(s)),
         ("RUL median (interval)", _rul_cell(s)),
         ("Trend", _trend_cell(s)),
-        ("Inspect by", _inspect_cell(s) + (f"<small>{esc(s.plan.reason)}</small>"
-                                           if s.plan is not None else "")),
+        ("Inspect by", _inspect_cell(s) + (
+            f"<small>{esc(s.plan.reason)}</small><small>planned at risk {s.plan.target:g}"
+            f"</small>" if s.plan is not None else "")),
         ("Inspections", f"{s.n_inspections}" + (
             f"<small>last at {esc(_fmt_time(s.last_time, unit))}, "
             f"{esc(_date(s.last_recorded_utc))} UTC</small>" if s.last_time is not None else "")),
@@ -896,13 +938,39 @@ def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *,
 
 
 # ----------------------------------------------------------------------------- the build
+def check_site_folder(folder: str | os.PathLike[str]) -> None:
+    """A ValueError unless ``folder`` may take the site: missing, empty, or a site an
+    earlier build wrote (its manifest ``actuators/.figures.json``, or the index key of
+    an older build, is there). A folder holding anything else is someone else's: its
+    ``index.html`` or ``assets/`` would be overwritten."""
+    p = Path(folder)
+    if not p.exists():
+        return
+    if not p.is_dir():
+        raise ValueError(f"--out {p} is a file, not a folder; give a folder for the site")
+    if any((p / "actuators" / name).is_file() for name in (_MANIFEST, _INDEX_KEY)):
+        return
+    try:
+        with os.scandir(p) as it:
+            found = sorted(e.name for _, e in zip(range(4), it))
+    except OSError as exc:
+        raise ValueError(f"--out {p}: cannot read the folder ({exc.strerror or exc}); give a "
+                         "folder you can read and write") from None
+    if found:
+        shown = ", ".join(found[:3]) + (", ..." if len(found) > 3 else "")
+        raise ValueError(f"--out {p} holds files that are not an emaphm fleet site ({shown}) "
+                         "and the site would overwrite them: give a new or empty folder, or "
+                         "the folder of an earlier emaphm fleet report")
+
+
 def _out_folder(out: str | os.PathLike[str]) -> Path:
     p = Path(out)
-    if p.exists() and not p.is_dir():
-        raise ValueError(f"--out {p} is a file, not a folder; give a folder for the site")
+    check_site_folder(p)
     try:
         (p / "actuators").mkdir(parents=True, exist_ok=True)
         (p / "assets").mkdir(exist_ok=True)
+        if not (p / "actuators" / _MANIFEST).is_file():     # the folder is the site's now
+            atomic_write_text(p / "actuators" / _MANIFEST, "{}\n")
     except OSError as exc:
         raise ValueError(f"cannot create the site folder {p} ({exc.strerror}); give a folder "
                          "you can write to") from None
@@ -978,7 +1046,7 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
                thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS, seed: int = 0,
                level: float = 0.9, workers: int | None = None, title: str = "Fleet health",
                redraw: bool = False, progress: Callable[[str], None] | None = None,
-               executor: Any = None) -> FleetSite:
+               executor: Any = None, policy: InspectionPolicy | None = None) -> FleetSite:
     """Write the fleet health site of ``history`` (a path or an open
     :class:`~emaphm.prognosis.HealthHistory`) into the folder ``out`` (created if missing).
 
@@ -988,9 +1056,14 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     the ``map_unordered(fn, items)`` of :mod:`emaphm.campaign.executors` (a
     :class:`~emaphm.campaign.DaskExecutor` spreads them over a Dask cluster); the pages
     still up to date in ``out`` are kept unless ``redraw`` (module docstring);
-    ``progress`` is called with a short line as pages are made.
+    ``progress`` is called with a short line as pages are made. ``policy`` plans the
+    "Inspect by" column (default :data:`~emaphm.fleet.status.FLEET_POLICY`, at
+    :data:`~emaphm.prognosis.inspection.DEFAULT_RISK`); a change of it makes every page
+    and row again. ``out`` must be new, empty or a folder a build wrote before
+    (:func:`check_site_folder`).
     """
     from ..prognosis.history import HealthHistory
+    from ..prognosis.inspection import InspectionPolicy
 
     seed = check_seed(seed)
     if not 0.0 < level < 1.0:
@@ -1001,10 +1074,17 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     if executor is not None and not callable(getattr(executor, "map_unordered", None)):
         raise ValueError("executor must have a map_unordered(fn, items) method, e.g. "
                          "emaphm.campaign.DaskExecutor('tcp://HOST:8786')")
+    if policy is None:
+        policy = InspectionPolicy()            # FLEET_POLICY, without importing .status
+    elif not isinstance(policy, InspectionPolicy):
+        raise ValueError("policy must be an emaphm.prognosis.inspection.InspectionPolicy, "
+                         f"e.g. InspectionPolicy(risk=0.05), got {policy!r}")
     t0 = time.perf_counter()
     # every option that changes a page or a row of the index: in both
-    common = {"thresholds": thresholds, "seed": seed, "level": level, "title": title}
-    settings = {**common, "thresholds": thresholds.to_dict(), "code": _code_fingerprint()}
+    common = {"thresholds": thresholds, "seed": seed, "level": level, "title": title,
+              "policy": policy}
+    settings = {**common, "thresholds": thresholds.to_dict(), "policy": policy.to_dict(),
+                "code": _code_fingerprint()}
     own = not isinstance(history, HealthHistory)
     h = HealthHistory(history, readonly=True) if own else history
     try:
@@ -1028,12 +1108,14 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
         atomic_write_text(figdir / _MANIFEST,
                           json.dumps(known, sort_keys=True, separators=(",", ":")) + "\n")
     order = sorted(entries, key=lambda i: tuple(entries[i]["order"]))   # status.attention_key
-    rows = [_ranked(entries[i]["row"], rank) for rank, i in enumerate(order, start=1)]
+    places = _inspect_order([entries[i]["row"] for i in order])
+    rows = [_ranked(entries[i]["row"], rank, places.get(i))
+            for rank, i in enumerate(order, start=1)]
     written += _write_assets(folder)
     written += _write_index(folder, rows, [entries[i]["cells"] for i in order],
                             [[stems[i], entries[i]["key"]] for i in order], settings,
                             title=title, source=h.path.name, thresholds=thresholds, seed=seed,
-                            level=level)
+                            level=level, policy=policy)
     return FleetSite(out=folder, index=folder / "index.html",
                      pages={i: figdir / f"{stems[i]}.html" for i in order},
                      statuses=tuple(statuses[i] for i in order if i in statuses),
@@ -1044,13 +1126,14 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
 
 def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, settings: dict,
                  *, title: str, source: str, thresholds: FailureThresholds, seed: int,
-                 level: float) -> int:
+                 level: float, policy: InspectionPolicy) -> int:
     """Write ``index.html`` and ``fleet.json`` of ``rows`` (ranked, in order) unless what
     they were last written from (``keys``: page stem and key of each row, the settings) is
     the same and both are there; returns the files written."""
     index = folder / "index.html"
     meta = {"title": title, "history": source, "seed": seed, "level": level,
-            "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS)}
+            "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS),
+            "inspection_policy": policy.to_dict()}
     index_key = _digest({"settings": settings, "meta": meta, "page_rows": PAGE_ROWS,
                          "rows": keys})
     key_file = folder / "actuators" / _INDEX_KEY
@@ -1060,7 +1143,8 @@ def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, 
     atomic_write_text(folder / "fleet.json", json.dumps(
         {**meta, "actuators": rows}, indent=1, allow_nan=False) + "\n")
     atomic_write_text(index, _index_html(rows, trs, title=title, source=source,
-                                         thresholds=thresholds, seed=seed, level=level))
+                                         thresholds=thresholds, seed=seed, level=level,
+                                         policy=policy))
     atomic_write_text(key_file, index_key + "\n")
     return 2
 

@@ -212,13 +212,23 @@ def attention_key(status: ActuatorStatus) -> tuple:
 
 
 def inspect_key(status: ActuatorStatus) -> tuple:
-    """Sort key of the schedule: the time of the next inspection, soonest first, as far
-    past due as it is (``at - t_now``; never inspected first of all), then by id; units
-    without a plan last."""
+    """Sort key of the schedule: the units due now first (never inspected first of all,
+    then as far past due as they are), whatever their time unit; then by time unit
+    (flight hours, then cycles: an hour and a cycle do not compare) the operating time
+    left to the next inspection (``at - t_now``, the order of the dates a
+    :class:`~emaphm.fleet.schedule.Calendar` gives), soonest first; ties (within float
+    noise: 299.99999999999994 is 300) by id; units without a plan last."""
+    from .markup import UNIT_ORDER
+
     p = status.plan
     if p is None:
-        return (1, 0.0, status.id)
-    return (0, p.at - p.t_now if p.t_last is not None else -math.inf, status.id)
+        return (2, 0, "", 0.0, status.id)
+    left = -math.inf if p.t_last is None else float(f"{p.at - p.t_now:.12g}")
+    if p.act_now:
+        return (0, 0, "", left, status.id)
+    unit = p.time_unit
+    return (1, UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit, left,
+            status.id)
 
 
 def order_fleet(statuses: Iterable[ActuatorStatus]) -> list[ActuatorStatus]:
