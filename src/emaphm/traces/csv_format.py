@@ -167,18 +167,39 @@ def _looks_numeric(cells: Sequence[str], decimal: str) -> bool:
                                for c in cells) and any(c.strip() for c in cells)
 
 
+def _is_text(cell: str, decimal: str) -> bool:
+    """A cell that is neither a number nor empty (nor ``nan``)."""
+    return cell.strip().lower() not in ("", "nan") and not _is_number(cell, decimal)
+
+
+def _data_like(cells: Sequence[str], decimal: str) -> bool:
+    """A row of data in a bench export: at least as many numbers as text cells (a status
+    or event column of text beside the channels)."""
+    numbers = sum(_is_number(c, decimal) for c in cells if c.strip())
+    return len(cells) >= 2 and numbers >= 1 and numbers >= sum(_is_text(c, decimal) for c in cells)
+
+
+def _mostly_numbers(line: str) -> bool:
+    """A line that looks like a row of data (for counting them while sniffing)."""
+    return _data_like(_split(line, _guess_delimiter(line)), ",") \
+        or _data_like(_split(line, _guess_delimiter(line)), ".")
+
+
 def _is_symbols_row(cells: Sequence[str]) -> bool:
+    """A units row: no numbers (but ``1``, a unit), and most of its cells units of the table
+    or bracketed (``[degC]``); a unit the table lacks (``°C`` of a temperature) is that
+    channel's own."""
     from ..quantities import QuantityError, measure
 
     filled = [c for c in cells if c.strip()]
-    if all(c[0] + c[-1] in ("[]", "()") for c in filled):
-        return True
-    try:
-        for c in filled:
-            measure(c)
-    except QuantityError:
-        return False
-    return bool(filled) and not _looks_numeric(cells, ".")
+    known = 0
+    for c in filled:
+        try:
+            known += c[0] + c[-1] in ("[]", "()") or measure(c).kind != ""
+        except QuantityError:
+            if _is_number(c, ".") or _is_number(c, ","):      # a number that is not a unit
+                return False                                  # ("1" is one): a row of data
+    return bool(filled) and 2 * known > len(filled) and not _looks_numeric(cells, ".")
 
 
 def sniff_csv(path: str | Path, *, preamble: bool = False, delimiter: str | None = None,
@@ -186,10 +207,12 @@ def sniff_csv(path: str | Path, *, preamble: bool = False, delimiter: str | None
     """Read the first lines of a CSV file into a :class:`CsvLayout`.
 
     The header is the first line that is not a comment (``#``); with ``preamble=True``
-    (bench exports) it is the last text line above the first numeric rows, so that lines
-    of text such as ``Sample rate: 20 kHz`` may precede it. ``delimiter`` (``,`` ``;``
-    tab) and ``decimal`` (``.`` or ``,``) are judged from the header and the first rows
-    unless given. A units row (``[s];[A]`` or ``s;A``) under the header is recognised.
+    (bench exports) it is the last text line above the first rows of data, so that lines
+    of text such as ``Sample rate: 20 kHz`` may precede it; a row of data may hold text
+    in some columns (a status or an event column). ``delimiter`` (``,`` ``;`` tab) and
+    ``decimal`` (``.`` or ``,``) are judged from the header and the first rows unless
+    given. A units row (``[s];[A]`` or ``s;A``; with ``preamble=True`` one whose cells are
+    mostly units, ``ms;deg;degC``) under the header is recognised.
     """
     path = Path(path)
     source = str(path)
@@ -209,7 +232,7 @@ def sniff_csv(path: str | Path, *, preamble: bool = False, delimiter: str | None
                 comments.append(s)
             continue
         candidates.append((index, offset, text))
-        numeric += bool(_NUMERIC_LINE.match(s))
+        numeric += bool(_NUMERIC_LINE.match(s)) or (preamble and _mostly_numbers(s))
         if (numeric if preamble else len(candidates)) > SNIFF_ROWS + 1:
             break
     if not candidates:
@@ -224,9 +247,19 @@ def _header_index(cands: list[tuple[int, int, str]], delimiter: str, decimal: st
     """Index in ``cands`` of the header row."""
     if not preamble:
         return 0
+    rows = [_split(c[2], delimiter) for c in cands]
+    last = len(rows)                    # the rows of data at the end of those read
+    while last > 1 and len(rows) - last < 5 and _data_like(rows[last - 1], decimal):
+        last -= 1
     for k in range(1, len(cands)):
-        cells = _split(cands[k][2], delimiter)
-        if _looks_numeric(cells, decimal) and len(cells) >= 2:
+        cells = rows[k]
+        # the first of (up to) three rows of data of one width: a text column beside the
+        # channels, or an event column that has text in this row only, does not hide it;
+        # text where the last rows read all have numbers is a preamble's ("Kanäle;6")
+        tail = [r for r in rows[last:] if len(r) == len(cells)]
+        if all(_data_like(r, decimal) and len(r) == len(cells) for r in rows[k:k + 3]) and \
+                not any(_is_text(c, decimal) and all(_is_number(r[j], decimal) for r in tail)
+                        for j, c in enumerate(cells)):
             head = k - 1
             if head >= 1 and _is_symbols_row(_split(cands[head][2], delimiter)) \
                     and len(_split(cands[head - 1][2], delimiter)) == len(cells):
@@ -313,7 +346,8 @@ def _row_error(exc: Exception, layout: CsvLayout, columns: Sequence[int]) -> Tra
         where = None
     return TraceError(f"{layout.path}: cannot read the data as numbers{where or ''} ({detail}); "
                       f"every data row needs a number in each of the columns "
-                      f"{[layout.names[c] for c in columns]} (write missing values as 'nan')")
+                      f"{[layout.names[c] for c in columns]}: correct that value in the file, or "
+                      "remove its row")
 
 
 def csv_blocks(layout: CsvLayout, columns: Sequence[int], *, max_rows: int | None = MAX_SAMPLES,

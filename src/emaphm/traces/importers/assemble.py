@@ -23,7 +23,7 @@ from ..container import Trace, TraceError, TraceWarning
 from ..limits import MAX_SAMPLES, too_many_samples
 from ..timebase import warn_if_shorter_than_profile
 from ..validation import validate
-from .base import ChannelInfo, SourceInfo
+from .base import ChannelInfo, SourceInfo, and_list
 from .channel_map import ChannelMap, Conversion
 from .registry import open_source
 
@@ -98,6 +98,18 @@ def _time_base(cmap: ChannelMap, info: SourceInfo, chans: dict[str, ChannelInfo]
     if len(rates) == 1 and None not in next(iter(rates)):
         rate, start = next(iter(rates))
         return _TimeBase("rate", rate, start)
+    if all(c.rate for c in chans.values()):
+        by_rate = {c.rate for c in chans.values()}
+        what, key = (("rates", lambda c: f"{c.rate:g} Hz") if len(by_rate) > 1
+                     else ("start times", lambda c: f"t = {c.start:g} s"))
+        groups: dict[str, list[str]] = {}
+        for c in chans.values():
+            groups.setdefault(key(c), []).append(repr(c.label))
+        shown = "; ".join(f"{and_list(names)} at {k}" for k, names in groups.items())
+        raise TraceError(f"{where}: the channels mapped have time bases at different {what} "
+                         f"({shown}); emaphm needs them on one time base: record or export them "
+                         "at one rate (or resample them in the recorder), or map channels of one "
+                         "rate")
     raise TraceError(f"{where}: no time base: the file has no time for these channels; map a t "
                      "channel in [channels] or give the sample rate in [time] rate = ... (Hz)")
 
@@ -238,15 +250,22 @@ def _read(source, cmap: ChannelMap, chans: dict[str, ChannelInfo], conv: dict[st
 
 
 def import_trace(path: str | Path, cmap: ChannelMap, *, window: Window = Window(),
-                 max_samples: int = MAX_SAMPLES, map_name: str = "map") -> Trace:
+                 max_samples: int = MAX_SAMPLES, map_name: str | None = None) -> Trace:
     """Read the bench export ``path`` through the channel map ``cmap`` into a validated
     trace (SI units, time from 0, the source and the map in its metadata); a
-    :class:`~emaphm.traces.TraceError` says what stops it."""
+    :class:`~emaphm.traces.TraceError` says what stops it, naming the map as ``map_name``
+    (default: the file it was loaded from, ``cmap.origin``)."""
     path = Path(path)
+    map_name = map_name or cmap.origin
     with open_source(path, cmap.source) as source:
         info = source.info
         chans = {spec.target: info.find(spec.name, spec.group, f"{map_name}: [channels] "
                                         f"{spec.target}") for spec in cmap.channels}
+        for target, c in chans.items():
+            if c.text is not None:
+                raise TraceError(f"{map_name}: [channels] {target}: column {c.label!r} holds text, "
+                                 f"not numbers (e.g. {c.text[:40]!r}); map a column of "
+                                 "numbers" + (f"; {info.hint}" if info.hint else ""))
         conv = {spec.target: spec.conversion(chans[spec.target].unit,
                                              f"{map_name}: [channels] {spec.target}")
                 for spec in cmap.channels}
@@ -272,7 +291,7 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
         measured = 2
     t0 = float(t[0])
     t = t - t0
-    resampled = _uniform(t, where)
+    resampled = _uniform(t, where, t0)
     meta = {
         "source": {"file": path.name, "format": info.format, "sha256": file_digest(path),
                    "window": window.to_list(), "t_start": t0,
@@ -316,17 +335,27 @@ def _time_text(base: _TimeBase, cmap: ChannelMap, chans: dict[str, ChannelInfo])
     return f"{base.rate:g} Hz from {base.start:g} s ({origin})"
 
 
-def _uniform(t: np.ndarray, where: str) -> str | None:
+def _uniform(t: np.ndarray, where: str, t0: float = 0.0) -> str | None:
     """None for a uniform time base; a note when the steps scatter within
     :data:`_RESAMPLE_LIMIT` of their mean (the samples are then interpolated onto the
-    uniform grid, with a warning)."""
+    uniform grid, with a warning); beyond it a TraceError at the step farthest from the
+    median step (a gap, samples lost), in the recording's time (``t0`` + ``t``)."""
     if t.size < 3:
         return None
     steps = np.diff(t)
     dt = float(t[-1] - t[0]) / (t.size - 1)
     spread = float((steps.max() - steps.min()) / dt)
-    if spread <= _UNIFORM_RTOL or spread > _RESAMPLE_LIMIT:
+    if spread <= _UNIFORM_RTOL:
         return None
+    if spread > _RESAMPLE_LIMIT:
+        typical = float(np.median(steps))
+        k = int(np.argmax(np.abs(steps - typical)))
+        what = (f"a gap of {steps[k]:.6g} s (about {round(steps[k] / typical) - 1:,} samples "
+                "missing)" if steps[k] > 1.5 * typical else f"a step of {steps[k]:.6g} s")
+        raise TraceError(f"{where}: the time base has {what} between rows {k:,} and {k + 1:,} "
+                         f"of the window (t = {t0 + t[k]:.9g} s to {t0 + t[k + 1]:.9g} s), where "
+                         f"the other steps are about {typical:.6g} s; import a window before or "
+                         "after it (--window START:END)")
     note = (f"time steps scattered by {spread:.3g} of the mean step {dt:.6g} s: interpolated "
             "onto the uniform grid")
     warnings.warn(TraceWarning(f"{where}: the {note}"), stacklevel=3)

@@ -44,7 +44,9 @@ class ChannelInfo:
     """A channel of a file: its ``name`` (and ``group`` where the format has groups: a TDMS
     group, an MDF channel group, a MATLAB struct), the unit the file declares (or None),
     its number of samples (None where unknown before reading, e.g. CSV), and its sample
-    ``rate`` [Hz] and ``start`` [s] where the file gives the channel a time base."""
+    ``rate`` [Hz] and ``start`` [s] where the file gives the channel a time base. ``text``
+    is a value of a column that holds text, not numbers (a CSV status column): listed,
+    never read."""
 
     name: str
     group: str | None = None
@@ -52,6 +54,7 @@ class ChannelInfo:
     samples: int | None = None
     rate: float | None = None
     start: float | None = None
+    text: str | None = None
 
     @property
     def label(self) -> str:
@@ -61,7 +64,9 @@ class ChannelInfo:
 @dataclass(frozen=True)
 class SourceInfo:
     """What :meth:`Source.info` found in a file: its ``format`` (``csv``, ``mat``...), its
-    channels, and ``notes`` on how it is written (delimiter, decimal comma, a preamble)."""
+    channels, and ``notes`` on how it is written (delimiter, decimal comma, a preamble);
+    ``skipped``, what the file holds that is not read as channels (a MATLAB matrix), and
+    ``hint``, advice a refusal adds (a map's delimiter that the file seems not to use)."""
 
     path: Path
     format: str
@@ -69,15 +74,27 @@ class SourceInfo:
     notes: tuple[str, ...] = ()
     #: the file's own time base (an MDF master channel) is given with each block
     own_time: bool = False
+    skipped: tuple[str, ...] = ()
+    hint: str = ""
 
     def find(self, name: str, group: str | None, where: str) -> ChannelInfo:
         """The channel called ``name`` (in ``group``, where given), or a TraceError naming
         the channels that exist."""
-        hits = [c for c in self.channels if c.name == name and (group is None or c.group == group)]
+        # a nested MATLAB group is Run.Messung; a map may write its HDF5 path, Run/Messung
+        alias = None if group is None else group.replace("/", ".")
+        hits = [c for c in self.channels
+                if c.name == name and (group is None or c.group in (group, alias))]
         if len(hits) == 1:
             return hits[0]
         if len(hits) > 1:
             groups = sorted({str(c.group) for c in hits})
+            if len(groups) == 1:                # twice in one table: no group tells them apart
+                at = [k + 1 for k, c in enumerate(self.channels) if c in hits]
+                what = ("column", "the header") if self.format == "csv" else \
+                    ("channel", f"group {hits[0].group!r}" if hits[0].group else "the file")
+                raise TraceError(f"{where}: {what[0]} {name!r} appears {len(hits)} times in "
+                                 f"{what[1]} of {self.path.name} ({what[0]}s "
+                                 f"{and_list(map(str, at))}); rename one in the file")
             raise TraceError(f"{where}: channel {name!r} is in several groups ({', '.join(groups)}); "
                              "say which with group = \"...\"")
         names = [c.label for c in self.channels]
@@ -86,8 +103,10 @@ class SourceInfo:
         folded = [c.label for c in self.channels if c.name.lower() == name.lower()]
         hint = f" (did you mean {folded[0]!r}?)" if folded else ""
         in_group = f" in group {group!r}" if group is not None else ""
+        has = f"the file has {shown}" if names else "the file has no channel it can read"
+        skipped = "".join(f"; {s}" for s in self.skipped + ((self.hint,) if self.hint else ()))
         raise TraceError(f"{where}: no channel {name!r}{in_group} in {self.path.name}{hint}; "
-                         f"the file has {shown} (`emaphm import {self.path.name} --inspect` "
+                         f"{has}{skipped} (`emaphm import {self.path.name} --inspect` "
                          "lists them)")
 
 
@@ -118,6 +137,12 @@ class Source(Protocol):
 
     def close(self) -> None:
         ...
+
+
+def and_list(items) -> str:
+    """``"3 and 5"``, ``"1, 2 and 4"``."""
+    items = list(items)
+    return ", ".join(items[:-1]) + " and " + items[-1] if len(items) > 1 else "".join(items)
 
 
 def as_float(x, where: str) -> np.ndarray:

@@ -92,8 +92,11 @@ class ChannelSpec:
 
     def conversion(self, declared: str | None, where: str) -> Conversion:
         """The SI conversion of this channel, its unit being the map's or else
-        ``declared`` (the file's)."""
+        ``declared`` (the file's). Where both are units of the table and differ, a
+        :class:`MapError` names both (a file's unit the table lacks yields to the map's)."""
         kind = TARGETS[self.target]
+        if declared is not None and not declared.strip():
+            declared = None
         unit = self.unit if self.unit is not None else declared
         if unit is None or not unit.strip():
             raise MapError(f"{where}: channel {self.name!r} has no unit in the map and the file "
@@ -102,8 +105,13 @@ class ChannelSpec:
         try:
             m = measure(unit)
         except QuantityError:
-            raise MapError(f"{where}: unknown unit {unit.strip()[:40]!r}; known units of {kind}: "
+            by = (f"the file declares unit {unit.strip()[:40]!r} for channel {self.name!r}, "
+                  f"not one emaphm knows; give its unit in the map, unit = \"...\""
+                  if self.unit is None else f"unknown unit {unit.strip()[:40]!r}")
+            raise MapError(f"{where}: {by}; known units of {kind}: "
                            f"{', '.join(_spellings(kind))}") from None
+        if self.unit is not None and declared is not None:
+            self._agree(m, declared, where)
         if m.kind == kind:
             if isinstance(self.scale, str):
                 raise MapError(f"{where}: scale {self.scale!r} is a ratio, but {self.target} is "
@@ -126,6 +134,23 @@ class ChannelSpec:
                        f"the {kind} of {self.target} ({SI[kind]}); known units of {kind}: "
                        f"{', '.join(_spellings(kind))}"
                        + (" (or V with a probe's scale)" if kind == "current" else ""))
+
+    def _agree(self, m, declared: str, where: str) -> None:
+        """Refuse a map's unit that contradicts the file's (a current in mA read as A is
+        1000 times off, silently)."""
+        try:
+            f = measure(declared)
+        except QuantityError:
+            return
+        if f == m:
+            return
+        fix = f"remove unit from the map to read it in {declared.strip()}"
+        if f.kind == m.kind and not isinstance(self.scale, str):
+            fix += (f", or, where the file's unit is wrong, remove unit and give "
+                    f"scale = {float(self.scale) * m.factor / f.factor:.10g} (its values in "
+                    f"{self.unit.strip()})")
+        raise MapError(f"{where}: channel {self.name!r} is declared in {declared.strip()!r} by "
+                       f"the file, in {self.unit.strip()!r} by the map; {fix}")
 
     def to_dict(self) -> dict[str, Any]:
         d: dict[str, Any] = {"name": self.name}
@@ -175,6 +200,8 @@ class ChannelMap:
     time: TimeSpec = field(default_factory=TimeSpec)
     source: SourceOptions = field(default_factory=SourceOptions)
     profile: str | None = None
+    #: where the map came from (its file), as refusals name it
+    origin: str = field(default="map", compare=False)
 
     def channel(self, target: str) -> ChannelSpec | None:
         return next((c for c in self.channels if c.target == target), None)
@@ -223,7 +250,7 @@ class ChannelMap:
         if prof and (set(prof) - {"name"} or name not in PROFILES):
             raise MapError(f"{source}: [profile] takes name = one of {', '.join(PROFILES)}, got "
                            f"{dict(prof)!r:.80}")
-        return cls(channels=chans, time=time, source=src, profile=name)
+        return cls(channels=chans, time=time, source=src, profile=name, origin=source)
 
 
 def _table(data: Mapping[str, Any], key: str, source: str, required: bool = False) -> dict:

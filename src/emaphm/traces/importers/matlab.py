@@ -1,8 +1,10 @@
 """MATLAB ``.mat`` exports: version 5 (read by ``scipy.io``) and version 7.3 (HDF5, read by
 ``h5py``, from the ``bench`` extra). A channel is a numeric vector at the top level, or a
-field of a struct (its ``group``); scalars (a sample rate such as ``fs``) are listed by
-``--inspect``. A version 7.3 file is read in slices; a version 5 file is read whole, one
-variable at a time."""
+field of a struct (its ``group``; a struct in a struct is the group ``Run.Messung``, as
+MATLAB writes the path); scalars (a sample rate such as ``fs``) are listed by
+``--inspect``, and so is what is not read (a struct array, a 2-D matrix), with the reason.
+A version 7.3 file is read in slices; a version 5 file is read whole, one variable at a
+time."""
 
 from __future__ import annotations
 
@@ -28,6 +30,19 @@ def _is_hdf5(path: Path) -> bool:
     return any(head[k:k + 8] == _HDF5_SIGNATURE for k in (0, 512, 1024))
 
 
+#: How to save channels emaphm reads, said where a variable is not read.
+_SAVE_AS = "save each channel as a vector, at the top level or in a struct"
+
+
+def _matrix(label: str, shape: tuple[int, ...]) -> str:
+    return (f"variable {label!r} is a {len(shape)}-D matrix of {' x '.join(map(str, shape))}, not "
+            f"read; {_SAVE_AS}")
+
+
+def _is_struct(value) -> bool:
+    return hasattr(value, "_fieldnames")
+
+
 def _vector_length(shape: tuple[int, ...]) -> int | None:
     if len(shape) == 1:
         return shape[0]
@@ -43,6 +58,7 @@ class MatSource:
         self.path = read_path(path)
         self.v73 = _is_hdf5(self.path)
         self.scalars: dict[str, float] = {}
+        self.skipped: list[str] = []
         self.info = self._inspect_v73() if self.v73 else self._inspect_v5()
 
     # ------------------------------------------------------------------ version 5
@@ -68,18 +84,35 @@ class MatSource:
                     self.scalars[name] = float(data[name])
                 except (TypeError, ValueError):
                     pass
+            elif len(shape) >= 2 and cls not in ("char", "cell", "sparse", "object"):
+                self.skipped.append(_matrix(name, tuple(shape)))
         return SourceInfo(path=self.path, format="mat", channels=tuple(chans),
-                          notes=("MATLAB version 5",) + self._scalar_note())
+                          notes=("MATLAB version 5",) + self._scalar_note(),
+                          skipped=tuple(self.skipped))
 
     def _struct_fields(self, name: str, value) -> list[ChannelInfo]:
+        """The vectors of the struct ``value`` (the group ``name``) and of the structs in
+        it (the group ``name.field``)."""
+        if isinstance(value, np.ndarray) and value.size > 1 and all(map(_is_struct, value.flat)):
+            self.skipped.append(f"variable {name!r} is a struct array of {value.size}, not read; "
+                                f"{_SAVE_AS} (one struct per run, or one file per run)")
+            return []
         out = []
         for field in getattr(value, "_fieldnames", None) or []:
-            x = np.asarray(getattr(value, field))
+            x = getattr(value, field)
+            if _is_struct(x) or (isinstance(x, np.ndarray) and x.dtype == object):
+                out += self._struct_fields(f"{name}.{field}", x)
+                continue
+            x = np.asarray(x)
             n = _vector_length(x.shape)
-            if n and n > 1 and x.dtype.kind in "biuf":
+            if x.dtype.kind not in "biuf":
+                continue
+            if n and n > 1:
                 out.append(ChannelInfo(name=field, group=name, samples=n))
-            elif x.size == 1 and x.dtype.kind in "biuf":
+            elif x.size == 1:
                 self.scalars[f"{name}.{field}"] = float(x.reshape(()))
+            elif x.ndim >= 2:
+                self.skipped.append(_matrix(f"{name}.{field}", x.shape))
         return out
 
     def _scalar_note(self) -> tuple[str, ...]:
@@ -106,13 +139,18 @@ class MatSource:
             group, _, leaf = name.rpartition("/")
             n = _vector_length(obj.shape)
             if n is not None and n > 1:
-                chans.append(ChannelInfo(name=leaf, group=group or None, samples=n))
+                # a struct in a struct is written as MATLAB writes its path: Run.Messung
+                chans.append(ChannelInfo(name=leaf, group=group.replace("/", ".") or None,
+                                         samples=n))
             elif obj.size == 1:
                 self.scalars[name.replace("/", ".")] = float(np.asarray(obj[()]).reshape(()))
+            elif len(obj.shape) >= 2:
+                self.skipped.append(_matrix(name.replace("/", "."), obj.shape))
 
         self.h5.visititems(visit)
         return SourceInfo(path=self.path, format="mat", channels=tuple(chans),
-                          notes=("MATLAB version 7.3 (HDF5)",) + self._scalar_note())
+                          notes=("MATLAB version 7.3 (HDF5)",) + self._scalar_note(),
+                          skipped=tuple(self.skipped))
 
     # ------------------------------------------------------------------ reading
     def blocks(self, channels: Sequence[ChannelInfo], first: int = 0,
@@ -120,7 +158,8 @@ class MatSource:
         n = min(c.samples or 0 for c in channels)
         stop = n if stop is None else min(stop, n)
         if self.v73:
-            sets = [self.h5[f"{c.group}/{c.name}" if c.group else c.name] for c in channels]
+            sets = [self.h5[f"{c.group.replace('.', '/')}/{c.name}" if c.group else c.name]
+                    for c in channels]
             for a in range(first, stop, BLOCK_ROWS):
                 b = min(a + BLOCK_ROWS, stop)
                 yield Block(start=a, columns=tuple(_slice(ds, a, b) for ds in sets))
@@ -129,11 +168,11 @@ class MatSource:
 
         cols = []
         for c in channels:
-            top = c.group or c.name
+            path = c.group.split(".") + [c.name] if c.group else [c.name]
             value = sio.loadmat(self.path, squeeze_me=True, struct_as_record=False,
-                                variable_names=[top])[top]
-            if c.group:
-                value = getattr(value, c.name)
+                                variable_names=[path[0]])[path[0]]
+            for field in path[1:]:
+                value = getattr(value, field)
             cols.append(as_float(value, f"{self.path}: {c.label}")[first:stop])
         yield Block(start=first, columns=tuple(cols))
 

@@ -45,7 +45,7 @@ def _guess(info: SourceInfo) -> dict[str, ChannelInfo]:
         kind = TARGETS[target]
         for pattern in _GUESSES[target]:
             for c in info.channels:
-                if c.label in used:
+                if c.label in used or c.text is not None:
                     continue
                 unit_kind = _kind(c.unit)
                 if unit_kind not in (None, kind) and not (kind == "current"
@@ -66,7 +66,7 @@ def describe(info: SourceInfo) -> str:
                                                     else "")]
     rows = [("channel", "group", "unit", "samples", "rate")]
     for c in info.channels:
-        rows.append((c.name, c.group or "", c.unit or "-",
+        rows.append((c.name, c.group or "", "(text)" if c.text is not None else c.unit or "-",
                      f"{c.samples:,}" if c.samples is not None else "?",
                      f"{c.rate:g} Hz" if c.rate else ""))
     widths = [min(max(len(r[k]) for r in rows), 40) for k in range(5)]
@@ -74,6 +74,7 @@ def describe(info: SourceInfo) -> str:
         lines.append("  ".join(x[:40].ljust(w) for x, w in zip(r, widths)).rstrip())
     if not info.channels:
         lines.append("(no numeric channels found)")
+    lines += list(info.skipped)
     return "\n".join(lines)
 
 
@@ -85,13 +86,19 @@ def starter_map(info: SourceInfo) -> str:
     """A channel map to edit: the columns guessed from the channel names (each with the
     unit the file declares, or a placeholder that the map refuses until it is set)."""
     found = _guess(info)
-    rates = {c.rate for c in info.channels if c.rate}
+    timed = list(found.values()) or list(info.channels)
+    rates = {c.rate for c in timed if c.rate}
     lines = [f"# channel map for {info.path.name}: check every line, then run",
              f"#   emaphm import {info.path.name} --map THIS.toml --out trace.parquet",
              "# value in SI = (scale * recorded + offset) converted from unit; a current",
              "# recorded in V (a probe) takes scale = \"10 A/V\" or its sensitivity \"100 mV/A\".",
              ""]
-    if "t" not in found and not info.own_time and len(rates) != 1:
+    if "t" not in found and not info.own_time and len(rates) > 1:
+        at = {r: [c.label for c in timed if c.rate == r] for r in sorted(rates)}
+        lines += ["# the channels are at different rates, and emaphm needs one time base:"]
+        lines += [f"#   {r:g} Hz: {', '.join(names)}" for r, names in at.items()]
+        lines += ["# record or export them at one rate (or resample them in the recorder)", ""]
+    elif "t" not in found and not info.own_time and not rates:
         lines += ["[time]", "rate = 0  # sample rate in Hz (the file has no time channel): SET IT",
                   ""]
     lines.append("[channels]")
@@ -117,5 +124,7 @@ def starter_map(info: SourceInfo) -> str:
         note = "" if c.unit else "  # the file declares no unit: SET IT"
         lines.append(f"{target} = {{ {', '.join(fields)} }}{note}")
     lines += ["", "# every channel of the file:"]
-    lines += [f"#   {c.label!r} [{c.unit or '-'}]" for c in info.channels[:200]]
+    lines += [f"#   {c.label!r} " + ("(text, not read)" if c.text is not None else
+                                          f"[{c.unit or '-'}]") for c in info.channels[:200]]
+    lines += [f"# {s}" for s in info.skipped]
     return "\n".join(lines) + "\n"
