@@ -22,6 +22,7 @@ from emaphm.prognosis.history import HealthHistory
 
 import test_fleet
 from test_fleet import _add_series, _k, _one_line_error, _unfold
+from test_fleet_browser import driver  # noqa: F401  (its Chromium fixture, for one test)
 
 small_site = test_fleet.small_site          # the fixture: a small fleet and its site
 
@@ -292,52 +293,25 @@ def test_the_inspect_by_column_sorts_by_the_time_left_per_unit_ties_by_id(tmp_pa
         {r["id"]: r["sort"]["inspect"] for r in site.rows}
 
 
-def test_the_browser_sorts_the_inspect_by_column_as_the_schedule_does(tmp_path):
-    """As test_fleet_browser.py drives it: skips without Chromium, fails instead where
-    EMAPHM_REQUIRE_BROWSER is set."""
-    import os
-    import shutil
-    import tempfile
-
-    from test_fleet_browser import CHROME_FLAGS, _browser, _open, _visible_ids
-
-    chromium, chromedriver = _browser()
-    from selenium import webdriver
-    from selenium.webdriver.chrome.options import Options
-    from selenium.webdriver.chrome.service import Service
+def test_the_browser_sorts_the_inspect_by_column_as_the_schedule_does(tmp_path, driver):
+    """As test_fleet_browser.py drives it (its driver: skips without Chromium, fails instead
+    where EMAPHM_REQUIRE_BROWSER is set)."""
+    from test_fleet_browser import _open, _visible_ids
 
     from emaphm.fleet.site import build_site
 
     site = build_site(_unit_fleet(tmp_path), tmp_path / "site", workers=0)
-    offline = os.environ.get("SE_OFFLINE")
-    os.environ["SE_OFFLINE"] = "true"
-    profile = tempfile.mkdtemp(prefix="emaphm-chromium-")
-    opts = Options()
-    opts.binary_location = chromium
-    for flag in CHROME_FLAGS:
-        opts.add_argument(flag)
-    opts.add_argument(f"--user-data-dir={profile}")
-    driver = webdriver.Chrome(service=Service(chromedriver), options=opts)
-    try:
-        _open(driver, site.index)
-        driver.find_element("css selector", "thead button[data-key=inspect]").click()
-        assert _visible_ids(driver) == ["P-PAST", "A-LATE", "B-EARLY", "M-NOISE", "Z-EXACT",
-                                        "C-CYC"]
-        shown = driver.execute_script(
-            "return Array.from(document.querySelectorAll('#fleet tbody td.c-inspect span'))"
-            ".map(s => s.textContent + ' ' + s.nextSibling.textContent)")
-        assert shown == ["1300 h in 300 h \u00b7 default interval",
-                         "450 h in 300 h \u00b7 default interval",
-                         "300 h in 300 h \u00b7 default interval",
-                         "300 h in 300 h \u00b7 default interval",
-                         "310 cycles in 300 cycles \u00b7 default interval"]
-    finally:
-        driver.quit()
-        shutil.rmtree(profile, ignore_errors=True)
-        if offline is None:
-            os.environ.pop("SE_OFFLINE", None)
-        else:
-            os.environ["SE_OFFLINE"] = offline
+    _open(driver, site.index)
+    driver.find_element("css selector", "thead button[data-key=inspect]").click()
+    assert _visible_ids(driver) == ["P-PAST", "A-LATE", "B-EARLY", "M-NOISE", "Z-EXACT", "C-CYC"]
+    shown = driver.execute_script(
+        "return Array.from(document.querySelectorAll('#fleet tbody td.c-inspect span'))"
+        ".map(s => s.textContent + ' ' + s.nextSibling.textContent)")
+    assert shown == ["1300 h in 300 h \u00b7 default interval",
+                     "450 h in 300 h \u00b7 default interval",
+                     "300 h in 300 h \u00b7 default interval",
+                     "300 h in 300 h \u00b7 default interval",
+                     "310 cycles in 300 cycles \u00b7 default interval"]
 
 
 # ----------------------------------------------------------------------------- 9: the summary
