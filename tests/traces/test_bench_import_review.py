@@ -292,3 +292,49 @@ def test_errors_from_a_loaded_map_name_its_file(tmp_path):
     with pytest.raises(TraceError, match=r"^other.toml: \[channels\] i_b"):
         import_trace(src, cmap, map_name="other.toml")
     assert cmap == _map(_MAP.replace('"IV"', '"I_V"'))           # where it came from aside
+
+
+# ----------------------------------------------------------------------------- second review
+def test_a_sensor_declared_in_volts_is_read_through_the_maps_unit_and_scale(tmp_path):
+    """A DAQ labels every input V: a potentiometer at 36 deg/V is mapped with unit = "deg"
+    and scale = 36. The file's unit is of another quantity, so the map's is no contradiction
+    (the refusal of contradicting units, same quantity, refused this)."""
+    t, ref, pos, ia, ib = _signals()
+    volts = np.degrees(np.column_stack([ref, pos])) / 36.0
+    lines = ["t [s],ref [V],pos [V],ia [A],ib [A]"] + [
+        ",".join(repr(float(x)) for x in row)
+        for row in np.column_stack([t, volts, ia, ib])]
+    (tmp_path / "daq.csv").write_text("\n".join(lines) + "\n")
+    cmap = _map('[channels]\nt = { name = "t" }\n'
+                'theta_ref = { name = "ref", unit = "deg", scale = 36 }\n'
+                'theta_m = { name = "pos", unit = "deg", scale = 36 }\n'
+                'i_a = { name = "ia" }\ni_b = { name = "ib" }\n')
+    _check(import_trace(tmp_path / "daq.csv", cmap))
+
+
+def test_a_contradicting_unit_with_an_offset_is_not_given_a_scale_that_drops_it(tmp_path):
+    src = _german(tmp_path / "run.csv", _HEADER)
+    with pytest.raises(MapError) as err:
+        import_trace(src, _map(_MAP.replace('"IU"', '"IU", unit = "mA", offset = 5')))
+    assert "in 'mA' by the map; remove unit from the map to read it in A" in str(err.value)
+    assert "scale" not in str(err.value)
+
+
+def test_a_long_preamble_of_names_and_numbers_is_not_taken_for_data(tmp_path):
+    """Catman-like: 25 lines 'ParamK,value' above the header. Rows of data start with a
+    number; a preamble's line starts with its name (the header was line 1)."""
+    t, _, _, ia, _ = _signals()
+    lines = [f"Param{k},{0.5 * k}" for k in range(25)] + ["t,i_a,omega"]
+    lines += [f"{float(x)!r},{float(y)!r},1.0" for x, y in zip(t[:30], ia[:30])]
+    (tmp_path / "pre.csv").write_text("\n".join(lines) + "\n")
+    info = inspect_source(tmp_path / "pre.csv")
+    assert [c.name for c in info.channels] == ["t", "i_a", "omega"]
+    assert "header on line 26" in describe(info)
+
+
+def test_a_first_data_row_of_ones_and_text_is_not_a_units_row(tmp_path):
+    (tmp_path / "ones.csv").write_text("n,enable,state\n" + "".join(
+        f"{k + 1},1,{'RUN' if k % 2 else 'OK'}\n" for k in range(10)))
+    info = inspect_source(tmp_path / "ones.csv")
+    assert [(c.name, c.unit) for c in info.channels][:2] == [("n", None), ("enable", None)]
+    assert "units" not in describe(info).splitlines()[0]

@@ -173,10 +173,14 @@ def _is_text(cell: str, decimal: str) -> bool:
 
 
 def _data_like(cells: Sequence[str], decimal: str) -> bool:
-    """A row of data in a bench export: at least as many numbers as text cells (a status
-    or event column of text beside the channels)."""
-    numbers = sum(_is_number(c, decimal) for c in cells if c.strip())
-    return len(cells) >= 2 and numbers >= 1 and numbers >= sum(_is_text(c, decimal) for c in cells)
+    """A row of data in a bench export: its first cell a number (the time or the sample
+    count: a preamble's ``Rate;10000`` starts with its name) and at least as many numbers
+    as text cells (a status or event column of text beside the channels)."""
+    filled = [c for c in cells if c.strip()]
+    if len(cells) < 2 or not filled or not _is_number(filled[0], decimal):
+        return False
+    numbers = sum(_is_number(c, decimal) for c in filled)
+    return numbers >= sum(_is_text(c, decimal) for c in cells)
 
 
 def _mostly_numbers(line: str) -> bool:
@@ -194,11 +198,12 @@ def _is_symbols_row(cells: Sequence[str]) -> bool:
     filled = [c for c in cells if c.strip()]
     known = 0
     for c in filled:
+        if _is_number(c, ".") or _is_number(c, ","):     # "1" is a unit, and a number: it
+            continue                                     # counts for neither
         try:
             known += c[0] + c[-1] in ("[]", "()") or measure(c).kind != ""
         except QuantityError:
-            if _is_number(c, ".") or _is_number(c, ","):      # a number that is not a unit
-                return False                                  # ("1" is one): a row of data
+            pass
     return bool(filled) and 2 * known > len(filled) and not _looks_numeric(cells, ".")
 
 

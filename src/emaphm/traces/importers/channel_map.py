@@ -136,16 +136,18 @@ class ChannelSpec:
                        + (" (or V with a probe's scale)" if kind == "current" else ""))
 
     def _agree(self, m, declared: str, where: str) -> None:
-        """Refuse a map's unit that contradicts the file's (a current in mA read as A is
-        1000 times off, silently)."""
+        """Refuse a map's unit that contradicts the file's, both of one quantity (a current
+        declared in A read as mA is 1000 times off, silently); a file's unit of another
+        quantity is the sensor's output (a potentiometer's V), which the map's unit and
+        scale convert."""
         try:
             f = measure(declared)
         except QuantityError:
             return
-        if f == m:
-            return
+        if f == m or f.kind != m.kind:   # another quantity: a sensor's output (V) read
+            return                       # through the map's unit and scale, as intended
         fix = f"remove unit from the map to read it in {declared.strip()}"
-        if f.kind == m.kind and not isinstance(self.scale, str):
+        if not isinstance(self.scale, str) and not self.offset:
             fix += (f", or, where the file's unit is wrong, remove unit and give "
                     f"scale = {float(self.scale) * m.factor / f.factor:.10g} (its values in "
                     f"{self.unit.strip()})")
