@@ -338,3 +338,16 @@ def test_a_first_data_row_of_ones_and_text_is_not_a_units_row(tmp_path):
     info = inspect_source(tmp_path / "ones.csv")
     assert [(c.name, c.unit) for c in info.channels][:2] == [("n", None), ("enable", None)]
     assert "units" not in describe(info).splitlines()[0]
+
+
+def test_rows_of_integers_say_nothing_of_the_decimal(tmp_path):
+    """The first rows sniffed hold integers only: they show no decimal separator, so a
+    map's decimal comma is not contradicted (a refusal said to set it to '.', which would
+    break the rows further down)."""
+    rows = ["t;a;b"] + [f"{k};0;0" for k in range(30)] + [f"{k};0,5;1,25" for k in range(30, 60)]
+    (tmp_path / "int.csv").write_text("\n".join(rows) + "\n")
+    with pytest.raises(TraceError) as err:
+        import_trace(tmp_path / "int.csv", _map('[source]\ndecimal = ","\n[channels]\n'
+                                                't = { name = "t", unit = "ms" }\n'
+                                                'theta_ref = { name = "x", unit = "rad" }\n'))
+    assert "no channel 'x'" in str(err.value) and "decimal" not in str(err.value)

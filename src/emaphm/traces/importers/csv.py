@@ -45,7 +45,8 @@ def _mismatch(options: SourceOptions, guess: CsvLayout | None) -> tuple[str, str
         given.append(f"delimiter {_delimiter_name(options.delimiter)}")
         to = '"\\t"' if guess.delimiter == "\t" else repr(guess.delimiter)
         fixes.append(f"remove [source] delimiter or set it to {to}")
-    if options.decimal is not None and options.decimal != guess.decimal:
+    shown = any(guess.decimal in c for r in guess.rows for c in r)   # rows of integers
+    if options.decimal is not None and options.decimal != guess.decimal and shown:  # say none
         given.append(f"decimal {options.decimal!r}")
         fixes.append(f"remove [source] decimal or set it to {guess.decimal!r}")
     if not given:
