@@ -349,5 +349,8 @@ def test_rows_of_integers_say_nothing_of_the_decimal(tmp_path):
     with pytest.raises(TraceError) as err:
         import_trace(tmp_path / "int.csv", _map('[source]\ndecimal = ","\n[channels]\n'
                                                 't = { name = "t", unit = "ms" }\n'
-                                                'theta_ref = { name = "x", unit = "rad" }\n'))
+                                                'theta_ref = { name = "x", unit = "rad" }\n'
+                                                'theta_m = { name = "a", unit = "rad" }\n'
+                                                'i_a = { name = "a", unit = "A" }\n'
+                                                'i_b = { name = "b", unit = "A" }\n'))
     assert "no channel 'x'" in str(err.value) and "decimal" not in str(err.value)
