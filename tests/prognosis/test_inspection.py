@@ -512,3 +512,26 @@ def test_reasons_never_print_a_number_equal_to_the_one_it_is_compared_with():
     assert _apart(0.0501, 0.05) == "0.0501" and _apart(0.0500001, 0.05) == "0.0500001"
     assert _apart(0.2, 0.05) == "0.2" and _apart(0.05, 0.05) == "0.05"
     assert _apart(99.99, 100.0, 3) == "99.99" and _apart(150.0, 100.0, 3) == "150"
+
+
+def test_a_crossing_after_the_last_inspection_off_the_healthy_level_stays_a_crossing():
+    """Friction at 87 % of its threshold, rising within its scatter (4 inspections): carried
+    to 1500 h it has crossed in 86 % of the draws. Off its healthy level, that is a
+    crossing (first to fail, past threshold), as the plan says, not 'no growth'; and the
+    table at the last inspection quotes its median, not 'in the noise'."""
+    from emaphm.prognosis.cli import _prognosis_table
+    from emaphm.prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS
+    from emaphm.prognosis.trends import indicator_state
+
+    t = np.array([0.0, 100.0, 200.0, 300.0])
+    thr = DEFAULT_FAILURE_THRESHOLDS.for_indicator("friction")
+    K = _friction_k(np.array([0.3, 0.55, 0.45, 0.62]) / 0.7 * thr)
+    later = prognose(t, K, seed=0, t_now=1500.0, indicators=["friction"])
+    p = later.predictions["friction"]
+    assert p.median == 0.0 and indicator_state(p, 300.0)[0] == "past threshold"
+    assert later.first is p
+    plan = plan_inspection(t, later, t_now=1500.0, time_unit="h", K=K)
+    assert plan.rule == "act now" and plan.indicator == "friction"
+    row = next(line for line in _prognosis_table(prognose(t, K, seed=0)).splitlines()
+               if line.startswith("friction"))
+    assert "in the noise" not in row and "no growth" not in row

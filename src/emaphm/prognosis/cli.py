@@ -289,7 +289,8 @@ def threshold_option(items: list[str] | None):
 
 
 def _prognosis_table(prog: Any) -> str:
-    from .trends import indicator_state
+    from .inspection import HEALTHY_SHARE
+    from .trends import indicator_state, level_at_last
 
     unit = prog.time_unit
     lines = [f"prognosis of {prog.actuator} at {prog.t_now:g} {unit} from {prog.times.size} "
@@ -303,7 +304,8 @@ def _prognosis_table(prog: Any) -> str:
         far = 10.0 * max(span, 1e-9)
         if p.no_growth(span):
             rul, iv = "no growth", f"P(within {far:.0f} {unit}) {p.p_fail_within(far):.2f}"
-        elif indicator_state(p, span)[0] == "no growth":   # a finite fit of the scatter
+        elif indicator_state(p, span)[0] == "no growth" and level_at_last(p) < HEALTHY_SHARE * \
+                p.threshold:                     # a finite fit of a healthy level's scatter
             rul, iv = "no growth", f"fitted {_fmt_time(p.median, unit)}, in the noise"
         else:
             rul = _fmt_time(p.median, unit)

@@ -250,13 +250,13 @@ def taking_part(prog: "Prognosis") -> dict[str, str]:
     """The indicators of ``prog`` that take part in the risk, name -> why ("past its
     threshold", "growing towards its threshold" or "at x of its threshold"); the others
     are at their healthy level (module docstring)."""
-    from .trends import indicator_state
+    from .trends import indicator_state, level_at_last
 
     span = float(prog.times[-1] - prog.times[0]) if prog.times.size else 0.0
     out = {}
     for name, p in prog.predictions.items():
         state = indicator_state(p, span)[0]
-        share = _level_at_last(p) / p.threshold
+        share = level_at_last(p) / p.threshold
         if state == "past threshold":
             out[name] = "past its threshold"
         elif state == "predicted":
@@ -264,15 +264,6 @@ def taking_part(prog: "Prognosis") -> dict[str, str]:
         elif share >= HEALTHY_SHARE:
             out[name] = f"at {share:.0%} of its threshold"
     return out
-
-
-def _level_at_last(p: "RULPrediction") -> float:
-    """The indicator's level at the last inspection: the value there of its most weighted
-    trend (not extrapolated to a later ``t_now``: a trend of scatter, carried forward,
-    could reach any level); 0 where it is not finite."""
-    top = p.fits[max(p.weights, key=p.weights.get)]
-    level = float(top.value(top.t_ref)[0])
-    return level if math.isfinite(level) else 0.0
 
 
 # ----------------------------------------------------------------------------- the plan
@@ -493,6 +484,8 @@ def _confirm(preds: list, part: Mapping[str, str], t_star: float, base: dict, ri
 def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: InspectionPolicy,
                base: dict, n: int, prognosis: "Prognosis") -> NextInspection:
     """The rules ``act now``, ``confirm``, ``risk`` and ``max interval`` (module docstring)."""
+    from .trends import level_at_last
+
     iv, unit, t_now, t_last = base["intervals"], base["time_unit"], base["t_now"], base["t_last"]
     risk = policy.risk
     f_now = float(first_crossing_cdf(preds, t_now))
@@ -512,7 +505,7 @@ def _risk_plan(preds: list, part: Mapping[str, str], t_star: float, policy: Insp
                             "inspection alone (one reading is no trend to act on)")
     if soon:
         lead = max(preds, key=lambda p: (float(crossing_cdf(p, min(t_star, t_now + iv.min))),
-                                         _level_at_last(p) / p.threshold))
+                                         level_at_last(p) / p.threshold))
         if f_now > risk:
             why = (f"{lead.indicator} {part[lead.indicator]}: probability {_apart(f_now, risk)} "
                    f"that it has crossed its failure threshold already, above the risk {risk:g}")

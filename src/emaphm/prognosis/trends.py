@@ -786,6 +786,15 @@ def _trend_sign(p: RULPrediction) -> tuple[int, float]:
     return (1 if rate > 0 else -1), rate
 
 
+def level_at_last(p: RULPrediction) -> float:
+    """The indicator's level at the last inspection: the value there of its most weighted
+    trend (not carried to a later ``t_now``: a trend of scatter, carried forward, could
+    reach any level); 0 where it is not finite."""
+    top = p.fits[max(p.weights, key=p.weights.get)]
+    level = float(top.value(top.t_ref)[0])
+    return level if math.isfinite(level) else 0.0
+
+
 def indicator_state(p: RULPrediction, span: float) -> tuple[str, int, float]:
     """``(state, trend, growth rate)`` of one indicator's prediction over a history
     spanning ``span``: state ``past threshold`` (the trend is at or past it: RUL median 0),
@@ -795,13 +804,17 @@ def indicator_state(p: RULPrediction, span: float) -> tuple[str, int, float]:
     out: an exponential fitted to the scatter of a k that sits at zero can cross a
     distant threshold at a finite time without any real growth. Predicted at a ``t_now``
     after the last inspection, a median of 0 is a crossing in between, which is a
-    prediction like any other: past the threshold only where the trend was there at the
-    last inspection or rises beyond its scatter (an exponential through one reading above
-    the scatter of zeros can reach any level a few days on)."""
+    prediction like any other: past the threshold where the trend was there at the last
+    inspection, rises beyond its scatter, or was off its healthy level already (at least
+    :data:`~emaphm.prognosis.inspection.HEALTHY_SHARE` of the threshold); an exponential
+    through one reading above the scatter of zeros, which can reach any level a few days
+    on, is not."""
+    from .inspection import HEALTHY_SHARE
+
     sign, rate = _trend_sign(p)
     if p.median <= 0.0:
         top = p.fits[max(p.weights, key=p.weights.get)]
-        if p.t_now <= top.t_ref or sign > 0 \
+        if p.t_now <= top.t_ref or sign > 0 or level_at_last(p) >= HEALTHY_SHARE * p.threshold \
                 or float(top.crossing_time(p.threshold)[0]) <= top.t_ref:
             return "past threshold", sign, rate
         return "no growth", sign, rate
