@@ -27,7 +27,7 @@ from .limits import MAX_SAMPLES, check_file_size, too_many_samples
 from .metadata import FORMAT_VERSION, _dumps, _loads
 from .validation import _import_command, _normalise_symbol, _unbracket
 
-__all__ = ["CsvLayout", "sniff_csv", "csv_blocks"]
+__all__ = ["CsvLayout", "sniff_csv", "csv_blocks", "is_number", "is_text"]
 
 _CSV_MAGIC = "# emaphm-trace"
 #: Lines :func:`sniff_csv` reads at most to find the header (a bench export's preamble
@@ -99,7 +99,7 @@ def _split(line: str, delimiter: str) -> list[str]:
     return [c.strip() for c in cells]
 
 
-def _is_number(text: str, decimal: str = ".") -> bool:
+def is_number(text: str, decimal: str = ".") -> bool:
     text = text.strip().strip('"')
     if decimal == ",":
         text = text.replace(",", ".")
@@ -163,13 +163,13 @@ def _guess_delimiter(line: str) -> str:
 
 
 def _looks_numeric(cells: Sequence[str], decimal: str) -> bool:
-    return bool(cells) and all(_is_number(c, decimal) or c.strip().lower() in ("", "nan")
+    return bool(cells) and all(is_number(c, decimal) or c.strip().lower() in ("", "nan")
                                for c in cells) and any(c.strip() for c in cells)
 
 
-def _is_text(cell: str, decimal: str) -> bool:
+def is_text(cell: str, decimal: str) -> bool:
     """A cell that is neither a number nor empty (nor ``nan``)."""
-    return cell.strip().lower() not in ("", "nan") and not _is_number(cell, decimal)
+    return cell.strip().lower() not in ("", "nan") and not is_number(cell, decimal)
 
 
 def _data_like(cells: Sequence[str], decimal: str) -> bool:
@@ -177,10 +177,10 @@ def _data_like(cells: Sequence[str], decimal: str) -> bool:
     count: a preamble's ``Rate;10000`` starts with its name) and at least as many numbers
     as text cells (a status or event column of text beside the channels)."""
     filled = [c for c in cells if c.strip()]
-    if len(cells) < 2 or not filled or not _is_number(filled[0], decimal):
+    if len(cells) < 2 or not filled or not is_number(filled[0], decimal):
         return False
-    numbers = sum(_is_number(c, decimal) for c in filled)
-    return numbers >= sum(_is_text(c, decimal) for c in cells)
+    numbers = sum(is_number(c, decimal) for c in filled)
+    return numbers >= sum(is_text(c, decimal) for c in cells)
 
 
 def _mostly_numbers(line: str) -> bool:
@@ -198,7 +198,7 @@ def _is_symbols_row(cells: Sequence[str]) -> bool:
     filled = [c for c in cells if c.strip()]
     known = 0
     for c in filled:
-        if _is_number(c, ".") or _is_number(c, ","):     # "1" is a unit, and a number: it
+        if is_number(c, ".") or is_number(c, ","):     # "1" is a unit, and a number: it
             continue                                     # counts for neither
         try:
             known += c[0] + c[-1] in ("[]", "()") or measure(c).kind != ""
@@ -263,7 +263,7 @@ def _header_index(cands: list[tuple[int, int, str]], delimiter: str, decimal: st
         # text where the last rows read all have numbers is a preamble's ("Kanäle;6")
         tail = [r for r in rows[last:] if len(r) == len(cells)]
         if all(_data_like(r, decimal) and len(r) == len(cells) for r in rows[k:k + 3]) and \
-                not any(_is_text(c, decimal) and all(_is_number(r[j], decimal) for r in tail)
+                not any(is_text(c, decimal) and all(is_number(r[j], decimal) for r in tail)
                         for j, c in enumerate(cells)):
             head = k - 1
             if head >= 1 and _is_symbols_row(_split(cands[head][2], delimiter)) \
@@ -290,7 +290,7 @@ def _layout(path: Path, cands: list[tuple[int, int, str]], meta: dict, comments:
     h = _header_index(cands, delimiter, decimal, preamble, source)
     header_line, _, header = cands[h]
     cells = _split(header, delimiter)
-    if all(_is_number(c) for c in cells):
+    if all(is_number(c) for c in cells):
         raise TraceError(f"{source}: the first row holds numbers, not column names; add a "
                          f"header row '{','.join(COLUMNS)}'")
     rest = cands[h + 1:]
@@ -336,7 +336,7 @@ def _bad_row(layout: CsvLayout, columns: Sequence[int]) -> str | None:
                         f"{width}{comma}")
             for c in columns:
                 text = cells[c].strip()
-                if text not in nulls and not _is_number(text, layout.decimal):
+                if text not in nulls and not is_number(text, layout.decimal):
                     return f" in data row {row}, column '{layout.names[c]}' (the value {text[:40]!r})"
             row += 1
     return None

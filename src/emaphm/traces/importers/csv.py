@@ -11,7 +11,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from ..container import TraceError
-from ..csv_format import CsvLayout, _is_number, _is_text, csv_blocks, sniff_csv
+from ..csv_format import CsvLayout, is_number, is_text, csv_blocks, sniff_csv
 from .base import Block, ChannelInfo, SourceInfo, read_path
 from .channel_map import SourceOptions
 
@@ -63,8 +63,8 @@ def _text_columns(lay: CsvLayout) -> list[str | None]:
     out: list[str | None] = []
     for k in range(len(lay.names)):
         cells = [r[k] for r in lay.rows if k < len(r)]
-        text = next((c for c in cells if _is_text(c, lay.decimal)), None)
-        out.append(None if any(_is_number(c, lay.decimal) for c in cells if c.strip()) else text)
+        text = next((c for c in cells if is_text(c, lay.decimal)), None)
+        out.append(None if any(is_number(c, lay.decimal) for c in cells if c.strip()) else text)
     return out
 
 
