@@ -293,6 +293,24 @@ def test_the_inspect_by_column_sorts_by_the_time_left_per_unit_ties_by_id(tmp_pa
         {r["id"]: r["sort"]["inspect"] for r in site.rows}
 
 
+def test_the_inspect_by_column_is_the_schedules_order_never_inspected_first(tmp_path):
+    """Never inspected first of all (it sorted by id among the due ones), then past due,
+    then the time left (a default interval each: by id), as fleet schedule orders the same
+    history."""
+    from emaphm.fleet.schedule import assess_fleet
+    from emaphm.fleet.site import build_site
+    from emaphm.fleet.status import inspect_key
+
+    db = _fleet(tmp_path / "o.sqlite", {
+        "A-PAST": (np.linspace(0.0, 600.0, 5), [_k(friction=0.2 + 0.0006 * x)
+                                                 for x in np.linspace(0.0, 600.0, 5)]),
+        "B-LATE": ([0.7], [_k()]), "C-SOON": ([0.2], [_k()]), "Z-NEW": ([], [])})
+    site = build_site(db, tmp_path / "site", workers=0)
+    shown = [r["id"] for r in sorted(site.rows, key=lambda r: r["sort"]["inspect"])]
+    assert shown == ["Z-NEW", "A-PAST", "B-LATE", "C-SOON"]
+    assert shown == [s.id for s in sorted(assess_fleet(db), key=inspect_key)]
+
+
 def test_the_browser_sorts_the_inspect_by_column_as_the_schedule_does(tmp_path, driver):
     """As test_fleet_browser.py drives it (its driver: skips without Chromium, fails instead
     where EMAPHM_REQUIRE_BROWSER is set)."""

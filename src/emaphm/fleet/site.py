@@ -486,21 +486,23 @@ def _inspect_fields(s: ActuatorStatus) -> dict:
 
 
 def _inspect_order(rows: Sequence[dict]) -> dict[str, int]:
-    """The place (1, 2, ...) of each row's id when the "Inspect by" column is sorted: due
-    now first, then, per time unit (flight hours, then cycles), the operating time left
-    until the inspection as the cell shows it ("in 300 h", rounded down, so float noise
-    ties), soonest first -- the order of ``emaphm fleet schedule``
-    (:func:`~emaphm.fleet.status.inspect_key`); ties by id; rows without a plan last. (The
-    inspect-by times themselves do not order the fleet: its actuators are at different
-    operating times.) The script sorts on it: one number per row."""
+    """The place (1, 2, ...) of each row's id when the "Inspect by" column is sorted: the
+    order of ``emaphm fleet schedule`` (:func:`~emaphm.fleet.status.inspect_key`, on the
+    rows' fields): due now first (never inspected first of all), then, per time unit
+    (flight hours, then cycles), the operating time left until the inspection, soonest
+    first (float noise ties); ties by id; rows without a plan last. (The inspect-by times
+    themselves do not order the fleet: its actuators are at different operating times.)
+    The script sorts on it: one number per row."""
     def key(r: dict) -> tuple:
         left, unit = r.get("inspect_left"), str(r.get("time_unit"))
         if r.get("inspect_by") is None:
             return (2, 0, "", 0.0, r["id"])
+        left = float(f"{left:.12g}") if left is not None else 0.0
         if r.get("inspect_now"):
-            return (0, 0, "", 0.0 if left is None else left, r["id"])
+            return (0, 0, "", -math.inf if r.get("inspect_rule") == "never inspected" else left,
+                    r["id"])
         return (1, UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit,
-                floor_deadline(left)[0], r["id"])
+                left, r["id"])
 
     return {r["id"]: i for i, r in enumerate(sorted(rows, key=key), start=1)}
 
