@@ -79,16 +79,23 @@ def test_fleet_report_refuses_a_folder_that_holds_another_index(small_site, tmp_
     mine.mkdir()
     (mine / "index.html").write_text("<html>mine</html>\n")
     err = _one_line_error(capsys, ["fleet", "report", "--db", str(db), "--out", str(mine),
-                                   "--quiet"], f"--out {mine}", "not an emaphm fleet site",
-                          "index.html", "new or empty folder", "earlier emaphm fleet report")
+                                   "--quiet"], f"--out {mine} holds index.html",
+                          "not of an emaphm fleet site", "give a new folder, one without them",
+                          "earlier emaphm fleet report")
     assert err.startswith("emaphm fleet: error: ")
     assert (mine / "index.html").read_text() == "<html>mine</html>\n"
     assert sorted(p.name for p in mine.iterdir()) == ["index.html"]
     from emaphm.fleet.site import build_site
 
-    with pytest.raises(ValueError, match="not an emaphm fleet site"):
+    with pytest.raises(ValueError, match="not of an emaphm fleet site"):
         build_site(db, mine, workers=0)
     assert sorted(p.name for p in mine.iterdir()) == ["index.html"]
+    # a fresh clone of a pages branch: what the site does not write is left alone
+    clone = tmp_path / "pages"
+    (clone / ".git").mkdir(parents=True)
+    (clone / "CNAME").write_text("fleet.example\n")
+    build_site(db, clone, workers=0)
+    assert (clone / "CNAME").read_text() == "fleet.example\n" and (clone / "index.html").is_file()
 
 
 def test_fleet_report_builds_into_an_empty_folder_and_updates_its_own_site(small_site,

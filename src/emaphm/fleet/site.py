@@ -940,11 +940,16 @@ def _actuator_html(s: ActuatorStatus, figures: dict, records: Sequence[Any], *,
 
 
 # ----------------------------------------------------------------------------- the build
+#: What a build writes at the top of its folder: anything else there is left alone.
+_SITE_NAMES = ("index.html", "fleet.json", "assets", "actuators")
+
+
 def check_site_folder(folder: str | os.PathLike[str]) -> None:
-    """A ValueError unless ``folder`` may take the site: missing, empty, or a site an
-    earlier build wrote (its manifest ``actuators/.figures.json``, or the index key of
-    an older build, is there). A folder holding anything else is someone else's: its
-    ``index.html`` or ``assets/`` would be overwritten."""
+    """A ValueError unless ``folder`` may take the site: missing, a site an earlier build
+    wrote (its manifest ``actuators/.figures.json``, or the index key of an older build,
+    is there), or one that holds none of the names a build writes (:data:`_SITE_NAMES`:
+    a fresh clone's ``.git`` or ``CNAME`` stays as it is). Someone else's ``index.html``,
+    ``fleet.json``, ``assets/`` or ``actuators/`` would be overwritten."""
     p = Path(folder)
     if not p.exists():
         return
@@ -953,16 +958,14 @@ def check_site_folder(folder: str | os.PathLike[str]) -> None:
     if any((p / "actuators" / name).is_file() for name in (_MANIFEST, _INDEX_KEY)):
         return
     try:
-        with os.scandir(p) as it:
-            found = sorted(e.name for _, e in zip(range(4), it))
+        found = [name for name in _SITE_NAMES if os.path.lexists(p / name)]
     except OSError as exc:
         raise ValueError(f"--out {p}: cannot read the folder ({exc.strerror or exc}); give a "
                          "folder you can read and write") from None
     if found:
-        shown = ", ".join(found[:3]) + (", ..." if len(found) > 3 else "")
-        raise ValueError(f"--out {p} holds files that are not an emaphm fleet site ({shown}) "
-                         "and the site would overwrite them: give a new or empty folder, or "
-                         "the folder of an earlier emaphm fleet report")
+        raise ValueError(f"--out {p} holds {', '.join(found)}, not of an emaphm fleet site, "
+                         "which the site would overwrite: give a new folder, one without "
+                         "them, or the folder of an earlier emaphm fleet report")
 
 
 def _out_folder(out: str | os.PathLike[str]) -> Path:
