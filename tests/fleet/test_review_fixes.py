@@ -231,6 +231,9 @@ def test_an_event_on_the_last_date_there_is_is_refused_before_the_file_is_writte
     assert cal.date_of(108.0, 100.0) == dt.date(9999, 12, 31)
     with pytest.raises(DateRangeError, match=r"2 days after 9999-12-30, past 9999-12-31"):
         cal.date_of(116.0, 100.0)
+    # an hour a day of 1e-300: an infinite count of days is said as what it is, not raised
+    with pytest.raises(DateRangeError, match=r"^more than 2,921,939 days after 2000-01-01, past 9999-12-31"):
+        Calendar(start=dt.date(2000, 1, 1), per_day=1e-300).date_of(1e10, 0.0)
     row = ScheduleRow(actuator="EMA-1", description="", inspect_by=108.0, time_unit="h",
                       date=dt.date.max, due_now=False, rule="healthy", indicator=None,
                       risk=None, target_risk=0.01, reason="r", last_inspection=100.0,

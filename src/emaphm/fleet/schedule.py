@@ -81,7 +81,10 @@ class Calendar:
         :class:`DateRangeError` when that is past the last date there is (9999-12-31)."""
         if t_last is None or at <= t_last:
             return self.start
-        days = math.floor((at - t_last) / self.per_day)
+        ratio = (at - t_last) / self.per_day
+        if not ratio < _dt.date.max.toordinal():     # more days than a calendar has, or inf:
+            raise DateRangeError(None, self.start)   # no count worth printing
+        days = math.floor(ratio)
         try:
             return self.start + _dt.timedelta(days=days)
         except OverflowError:
@@ -91,9 +94,11 @@ class Calendar:
 class DateRangeError(ValueError):
     """A date past the last one a calendar holds (9999-12-31): ``days`` after ``start``."""
 
-    def __init__(self, days: int, start: _dt.date) -> None:
+    def __init__(self, days: int | None, start: _dt.date) -> None:
         self.days, self.start = days, start
-        super().__init__(f"{days:,} days after {start.isoformat()}, past "
+        count = f"{days:,}" if days is not None else \
+            f"more than {(_dt.date.max - start).days:,}"
+        super().__init__(f"{count} days after {start.isoformat()}, past "
                          f"{_dt.date.max.isoformat()}, the last date a calendar holds")
 
 
