@@ -154,6 +154,8 @@ def test_demo_degradation_into_a_history_says_so_and_refuses_a_repeat(capsys, tm
     assert main(argv + ["--seed", "1"]) == 0
     with HealthHistory(db, readonly=True) as h:
         assert [a.id for a in h.actuators()] == ["EMA-1", "demo-gain-drift-0", "demo-gain-drift-1"]
+    (tmp_path / "empty.sqlite").touch()                  # mktemp's: a new history, not refused
+    assert main(argv[:-3] + ["--db", str(tmp_path / "empty.sqlite"), "--json"]) == 0
 
 
 def test_demo_degradation_cli_synthetic(capsys, tmp_path):

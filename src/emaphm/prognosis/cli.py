@@ -490,8 +490,8 @@ def _demo_ids_free(db: Path, ids: list[str]) -> None:
     """Refuse a demo whose actuators a history ``db`` holds already (an earlier demo of the
     same scenario and seed), before any simulation; say which ones are added to a history
     that holds others."""
-    if not db.exists():
-        return
+    if not db.exists() or (db.is_file() and db.stat().st_size == 0):    # a new history (an
+        return                                                          # empty file: mktemp)
     from .history import HealthHistory
 
     with HealthHistory(db, readonly=True) as h:
