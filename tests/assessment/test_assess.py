@@ -39,6 +39,26 @@ def test_it_writes_the_whole_assessment_and_nothing_beside(assessed):
         assert (assessed / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_the_json_is_strict_json_a_missing_number_null(assessed, tmp_path):
+    """JSON has no NaN: a reader that keeps to the standard refuses one (a threshold no
+    other fault moved had 'crosstalk': NaN)."""
+    from emaphm.assessment.report import _finite, write_outputs
+
+    def strict(text):
+        return json.loads(text, parse_constant=lambda c: pytest.fail(f"{c} in the JSON"))
+
+    strict((assessed / "assessment.json").read_text())
+    a = strict((assessed / "assessment.json").read_text())
+    name = next(iter(a["thresholds"]["tuning"]))
+    a["thresholds"]["tuning"][name]["crosstalk"] = float("nan")
+    assert _finite({"x": [1.0, float("inf"), {"y": float("nan")}]}) == {"x": [1.0, None,
+                                                                              {"y": None}]}
+    write_outputs(a, tmp_path)
+    assert strict((tmp_path / "assessment.json").read_text())["thresholds"]["tuning"][name][
+        "crosstalk"] is None
+    assert "nan" not in (tmp_path / "report.md").read_text()
+
+
 def test_every_figure_of_the_json_can_be_recomputed_from_its_runs(assessed):
     a = json.loads((assessed / "assessment.json").read_text())
     assert a["schema_version"] == 1 and a["emaphm_version"]

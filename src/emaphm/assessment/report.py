@@ -238,8 +238,8 @@ def report_md(a: Mapping[str, Any], figures: Mapping[str, str]) -> str:
     lines += ["", "## Thresholds", ""]
     tuning = a["thresholds"]["tuning"]
     rows = [[n, f"{v:.4g}", f"{tuning[n]['default']:.4g}" if n in tuning else "",
-             f"{tuning[n]['largest']:.3g}" if n in tuning else "",
-             f"{tuning[n]['crosstalk']:.3g}" if n in tuning else "",
+             _g(tuning[n]["largest"]) if n in tuning else "",
+             _g(tuning[n]["crosstalk"]) if n in tuning else "",
              tuning[n]["rule"] if n in tuning else ""]
             for n, v in a["thresholds"]["values"].items()]
     lines += _md_table(["threshold", "value", "default", "largest healthy",
@@ -309,6 +309,24 @@ def pod_figure(rows: Sequence[Mapping[str, Any]], fit: Mapping[str, Any], title:
     return fig
 
 
+def _g(x: Any) -> str:
+    """A number in 3 significant digits; a dash where there is none (None, NaN)."""
+    return "\u2013" if x is None or (isinstance(x, float) and not math.isfinite(x)) else f"{x:.3g}"
+
+
+def _finite(obj: Any) -> Any:
+    """``obj`` with every float that is not finite as None: JSON has no NaN (a threshold no
+    other fault moved has no crosstalk), and a file that holds one is no JSON to a reader
+    that keeps to the standard."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, Mapping):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
+
+
 def write_outputs(a: Mapping[str, Any], folder: Path) -> list[Path]:
     """Write ``assessment.json``, ``report.md`` and the figures of ``a`` into ``folder``."""
     paths = []
@@ -320,7 +338,8 @@ def write_outputs(a: Mapping[str, Any], folder: Path) -> list[Path]:
         pod_figure(rows, a["pod_fit"][grid], grid).savefig(folder / name, dpi=110)
         figures[grid] = name
         paths.append(folder / name)
-    (folder / "assessment.json").write_text(json.dumps(a, indent=1, sort_keys=False) + "\n")
+    (folder / "assessment.json").write_text(
+        json.dumps(_finite(a), indent=1, sort_keys=False, allow_nan=False) + "\n")
     (folder / "report.md").write_text(report_md(a, figures))
     return [folder / "assessment.json", folder / "report.md", *paths]
 
