@@ -339,8 +339,14 @@ def test_an_actuators_own_thresholds_round_trip_through_its_file(tmp_path):
     t = thresholds_for("physical", back)
     assert (t.friction, t.short_circuit, t.backlash) == (default.friction, default.short_circuit,
                                                          0.05)
-    # the paper's turn removal keeps its own thresholds; a data sheet without the table too
-    assert thresholds_for("paper", unit) == THRESHOLDS_BY_FAULT_MODEL["paper"]
+    # the paper's turn removal keeps its own short-circuit threshold (k3..k5 read another
+    # way there); the other modes' tuned thresholds hold under it too (they were ignored)
+    t = thresholds_for("paper", unit)
+    assert t.short_circuit == THRESHOLDS_BY_FAULT_MODEL["paper"].short_circuit
+    assert (t.friction, t.backlash) == (0.06, 0.05)
+    assert t == dataclasses.replace(THRESHOLDS_BY_FAULT_MODEL["paper"], friction=0.06,
+                                    backlash=0.05)
+    # a data sheet without the table keeps the defaults
     assert thresholds_for("physical", siemens_1fk7060()) == default
     # a file without the table writes none
     assert "[thresholds]" not in save_params(siemens_1fk7060(), tmp_path / "p.toml").read_text()

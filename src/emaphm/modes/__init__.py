@@ -99,14 +99,19 @@ THRESHOLDS_BY_FAULT_MODEL = MappingProxyType({
 def thresholds_for(fault_model: str, params: Any = None) -> Any:
     """The detection thresholds of a diagnosis under ``fault_model``: the defaults
     (:data:`THRESHOLDS_BY_FAULT_MODEL`), with the actuator's own ``[thresholds]``
-    (:attr:`emaphm.params.ActuatorParams.thresholds`, tuned by ``emaphm assess``) in place
-    under the ``physical`` fault model, the one they were tuned on (the ``paper``'s turn
-    removal keeps its own); for parameters without a calibration (a data sheet) only where
-    they are higher than the defaults: they were tuned for a calibrated unit."""
+    (:attr:`emaphm.params.ActuatorParams.thresholds`, tuned by ``emaphm assess``) in place:
+    all of them under the ``physical`` fault model, the one they were tuned on; under
+    another, those whose default is the same under both models (every mode's but the short
+    circuit's: the ``paper``'s turn removal reads another k3..k5 and keeps its own); for
+    parameters without a calibration (a data sheet) only where they are higher than the
+    defaults: they were tuned for a calibrated unit."""
     base = THRESHOLDS_BY_FAULT_MODEL[fault_model]
     own = getattr(params, "thresholds", ())
-    if fault_model != "physical" or not own:
+    if not own:
         return base
+    if fault_model != "physical":
+        tuned_on = THRESHOLDS_BY_FAULT_MODEL["physical"]
+        own = tuple((n, v) for n, v in own if getattr(base, n) == getattr(tuned_on, n))
     if not params.calibration.date:
         # tuned for a calibrated unit: on a data sheet, whose unit differs from it by its
         # tolerances, a threshold is only ever raised (emaphm assess measured a lowered
