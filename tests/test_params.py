@@ -327,6 +327,8 @@ def test_an_actuators_own_thresholds_round_trip_through_its_file(tmp_path):
                                                              ("backlash", 0.05)))
     path = save_params(own, tmp_path / "own.toml")
     assert "[thresholds]" in path.read_text()
+    table = path.read_text().split("[thresholds]")[1]
+    assert "[rad]" not in table and "dimensionless" in table     # not the backlash's radians
     back = load_params(path)
     assert back.thresholds == (("backlash", 0.05), ("friction", 0.06), ("short_circuit", 0.011))
     default = THRESHOLDS_BY_FAULT_MODEL["physical"]

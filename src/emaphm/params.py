@@ -581,7 +581,8 @@ class ActuatorParams:
     #: This actuator's detection thresholds, ``(name, value)`` pairs of the fields of
     #: :class:`emaphm.modes.Thresholds` in place of the defaults (the file's
     #: ``[thresholds]`` table, written by ``emaphm assess``); empty: the defaults. They
-    #: apply to the ``physical`` fault model (:func:`emaphm.modes.thresholds_for`).
+    #: apply under the ``physical`` fault model, and all but the short circuit's under the
+    #: ``paper``'s (:func:`emaphm.modes.thresholds_for`).
     thresholds: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
@@ -844,8 +845,17 @@ def _with_units(lines: list[str]) -> list[str]:
     """TOML lines with each field's unit as a comment above it (``# R [ohm]``)."""
     out = ["# emaphm actuator parameters, SI units; the unit of each field is in the comment",
            "# above it. Per-phase values are lists (a, b, c)."]
+    section = ""
     for line in lines:
+        if line.startswith("["):
+            section = line.strip()
         key = line.split("=", 1)[0].strip() if "=" in line and not line.startswith(" ") else ""
+        if section == "[thresholds]":         # values of the measures on k, not of the
+            out.append(line)                  # parameters of the same name (backlash [rad])
+            if line == section:
+                out.append("# detection thresholds of each mode's measure on k (dimensionless; "
+                           "emaphm assess tunes them)")
+            continue
         if key in _UNITS:
             out.append(f"# {key} [{_UNITS[key]}]")
         out.append(line)

@@ -521,3 +521,16 @@ def test_a_long_calibration_is_announced(nominal_params):
                         "traces", buf)
     assert buf.getvalue().startswith("emaphm calibrate: note: this calibration may take about ")
     assert buf.getvalue().endswith(" on one core; calibrate on shorter traces\n")
+
+
+def test_simulate_help_names_every_mode_that_can_be_injected(capsys):
+    """--fault's help lists every mode a trace can be given (it listed the paper's five;
+    demagnetization and the current sensor were only in the error message)."""
+    from emaphm.modes import MODES
+
+    with pytest.raises(SystemExit):
+        main(["simulate", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    for name, mode in MODES.items():
+        if mode.inject is not None:
+            assert f"{name}:" in text, name
