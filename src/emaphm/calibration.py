@@ -450,6 +450,16 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     sources = list(sources) if sources is not None else [f"trace {i + 1}" for i in range(len(traces))]
     if len(sources) != len(traces):
         raise ValueError("give one source name per trace")
+    from .traces.container import fingerprint
+
+    seen: dict[str, str] = {}
+    for tr, src in zip(traces, sources):     # one recording twice weighs it twice and
+        fp = fingerprint(tr)                 # narrows the intervals it has not earned
+        if fp in seen:
+            raise CalibrationError(f"{src} is the same recording as {seen[fp]}; give each "
+                                   "trace of the healthy unit once (other recordings of it "
+                                   "narrow the intervals, a copy does not)")
+        seen[fp] = src
     free = list(free) if free is not None else list(_NAMES)
     unknown = [n for n in free if n not in PARAMETERS]
     if unknown:

@@ -98,6 +98,16 @@ def test_a_faulty_unit_is_refused():
         calibrate(traces, NOMINAL, free=["J", "R", "gain_a"])
 
 
+def test_the_same_recording_twice_is_refused_before_any_fit():
+    """A copy weighs one recording twice and narrows the intervals it has not earned."""
+    (trace,) = _unit_traces([4], dev={})
+    with pytest.raises(CalibrationError, match=r"^b.parquet is the same recording as "
+                                               r"a.csv; give each trace of the healthy unit "
+                                               r"once"):
+        calibrate([trace, trace], NOMINAL, sources=["a.csv", "b.parquet"],
+                  progress=lambda n: pytest.fail("fitted"))
+
+
 def test_a_trace_without_noise_or_of_unknown_parameters_is_refused():
     clean = simulate(model="monitoring", fault_model="physical")
     with pytest.raises(CalibrationError, match="carry no measurement noise"):
