@@ -333,6 +333,13 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     finally:
         progress.close()
     ident, diag = exam.identification, exam.diagnosis
+    recorded = (trace.meta.get("parameters") or {}).get("name") \
+        if isinstance(trace.meta.get("parameters"), dict) else None
+    used = params.name
+    if diag.verdict == "unexplained" and isinstance(recorded, str) and recorded != used:
+        print(f"emaphm diagnose: note: the trace's metadata says it was simulated for "
+              f"{shown(recorded)}, and it was diagnosed with {shown(used)}: give that "
+              f"actuator's parameters (--params)", file=sys.stderr)
     if args.json:
         out = {**ident.to_dict(), **diag.to_dict(),
                "scenario": args.scenario or trace.meta.get("scenario"),

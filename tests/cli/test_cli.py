@@ -534,3 +534,26 @@ def test_simulate_help_names_every_mode_that_can_be_injected(capsys):
     for name, mode in MODES.items():
         if mode.inject is not None:
             assert f"{name}:" in text, name
+
+
+def test_a_trace_of_another_actuator_says_whose_it_is(tmp_path, capsys):
+    """A trace of ema-270v-750w diagnosed with the preset reads unexplained (1000x the noise
+    floor); its metadata names the actuator it was simulated for, and the note says so."""
+    from emaphm.params import load_params
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+    from emaphm.traces import write_trace
+
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    ema = load_params(root / "examples" / "actuators" / "ema-270v-750w.toml")
+    path = write_trace(simulate(model="monitoring", params=ema, sensors=DEFAULT_SENSORS, seed=1),
+                       tmp_path / "ema.parquet")
+    assert main(["diagnose", str(path), "--quiet", "--json"]) == 0
+    out, err = capsys.readouterr()
+    assert json.loads(out)["verdict"] == "unexplained"
+    assert ("the trace's metadata says it was simulated for 'ema-270v-750w', and it was "
+            "diagnosed with 'siemens-1fk7060-2ac71': give that actuator's parameters") in err
+    assert main(["diagnose", str(path), "--quiet", "--json", "--params",
+                 str(root / "examples" / "actuators" / "ema-270v-750w.toml")]) == 0
+    assert "metadata says" not in capsys.readouterr().err
