@@ -276,3 +276,14 @@ def test_a_damaged_store_is_refused_unchanged_with_the_way_out(tmp_path):
             CampaignStore.open(p, **kw)
         assert "it was not changed" in str(err.value)
     assert p.read_bytes() == before
+
+
+def test_a_file_that_is_no_store_is_refused_with_a_fix_that_fits_report_too(tmp_path):
+    """`emaphm report` takes the store as its argument: the fix no longer says --store
+    alone ('Give another --store path')."""
+    (tmp_path / "spec.toml").write_text("runs = 2\n")
+    with pytest.raises(IncompatibleStoreError, match=r"not a SQLite database\); it was not "
+                                                     r"changed. Give the path of a store that "
+                                                     r"emaphm campaign wrote"):
+        CampaignStore.open(tmp_path / "spec.toml", readonly=True)
+    assert (tmp_path / "spec.toml").read_text() == "runs = 2\n"

@@ -315,7 +315,7 @@ class CampaignStore:
             if header != _SQLITE_HEADER:
                 raise IncompatibleStoreError(
                     f"{p} is not an emaphm campaign store (not a SQLite database); it was not "
-                    "changed. Give another --store path.")
+                    f"changed. {_STORE_FIX}")
         elif readonly or spec is None:
             raise FileNotFoundError(f"no campaign store at {p}; run `emaphm campaign --store {p}` "
                                     "to create one")
@@ -509,19 +509,25 @@ def _damaged(p: Path, what: str) -> str:
             "campaign again (every run is reproducible from its seeds).")
 
 
+#: The fix a file that is no campaign store is given: `emaphm campaign` takes it as --store,
+#: `emaphm report` as its argument.
+_STORE_FIX = ("Give the path of a store that emaphm campaign wrote (its --store), or a new "
+              "path to run a campaign into")
+
+
 def _read_meta(conn: sqlite3.Connection, p: Path) -> dict[str, str] | None:
     """The meta table, None for a database without tables; raises for a foreign one."""
     try:
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
     except sqlite3.DatabaseError as exc:
-        raise IncompatibleStoreError(f"{p} cannot be read as a SQLite database ({exc}); it was not "
-                                     "changed. Give another --store path.") from None
+        raise IncompatibleStoreError(f"{p} cannot be read as a SQLite database ({exc}); it was "
+                                     f"not changed. {_STORE_FIX}") from None
     if not tables:
         return None
     if "meta" not in tables or "runs" not in tables:
         raise IncompatibleStoreError(
             f"{p} is a SQLite database but not an emaphm campaign store (tables: "
-            f"{', '.join(sorted(tables))}); it was not changed. Give another --store path.")
+            f"{', '.join(sorted(tables))}); it was not changed. {_STORE_FIX}")
     return {k: v for k, v in conn.execute("SELECT key, value FROM meta")}
 
 
