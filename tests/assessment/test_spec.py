@@ -86,3 +86,27 @@ def test_a_units_cases_turn_the_phase_and_the_fault_resistance_from_unit_to_unit
     offset = [c for c in c0 if c.grid == "current_sensor:offset"][0]
     inj = offset.injection()
     assert inj.sensor[1:] == (1.0, offset.severity)        # an offset, gain 1
+
+
+def test_the_cli_fits_its_defaults_to_what_is_given(capsys):
+    """--healthy 1 alone: the data-sheet share follows it (the default 2 refused it, naming
+    a flag never typed); given, a share beyond --healthy is refused naming the flag; a bad
+    --healthy is described as what it counts."""
+    import argparse
+
+    from emaphm.assessment import cli as acli
+    from emaphm.cli import main
+
+    parser = argparse.ArgumentParser()
+    acli.register(parser.add_subparsers(dest="command"))
+
+    def spec(*argv):
+        return acli.build_spec(parser.parse_args(["assess", "--out", "x", *argv]))
+
+    assert (spec("--healthy", "1").healthy_datasheet, spec().healthy_datasheet) == (1, 2)
+    with pytest.raises(AssessmentError, match=r"healthy-datasheet \(3\) cannot exceed healthy "
+                                              r"\(2\).*give --healthy-datasheet 2 or fewer"):
+        spec("--healthy", "2", "--healthy-datasheet", "3")
+    with pytest.raises(SystemExit) as exit_:
+        main(["assess", "--out", "x", "--healthy", "-1"])
+    assert exit_.value.code == 2 and "(healthy traces per unit)" in capsys.readouterr().err

@@ -24,6 +24,8 @@ __all__ = ["register", "cmd_assess"]
 _units = arg_type(int, lambda n: 1 <= n <= 10_000, "expected an integer from 1 to 10000 "
                   "(production units)")
 _count = arg_type(int, lambda n: 0 <= n <= 10_000, "expected an integer from 0 to 10000")
+_traces = arg_type(int, lambda n: 1 <= n <= 10_000, "expected an integer from 1 to 10000 "
+                   "(healthy traces per unit)")
 _far = arg_type(float, lambda x: 0.0 < x < 0.5, "expected a rate in (0, 0.5), e.g. 0.01")
 _seed = arg_type(int, lambda n: n >= 0, "expected an integer >= 0")
 _workers = arg_type(int, lambda n: 0 <= n <= 4096, "expected an integer from 0 to 4096 "
@@ -54,7 +56,8 @@ def build_spec(args: argparse.Namespace) -> Any:
     return AssessmentSpec(
         params.to_dict(), tolerances, units=args.units,
         tune_units=0 if args.no_tune else args.tune_units, healthy=args.healthy,
-        healthy_datasheet=args.healthy_datasheet, target_far=args.target_far, seed=args.seed,
+        healthy_datasheet=(min(2, args.healthy) if args.healthy_datasheet is None
+                           else args.healthy_datasheet), target_far=args.target_far, seed=args.seed,
         grids=grids, severities=_severities(args.severities),
         datasheet_faults=args.datasheet_faults)
 
@@ -132,16 +135,18 @@ def register(sub: Any) -> None:
     a.add_argument("--out", required=True, help="output folder, new")
     a.add_argument("--units", type=_units, default=20, help="reported production units (default 20)")
     a.add_argument("--tune-units", type=_count, default=None,
-                   help="units the thresholds are tuned on (default as many as --units)")
+                   help="units the thresholds are tuned on (default as many as --units; 0: "
+                        "none, the thresholds of --params kept, as --no-tune)")
     a.add_argument("--no-tune", action="store_true",
                    help="keep the thresholds of --params (e.g. to check an assessed params.toml "
                         "on new units with another --seed)")
     a.add_argument("--target-far", type=_far, default=0.01,
                    help="false-alarm rate the tuned thresholds aim under (default 0.01)")
-    a.add_argument("--healthy", type=_units, default=10,
+    a.add_argument("--healthy", type=_traces, default=10,
                    help="healthy traces per unit diagnosed after calibration (default 10)")
-    a.add_argument("--healthy-datasheet", type=_count, default=2,
-                   help="of those, how many are also diagnosed on the data sheet (default 2)")
+    a.add_argument("--healthy-datasheet", type=_count, default=None,
+                   help="of those, how many are also diagnosed on the data sheet (default 2, "
+                        "or --healthy where that is fewer)")
     a.add_argument("--grids", help="comma-separated fault grids (default all: "
                                    "emaphm.assessment.grid_names())")
     a.add_argument("--severities", action="append", metavar="GRID=S1,S2",

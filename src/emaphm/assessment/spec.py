@@ -141,8 +141,10 @@ class AssessmentSpec:
             raise AssessmentError(f"tune-units must be an integer >= 0, got {self.tune_units!r}")
         object.__setattr__(self, "tune_units", tune)
         if self.healthy_datasheet > self.healthy:
-            raise AssessmentError("healthy-datasheet cannot exceed healthy "
-                                  f"({self.healthy_datasheet} > {self.healthy})")
+            raise AssessmentError(f"healthy-datasheet ({self.healthy_datasheet}) cannot exceed "
+                                  f"healthy ({self.healthy}): it counts the healthy traces also "
+                                  "diagnosed on the data sheet; give --healthy-datasheet "
+                                  f"{self.healthy} or fewer")
         if not (isinstance(self.target_far, (int, float)) and 0.0 < self.target_far < 0.5):
             raise AssessmentError(f"target-far must be in (0, 0.5), got {self.target_far!r}")
         object.__setattr__(self, "target_far", float(self.target_far))
