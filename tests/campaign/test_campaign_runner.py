@@ -333,6 +333,27 @@ def test_cli_dry_run_lists_runs_and_seeds(tmp_path, capsys):
     assert not (tmp_path / "s.sqlite").exists()
 
 
+def test_cli_dry_run_on_a_store_refuses_a_campaign_it_does_not_hold(tmp_path, capsys):
+    """--dry-run with options on an existing store lists what a run would do, and so
+    refuses what a run refuses (it listed the paper's 198 runs for a store of 2)."""
+    import dataclasses
+
+    from emaphm.campaign import CampaignStore
+    from emaphm.campaign.spec import CampaignSpec, parse_algorithms, parse_scenarios
+
+    store = tmp_path / "s.sqlite"
+    spec = dataclasses.replace(CampaignSpec(), scenarios=parse_scenarios("gain-low"),
+                               algorithms=parse_algorithms("pso"), runs=2)
+    with CampaignStore.open(store, spec):
+        pass
+    before = store.read_bytes()
+    assert main(["campaign", "--store", str(store), "--runs", "6", "--dry-run"]) == 2
+    assert "holds a different campaign" in capsys.readouterr().err
+    assert main(["campaign", "--store", str(store), "--dry-run"]) == 0
+    assert len(capsys.readouterr().out.splitlines()) == 2
+    assert store.read_bytes() == before
+
+
 def _die_on_one(x):
     """A run whose worker process dies (as an OOM kill or a segfault would)."""
     if x == 1:

@@ -115,8 +115,8 @@ def cmd_campaign(args: argparse.Namespace) -> int:
         raise UsageError("give either --workers (local pool) or --scheduler (Dask cluster), not both")
     spec = build_spec(args)
     if args.dry_run:
-        if spec is None:
-            with CampaignStore.open(args.store, readonly=True) as st:
+        if spec is None or Path(args.store).exists():  # the store's, or refused as a run is
+            with CampaignStore.open(args.store, spec, readonly=True) as st:
                 spec = st.spec
         for r in spec.runs_list():
             print(f"{r.key}\tseed={r.seed}\tnoise_seed={r.noise_seed}\tspawn_key={list(r.spawn_key)}")
