@@ -145,6 +145,8 @@ def test_write_report_files_tables_and_figures(paper_store, tmp_path):
     assert "## Multiple faults (layout of the paper's Table 4)" in md
     assert "![error per scenario](fig7_error.png)" in md
     assert "| DE time (s) | DE err. (%) | DE PC (%) | PSO time (s) |" in md
+    # what decides the numbers: the actuator and the fault model (they were not said)
+    assert "Actuator: the preset (siemens-1fk7060-2ac71); fault model" in md
 
 
 #: The CSV files of a report, and their text columns (every other column is numeric).

@@ -385,6 +385,7 @@ def write_report(store: str | os.PathLike[str] | CampaignStore, out_dir: str | o
     cells = summarize(ok)
     algos = [a.label for a in spec.algorithms]
     md = _header_section(spec, algos, counts, meta, versions, store_name)
+    md.insert(3, _setup_line(spec, ok))
     written: list[Path] = []
     for section in (_paper_tables_section, _per_scenario_section, _comparison_section):
         lines, paths = section(spec, cells, algos, out)
@@ -418,6 +419,20 @@ def _header_section(spec: Any, algos: list[str], counts: dict, meta: dict, versi
         "PC is Eq. 10 over the algorithms of the table. Per fault mode, time and error are the "
         "mean of the two magnitudes; the total row takes the mean time and mean error over "
         "the modes and computes PC from them, as the paper does. The best PC of a row is in bold.\n"]
+
+
+def _setup_line(spec: Any, ok: Sequence[Any]) -> str:
+    """The actuator and the fault models the runs used, and how many the polish ran on
+    (with a budget the metaheuristic may use it all and leave the polish none)."""
+    name = (spec.params or {}).get("name") if isinstance(spec.params, dict) else None
+    models = sorted({s.fault_model for s in spec.scenarios})
+    polished = sum(1 for r in ok if (r.polish_evaluations or 0) > 0)
+    return (f"Actuator: {name or 'the preset (siemens-1fk7060-2ac71)'}"
+            + (" (the spec's parameters)" if name else "")
+            + f"; fault model{'s' if len(models) != 1 else ''} of the scenarios: "
+            + ", ".join(models)
+            + (f"; the polish ran in {polished} of {len(ok)} runs" if spec.polish and ok else "")
+            + ".\n")
 
 
 def _paper_tables_section(spec: Any, cells: dict, algos: list[str],
