@@ -170,7 +170,9 @@ def conclusions(a: Mapping[str, Any]) -> list[str]:
                    if all(q["pci"] >= PCI_TARGET for q in by_size[i:])]
         if good:
             r = (onwards or good)[0]
+            bounded = r["lo"] >= PCI_TARGET     # the interval, not one lucky run, says it
             text = (f"{label}: named right 9 times in 10 or more "
+                    + ("" if bounded else "in the runs tried (too few to bound it there) ")
                     + ("from" if onwards else "at") + f" {r['severity']:g} ({unit})"
                     + (" on" if onwards else ", not at every larger severity")
                     + f", {r['right']} times in {r['n']} there (interval {_pct(r['lo'])} to "
