@@ -117,11 +117,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
           f"simulated in {elapsed:.2f} s)", file=sys.stderr)
     if plot:
         overlay = None
-        if not np.allclose(k, scenario("nominal")) and not args.no_overlay:
+        if (faults or not np.allclose(k, scenario("nominal"))) and not args.no_overlay:
             overlay = simulate(scenario("nominal"), model=args.model, params=params,
                                fault_model=fault_model, profile=profile,
                                **unit).with_meta(scenario="nominal")
-        plot_trace(trace, overlay, path=plot)
+        title = None
+        if args.fault:                          # the faults, which k alone does not show
+            title = (f"{args.model}: {', '.join(args.fault)}"
+                     + ("" if np.allclose(k, scenario("nominal"))
+                        else f", k = {np.round(k, 3).tolist()}"))
+        plot_trace(trace, overlay, path=plot, title=title)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
 

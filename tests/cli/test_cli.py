@@ -152,6 +152,20 @@ def test_simulate_plot_writes_a_png(workdir, capsys):
     assert _listing(workdir) == ["x.csv", "x.png"]
 
 
+def test_simulate_plot_of_a_fault_shows_it(workdir, capsys, monkeypatch):
+    """A --fault trace's figure overlays the nominal run and names the fault in its title
+    (k is nominal there: the figure showed neither)."""
+    import emaphm.plots as plots
+
+    seen = {}
+    monkeypatch.setattr(plots, "plot_trace",
+                        lambda trace, overlay, path=None, title=None: seen.update(
+                            overlay=overlay, title=title))
+    assert main(["simulate", "--fault", "demagnetization:0.15", "--model", "monitoring",
+                 "--out", str(workdir / "d.csv"), "--plot", str(workdir / "d.png")]) == 0
+    assert seen["overlay"] is not None and seen["title"] == "monitoring: demagnetization:0.15"
+
+
 def test_simulate_partial_params_change_the_result(workdir, capsys):
     toml = workdir / "heavy.toml"
     toml.write_text("[transmission]\nFDJ = 0.3\nFSJ = 0.45\n")
