@@ -354,8 +354,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         print(json.dumps(out))
     else:
         print(_table(ident, diag))
-    if plot:
-        plot_identification(trace, ident, diagnosis=diag, path=plot)
+    if plot:                # the trace the identification fitted: a faulty sensor undone
+        plot_identification(exam.trace, ident, diagnosis=diag, path=plot)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
 

@@ -166,6 +166,25 @@ def test_simulate_plot_of_a_fault_shows_it(workdir, capsys, monkeypatch):
     assert seen["overlay"] is not None and seen["title"] == "monitoring: demagnetization:0.15"
 
 
+def test_diagnose_plot_of_a_sensor_fault_shows_the_currents_that_were_fitted(workdir, capsys,
+                                                                               monkeypatch):
+    """Phase B's sensor reads 0.8 of its current: the fit is of the currents with that undone,
+    and so is the figure (it drew the raw currents against the model of the corrected)."""
+    import emaphm.plots as plots
+
+    seen = {}
+    monkeypatch.setattr(plots, "plot_identification",
+                        lambda trace, ident, diagnosis=None, path=None: seen.update(trace=trace))
+    raw = workdir / "s.parquet"
+    assert main(["simulate", "--fault", "current_sensor:b:gain:0.8", "--model", "monitoring",
+                 "--seed", "1", "--out", str(raw)]) == 0
+    assert main(["diagnose", str(raw), "--quiet", "--json", "--plot", str(workdir / "s.png")]) == 0
+    assert "current_sensor" in capsys.readouterr().out
+    i_b = read_trace(raw).i_abc[:, 1]
+    np.testing.assert_allclose(seen["trace"].i_abc[:, 1], i_b / 0.8, rtol=0.02,
+                               atol=0.02 * np.abs(i_b).max())
+
+
 def test_simulate_partial_params_change_the_result(workdir, capsys):
     toml = workdir / "heavy.toml"
     toml.write_text("[transmission]\nFDJ = 0.3\nFSJ = 0.45\n")
