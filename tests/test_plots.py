@@ -152,6 +152,17 @@ def test_plot_identification_reads_only(faulty, ident, tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ident.png"]
 
 
+def test_plot_identification_says_a_sensor_was_corrected(faulty, ident, monkeypatch):
+    """The currents of a trace whose sensor the diagnosis undid are not the measured ones:
+    the phase's legend and the residual's axis say so."""
+    _no_simulation(monkeypatch)
+    fixed = faulty.with_meta(corrected_sensor={"phase": "B", "gain": 0.8, "offset_a": 0.0})
+    fig = plot_identification(fixed, ident)
+    labels = [ax.get_legend().get_texts()[0].get_text() for ax in fig.axes[:3]]
+    assert labels == ["measured", "measured, phase B's sensor corrected", "measured"]
+    assert fig.axes[3].get_ylabel() == "corrected - model [A]"
+
+
 def test_plot_identification_marks_the_polish_and_the_noise_floor(tmp_path):
     from emaphm.simulate import DEFAULT_SENSORS
 

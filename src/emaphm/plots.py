@@ -116,11 +116,15 @@ def plot_identification(measured: "Trace", ident: "Identification", *,
     fig = Figure(figsize=(11, 11), layout="constrained")
     gs = fig.add_gridspec(5, 1, height_ratios=[1, 1, 1, 0.9, 1.1])
     model = ident.model_trace
+    fixed = measured.meta.get("corrected_sensor") if isinstance(measured.meta, dict) else None
+    label = "measured" if not fixed else f"measured, phase {fixed['phase']}'s sensor corrected"
     first = None
     for j, name in enumerate(_PHASES):
         a = fig.add_subplot(gs[j, 0], sharex=first)
         first = first or a
-        a.plot(measured.t, measured.i_abc[:, j], color="0.45", lw=1.0, label="measured")
+        a.plot(measured.t, measured.i_abc[:, j], color="0.45", lw=1.0,
+               label=label if fixed and _PHASES[j].endswith(str(fixed["phase"]).lower())
+               else "measured")
         a.plot(model.t, model.i_abc[:, j], color=f"C{j + 1}", lw=1.0, ls="--",
                label="monitoring model at k")
         a.set_ylabel(f"{name} [A]")
@@ -132,7 +136,7 @@ def plot_identification(measured: "Trace", ident: "Identification", *,
     sigma = float(np.max(white_noise_sigma(np.asarray(measured.i_abc, dtype=float))))
     if sigma > 0:
         r.axhspan(-2 * sigma, 2 * sigma, color="0.85", zorder=0, label="+-2 sigma of the noise")
-    r.set_ylabel("measured - model [A]")
+    r.set_ylabel("measured - model [A]" if not fixed else "corrected - model [A]")
     r.set_xlabel("time [s]")
     r.legend(loc="upper right", fontsize=7, ncol=4, framealpha=0.8)
     c = fig.add_subplot(gs[4, 0])

@@ -352,6 +352,19 @@ def test_cli_dry_run_on_a_store_refuses_a_campaign_it_does_not_hold(tmp_path, ca
     assert main(["campaign", "--store", str(store), "--dry-run"]) == 0
     assert len(capsys.readouterr().out.splitlines()) == 2
     assert store.read_bytes() == before
+    # an empty file (mktemp's) or an empty database: a run fills it, a dry run lists its runs
+    (tmp_path / "empty.sqlite").touch()
+    import sqlite3
+
+    con = sqlite3.connect(tmp_path / "blank.sqlite")
+    con.execute("PRAGMA user_version = 1")           # a database of one page, no table
+    con.commit()
+    con.close()
+    assert (tmp_path / "blank.sqlite").stat().st_size > 0
+    for name in ("empty.sqlite", "blank.sqlite"):
+        assert main(["campaign", "--store", str(tmp_path / name), "--scenarios", "gain-low",
+                     "--algorithms", "pso", "--runs", "2", "--dry-run"]) == 0, name
+        assert len(capsys.readouterr().out.splitlines()) == 2
 
 
 def _die_on_one(x):

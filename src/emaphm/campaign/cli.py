@@ -102,6 +102,25 @@ def build_spec(args: argparse.Namespace) -> Any:
     return dataclasses.replace(spec, **changes) if changes else spec
 
 
+def _holds_something(path: Path) -> bool:
+    """Whether a run would check ``path`` against its spec rather than create the store
+    there: a file that is not empty and not an SQLite database without tables (mktemp's
+    empty file and an empty database are filled by a run)."""
+    import sqlite3
+
+    if not path.is_file() or path.stat().st_size == 0:
+        return False
+    try:
+        con = sqlite3.connect(f"{path.resolve().as_uri()}?mode=ro", uri=True)
+        try:
+            return bool(con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")
+                        .fetchall())
+        finally:
+            con.close()
+    except sqlite3.DatabaseError:         # not SQLite: refused by open, as a run refuses it
+        return True
+
+
 def cmd_campaign(args: argparse.Namespace) -> int:
     from ..progress import compile_notice
     from .executors import DaskExecutor, make_executor, warm_up
@@ -115,8 +134,8 @@ def cmd_campaign(args: argparse.Namespace) -> int:
         raise UsageError("give either --workers (local pool) or --scheduler (Dask cluster), not both")
     spec = build_spec(args)
     if args.dry_run:
-        if spec is None or Path(args.store).exists():  # the store's, or refused as a run is
-            with CampaignStore.open(args.store, spec, readonly=True) as st:
+        if spec is None or _holds_something(Path(args.store)):  # the store's, or refused
+            with CampaignStore.open(args.store, spec, readonly=True) as st:  # as a run is
                 spec = st.spec
         for r in spec.runs_list():
             print(f"{r.key}\tseed={r.seed}\tnoise_seed={r.noise_seed}\tspawn_key={list(r.spawn_key)}")

@@ -424,11 +424,19 @@ def _header_section(spec: Any, algos: list[str], counts: dict, meta: dict, versi
 def _setup_line(spec: Any, ok: Sequence[Any]) -> str:
     """The actuator and the fault models the runs used, and how many the polish ran on
     (with a budget the metaheuristic may use it all and leave the polish none)."""
-    name = (spec.params or {}).get("name") if isinstance(spec.params, dict) else None
+    from ..params import siemens_1fk7060
+
+    preset = siemens_1fk7060()
+    given = spec.params if isinstance(spec.params, dict) and spec.params else None
+    if given is None or given == preset.to_dict():
+        who = f"the preset ({preset.name})"
+    else:                       # a partial file keeps the preset's name: say it was changed
+        name = str(given.get("name") or "unnamed")
+        who = (f"{name} (the spec's parameters"
+               + (", the preset's name with other values" if name == preset.name else "") + ")")
     models = sorted({s.fault_model for s in spec.scenarios})
     polished = sum(1 for r in ok if (r.polish_evaluations or 0) > 0)
-    return (f"Actuator: {name or 'the preset (siemens-1fk7060-2ac71)'}"
-            + (" (the spec's parameters)" if name else "")
+    return (f"Actuator: {who}"
             + f"; fault model{'s' if len(models) != 1 else ''} of the scenarios: "
             + ", ".join(models)
             + (f"; the polish ran in {polished} of {len(ok)} runs" if spec.polish and ok else "")

@@ -511,8 +511,8 @@ def _damaged(p: Path, what: str) -> str:
 
 #: The fix a file that is no campaign store is given: `emaphm campaign` takes it as --store,
 #: `emaphm report` as its argument.
-_STORE_FIX = ("Give the path of a store that emaphm campaign wrote (its --store), or a new "
-              "path to run a campaign into")
+_STORE_FIX = ("Give the path of a store that emaphm campaign wrote (its --store), or, to "
+              "start a campaign, a new path.")
 
 
 def _read_meta(conn: sqlite3.Connection, p: Path) -> dict[str, str] | None:

@@ -34,9 +34,9 @@ def _usage(msg: str) -> Exception:
 
 def _site_folder(text: str) -> Path:
     """The ``--out`` folder of the site: a folder this process can write in, or one it can
-    create (its nearest existing parent writable), that is new, empty or an earlier site
-    (:func:`~emaphm.fleet.site.check_site_folder`); else a :class:`UsageError` before any
-    work is done or announced."""
+    create (its nearest existing parent writable), that is new, an earlier site or holds none
+    of the site's names (:func:`~emaphm.fleet.site.check_site_folder`); else a
+    :class:`UsageError` before any work is done or announced."""
     out = Path(text)
     if not text.strip():
         raise _usage("--out is empty; give a folder for the site, e.g. --out fleet-site/")
@@ -303,15 +303,17 @@ def register(subparsers: Any) -> None:
                     "no network). Its \"Inspect by\" column plans the next inspection of each "
                     "actuator with the options of emaphm fleet schedule (--risk and the "
                     "intervals, the same defaults): give both commands the same, and the "
-                    "pages a schedule links to show the times it plans. --out must be a new "
-                    "or empty folder, or one an earlier fleet report wrote (updated: only "
-                    "what changed is made again; a change of these options makes every "
-                    "page again).")
+                    "pages a schedule links to show the times it plans. --out is updated "
+                    "where an earlier fleet report wrote it (only what changed is made "
+                    "again; a change of these options makes every page again); a folder "
+                    "holding an index.html, fleet.json, assets/ or actuators/ that no fleet "
+                    "report wrote is refused.")
     r.add_argument("--db", help="health history database (default $EMAPHM_HISTORY or "
                                 "emaphm-history.sqlite)")
     r.add_argument("--out", required=True,
-                   help="folder of the site: new (created), empty, or the folder of an earlier "
-                        "fleet report (updated); a folder holding other files is refused")
+                   help="folder of the site: new (created), the folder of an earlier fleet "
+                        "report (updated), or one without index.html, fleet.json, assets/ and "
+                        "actuators/ (its other files left alone); else refused")
     r.add_argument("--actuator", action="append", metavar="ID",
                    help="only this actuator (repeatable; default: all)")
     r.add_argument("--threshold", action="append", metavar="MODE=VALUE",

@@ -36,9 +36,10 @@ A build of the whole history removes the pages and figures of actuators an earli
 into the folder wrote that the history no longer has; a build of some ``actuators`` keeps
 the others'.
 
-The folder is new, empty, or one a build wrote before (its ``actuators/.figures.json``,
-written first of all, marks it): a folder holding anything else is refused
-(:func:`check_site_folder`), so a site never overwrites an ``index.html`` it did not write.
+The folder is new, one a build wrote before (its ``actuators/.figures.json``, written
+first of all, marks it), or one that holds none of the names a build writes
+(:func:`check_site_folder`; its other files are left alone), so a site never overwrites an
+``index.html`` it did not write.
 
 The "Inspect by" column is the next inspection of each actuator at the build's
 ``policy`` (:class:`~emaphm.prognosis.inspection.InspectionPolicy`; default
@@ -79,7 +80,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 from .._files import atomic_write, atomic_write_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
-from .markup import UNIT_ORDER, esc, floor_deadline, fmt_deadline, page_stem, script_json
+from .markup import UNIT_ORDER, esc, fmt_deadline, page_stem, script_json
 
 if TYPE_CHECKING:  # pragma: no cover - .status imports the prognosis (SciPy): see _render
     from ..prognosis.inspection import InspectionPolicy
@@ -1064,8 +1065,8 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     ``progress`` is called with a short line as pages are made. ``policy`` plans the
     "Inspect by" column (default :data:`~emaphm.fleet.status.FLEET_POLICY`, at
     :data:`~emaphm.prognosis.inspection.DEFAULT_RISK`); a change of it makes every page
-    and row again. ``out`` must be new, empty or a folder a build wrote before
-    (:func:`check_site_folder`).
+    and row again. ``out`` must be new, a folder a build wrote before, or one without the
+    names a build writes (:func:`check_site_folder`).
     """
     from ..prognosis.history import HealthHistory
     from ..prognosis.inspection import InspectionPolicy
