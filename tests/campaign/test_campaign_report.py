@@ -271,3 +271,22 @@ def test_the_convergence_figure_has_one_median_per_algorithm_and_scenario(paper_
             assert np.nanmin(y) == pytest.approx(1.5e-4)
             assert line.get_xdata()[-1] == pytest.approx(50 * 21 + 40)      # the longer run
     assert convergence_figure(spec, []) is None
+
+
+def test_the_setup_line_names_parameters_that_are_not_the_presets():
+    """A partial parameter file keeps the preset's name with other values: said so (the
+    report read 'the preset' or the preset's name as if it were the preset)."""
+    import dataclasses
+    from types import SimpleNamespace as NS
+
+    from emaphm.campaign.report import _setup_line
+    from emaphm.params import siemens_1fk7060
+
+    preset, sc = siemens_1fk7060(), [NS(fault_model="paper"), NS(fault_model="physical")]
+    heavier = dataclasses.replace(preset, motor=dataclasses.replace(preset.motor, J_m=1e-3))
+    line = lambda params: _setup_line(NS(params=params, scenarios=sc, polish=False), [])
+    assert line(None).startswith(f"Actuator: the preset ({preset.name}); fault models of the "
+                                 "scenarios: paper, physical")
+    assert line(preset.to_dict()).startswith("Actuator: the preset")
+    assert line(heavier.to_dict()).startswith(f"Actuator: {preset.name} (the spec's parameters, "
+                                              "the preset's name with other values)")
