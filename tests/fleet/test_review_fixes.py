@@ -109,6 +109,9 @@ def test_fleet_report_builds_into_an_empty_folder_and_updates_its_own_site(small
     assert (out / "actuators" / ".figures.json").is_file()
     assert main(argv) == 0                          # our own site: updated, nothing to make
     assert json.loads(capsys.readouterr().out)["drawn"] == 0
+    text = ["fleet", "report", "--db", str(db), "--out", str(out), "--workers", "0"]
+    assert main(text) == 0                          # said as it is: nothing was written
+    assert capsys.readouterr().out.startswith(f"up to date, nothing written: {out}")
     # a site written by an older build: recognised by its index key alone
     (out / "actuators" / ".figures.json").unlink()
     assert main(argv) == 0 and json.loads(capsys.readouterr().out)["drawn"] == 5

@@ -11,6 +11,7 @@ plan, the policy simulated to a flag, the misuse messages, and the command line.
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import math
 
@@ -453,6 +454,21 @@ def test_prognose_table_marks_a_trend_carried_past_its_range(tmp_path, capsys):
     assert ">1.000" in row and "no growth" in row and "in the noise" in row
     assert "past the range its indicator can take, shown at the bound" in out
     assert "first to fail: friction" in out and "act now" not in out
+    # the JSON says what the table says: each prediction's state
+    assert main(["prognose", "EMA-1", "--db", db, "--at", "1900", "--json"]) == 0
+    preds = json.loads(capsys.readouterr().out)["predictions"]
+    assert (preds["short_b"]["state"], preds["friction"]["state"]) == ("no growth", "predicted")
+    # at the last inspection a healthy component's fit below 0 is scatter, shown as it is
+    assert main(["prognose", "EMA-1", "--db", db]) == 0
+    out = capsys.readouterr().out
+    assert "<0.000" not in out and ">1.000" not in out and "shown at the bound" not in out
+    from emaphm.prognosis.cli import _now_text
+
+    with HealthHistory(db, readonly=True) as h:
+        data = h.data("EMA-1")
+    p = prognose(data.times, data.K, seed=0).predictions["short_c"]
+    assert _now_text(dataclasses.replace(p, current=-0.0012)) == "-0.001"
+    assert _now_text(dataclasses.replace(p, current=-0.0012, t_now=1900.0)) == "<0.000"
 
 
 def test_prognose_risk_under_three_inspections_acts_on_an_indicator_past_its_threshold(

@@ -136,7 +136,8 @@ def cmd_report(args: argparse.Namespace) -> int:
         past = sum(r["rul_state"] == "past threshold" for r in site.rows)
         predicted = sum(r["rul_state"] == "predicted" for r in site.rows)
         kept = len(site.rows) - site.drawn
-        print(f"wrote {site.index} ({len(site.rows)} actuators: {past} past a threshold, "
+        print(f"{'wrote' if site.written else 'up to date, nothing written:'} {site.index} "
+              f"({len(site.rows)} actuators: {past} past a threshold, "
               f"{predicted} with a predicted failure; inspections planned at risk "
               f"{policy.risk:g}) in {site.elapsed_s:.1f} s"
               + (f"; the pages of {kept} were up to date" if kept else ""))

@@ -312,7 +312,7 @@ def _prognosis_table(prog: Any) -> str:
             iv = f"[{_fmt_time(p.lo, unit)}, {_fmt_time(p.hi, unit) if math.isfinite(p.hi) else 'inf'}]"
         lines.append(f"{name:13s} {_now_text(p):>7s} {p.threshold:9.3f}  {model:24s} {rul:>12s}  "
                      f"{iv:>22s}")
-    if any(not p.bounds[0] <= p.current <= p.bounds[1] for p in prog.predictions.values()):
+    if any(_carried_out(p) for p in prog.predictions.values()):
         lines.append(f"(now: > or < marks a trend carried to {prog.t_now:g} {unit} past the range "
                      "its indicator can take, shown at the bound)")
     lines += [f"{n}: {p.extrapolated}" for n, p in prog.predictions.items() if p.extrapolated]
@@ -332,14 +332,19 @@ def _prognosis_table(prog: Any) -> str:
     return "\n".join(lines)
 
 
+def _carried_out(p: Any) -> bool:
+    """Whether the trend, carried past the last inspection to t_now, left the range its
+    indicator can take (at the last inspection a healthy component's fit dips below 0 by its
+    scatter: no extrapolation, shown as it is)."""
+    top = p.fits[max(p.weights, key=p.weights.get)]
+    return p.t_now > top.t_ref and not p.bounds[0] <= p.current <= p.bounds[1]
+
+
 def _now_text(p: Any) -> str:
-    """The trend's value at t_now, or the bound it passed with > or < (a trend carried past
-    the last inspection can leave the range its indicator can take)."""
-    lo, hi = p.bounds
-    if p.current > hi:
-        return f">{hi:.3f}"
-    if p.current < lo:
-        return f"<{lo:.3f}"
+    """The trend's value at t_now, or the bound a trend carried past the last inspection
+    passed, with > or <."""
+    if _carried_out(p):
+        return f">{p.bounds[1]:.3f}" if p.current > p.bounds[1] else f"<{p.bounds[0]:.3f}"
     return f"{p.current:.3f}"
 
 

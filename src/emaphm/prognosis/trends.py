@@ -851,9 +851,13 @@ class Prognosis:
         return min(live, key=lambda p: (p.median, p.lo)) if live else None
 
     def to_dict(self) -> dict[str, Any]:
+        """As data; each prediction with its ``state`` (:func:`indicator_state`: past
+        threshold, predicted or no growth), as the table reads it."""
+        span = float(self.times[-1] - self.times[0]) if self.times.size else 0.0
         return {"actuator": self.actuator, "t_now": self.t_now, "time_unit": self.time_unit,
                 "thresholds": self.thresholds.to_dict(), "n_inspections": int(self.times.size),
-                "predictions": {n: p.to_dict() for n, p in self.predictions.items()}}
+                "predictions": {n: {**p.to_dict(), "state": indicator_state(p, span)[0]}
+                                for n, p in self.predictions.items()}}
 
 
 def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
