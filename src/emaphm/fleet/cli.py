@@ -230,7 +230,7 @@ def cmd_schedule(args: argparse.Namespace) -> int:
                      "operating time (flight hours or cycles): give --start DATE (the date of "
                      "the plan) and --per-day H (operating hours or cycles a day), or write "
                      "a .csv")
-    from .schedule import assess_fleet, rows_from, units_message, write_csv, write_ics
+    from .schedule import assess_fleet, check_one_unit, rows_from, write_csv, write_ics
 
     db = db_path(args)
     with HealthHistory(db, readonly=True) as h:
@@ -239,12 +239,11 @@ def cmd_schedule(args: argparse.Namespace) -> int:
         every = h.actuators()
         policy = _planning_policy(args, (a.time_unit for a in every))
         chosen = set(args.actuator or ())
-        units: dict[str, int] = {}
-        for a in every:
-            if not chosen or a.id in chosen:
-                units[a.time_unit] = units.get(a.time_unit, 0) + 1
-        if calendar is not None and len(units) > 1:        # before the fleet is assessed
-            raise _usage(units_message(units))
+        if calendar is not None:                     # before the fleet is assessed
+            try:
+                check_one_unit(a.time_unit for a in every if not chosen or a.id in chosen)
+            except ValueError as exc:
+                raise _usage(str(exc)) from None
         statuses = assess_fleet(h, policy=policy, thresholds=thresholds, seed=args.seed,
                                 actuators=args.actuator)
     try:

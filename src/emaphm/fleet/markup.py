@@ -21,10 +21,31 @@ from decimal import Decimal
 from typing import Any
 
 __all__ = ["esc", "script_json", "slug", "page_stem", "floor_deadline", "fmt_deadline",
-           "plain_number", "UNIT_ORDER"]
+           "plain_number", "UNIT_ORDER", "unit_rank", "schedule_key"]
 
 #: The order of the time units when a fleet's rows are grouped by unit (flight hours first).
 UNIT_ORDER = ("h", "cycles")
+
+
+def unit_rank(unit: str) -> tuple[int, str]:
+    """Sort key of a time unit: :data:`UNIT_ORDER`'s place, other units after, by name."""
+    return (UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit)
+
+
+def schedule_key(ident: str, unit: str | None = None, left: float | None = None, *,
+                 due_now: bool = False, never: bool = False) -> tuple:
+    """The order of :func:`~emaphm.fleet.status.inspect_key` from plain values, for
+    whatever holds them (an :class:`~emaphm.fleet.status.ActuatorStatus`, a row of the
+    site; here, so that a rebuild with nothing changed imports no prognosis): the
+    actuator's id, its time ``unit`` and the operating time ``left`` to its next inspection
+    (None: no plan), whether it is ``due_now`` and ``never`` inspected."""
+    if left is None:
+        return (2, 0, "", 0.0, ident)
+    left = -math.inf if never else float(f"{left:.12g}")
+    if due_now:
+        return (0, 0, "", left, ident)
+    return (1, *unit_rank(str(unit)), left, ident)
+
 
 _SLUG_DROP = re.compile(r"[^a-z0-9]+")
 

@@ -41,13 +41,13 @@ import math
 from urllib.parse import quote, urlsplit, urlunsplit
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterable, Sequence
 
 from .._files import atomic_write_text
 from ..prognosis.inspection import InspectionPolicy
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, FailureThresholds
 from ..seeds import check_seed
-from .markup import UNIT_ORDER, fmt_deadline, page_stem, plain_number
+from .markup import fmt_deadline, page_stem, plain_number, unit_rank
 from .status import FLEET_POLICY, ActuatorStatus, assess, inspect_key
 
 __all__ = ["Calendar", "DateRangeError", "ScheduleRow", "schedule", "assess_fleet", "rows_from",
@@ -147,27 +147,24 @@ def page_links(ids: Sequence[str], base: str) -> dict[str, str]:
     return {i: f"{prefix}actuators/{s}.html" for i, s in stems.items()}
 
 
-def check_one_unit(statuses: Sequence[ActuatorStatus]) -> None:
-    """A ValueError when ``statuses`` are timed in more than one unit: a
-    :class:`Calendar`'s operating time per day is in one (module docstring)."""
+def check_one_unit(time_units: Iterable[str]) -> None:
+    """A ValueError when the actuators timed in ``time_units`` (one per actuator) are timed
+    in more than one unit: a :class:`Calendar`'s operating time per day is in one (module
+    docstring)."""
     units: dict[str, int] = {}
-    for s in statuses:
-        units[s.actuator.time_unit] = units.get(s.actuator.time_unit, 0) + 1
+    for u in time_units:
+        units[u] = units.get(u, 0) + 1
     if len(units) > 1:
         raise ValueError(units_message(units))
 
 
 def units_message(units: dict[str, int]) -> str:
     """Why a plan with dates is refused for actuators timed in ``units`` (unit -> how many)."""
-    order = sorted(units, key=_unit_rank)
+    order = sorted(units, key=unit_rank)
     said = " and ".join(f"{units[u]} in {u}" for u in order)
     return (f"dates map one unit of operating time onto days, and these actuators are timed "
             f"in {len(units)} units ({said}): plan each unit apart, naming its actuators with "
             "--actuator ID, or leave out --start and --per-day (a .csv without dates)")
-
-
-def _unit_rank(unit: str) -> tuple[int, str]:
-    return (UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit)
 
 
 def rows_from(statuses: Sequence[ActuatorStatus], *, base: str = "fleet-site/",
@@ -178,7 +175,7 @@ def rows_from(statuses: Sequence[ActuatorStatus], *, base: str = "fleet-site/",
     actuator: nothing is written)."""
     links = page_links([s.id for s in statuses], base)
     if calendar is not None:
-        check_one_unit(statuses)
+        check_one_unit(s.actuator.time_unit for s in statuses)
     rows = []
     late: list[tuple[ActuatorStatus, DateRangeError]] = []
     for s in sorted(statuses, key=inspect_key):

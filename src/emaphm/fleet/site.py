@@ -80,7 +80,7 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 from .._files import atomic_write, atomic_write_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
-from .markup import UNIT_ORDER, esc, fmt_deadline, page_stem, script_json
+from .markup import esc, fmt_deadline, page_stem, schedule_key, script_json, unit_rank
 
 if TYPE_CHECKING:  # pragma: no cover - .status imports the prognosis (SciPy): see _render
     from ..prognosis.inspection import InspectionPolicy
@@ -495,15 +495,11 @@ def _inspect_order(rows: Sequence[dict]) -> dict[str, int]:
     themselves do not order the fleet: its actuators are at different operating times.)
     The script sorts on it: one number per row."""
     def key(r: dict) -> tuple:
-        left, unit = r.get("inspect_left"), str(r.get("time_unit"))
-        if r.get("inspect_by") is None:
-            return (2, 0, "", 0.0, r["id"])
-        left = float(f"{left:.12g}") if left is not None else 0.0
-        if r.get("inspect_now"):
-            return (0, 0, "", -math.inf if r.get("inspect_rule") == "never inspected" else left,
-                    r["id"])
-        return (1, UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit,
-                left, r["id"])
+        planned = r.get("inspect_by") is not None
+        return schedule_key(r["id"], r.get("time_unit"),
+                            (r.get("inspect_left") or 0.0) if planned else None,
+                            due_now=bool(r.get("inspect_now")),
+                            never=r.get("inspect_rule") == "never inspected")
 
     return {r["id"]: i for i, r in enumerate(sorted(rows, key=key), start=1)}
 
@@ -511,8 +507,7 @@ def _inspect_order(rows: Sequence[dict]) -> dict[str, int]:
 def _policy_words(policy: InspectionPolicy, units: Iterable[str]) -> str:
     """The intervals of ``policy`` for each time unit of ``units``, in words."""
     out = []
-    for unit in sorted(set(units), key=lambda u: (UNIT_ORDER.index(u) if u in UNIT_ORDER
-                                                  else len(UNIT_ORDER), u)):
+    for unit in sorted(set(units), key=unit_rank):
         try:
             iv = policy.intervals(unit)
         except ValueError:

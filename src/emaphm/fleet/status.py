@@ -218,17 +218,14 @@ def inspect_key(status: ActuatorStatus) -> tuple:
     left to the next inspection (``at - t_now``, the order of the dates a
     :class:`~emaphm.fleet.schedule.Calendar` gives), soonest first; ties (within float
     noise: 299.99999999999994 is 300) by id; units without a plan last."""
-    from .markup import UNIT_ORDER
+    from .markup import schedule_key
 
     p = status.plan
     if p is None:
-        return (2, 0, "", 0.0, status.id)
-    left = -math.inf if p.t_last is None else float(f"{p.at - p.t_now:.12g}")
-    if p.act_now:
-        return (0, 0, "", left, status.id)
-    unit = p.time_unit
-    return (1, UNIT_ORDER.index(unit) if unit in UNIT_ORDER else len(UNIT_ORDER), unit, left,
-            status.id)
+        return schedule_key(status.id)
+    return schedule_key(status.id, p.time_unit, p.at - p.t_now, due_now=p.act_now,
+                        never=p.t_last is None)
+
 
 
 def order_fleet(statuses: Iterable[ActuatorStatus]) -> list[ActuatorStatus]:
