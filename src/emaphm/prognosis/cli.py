@@ -336,8 +336,7 @@ def _carried_out(p: Any) -> bool:
     """Whether the trend, carried past the last inspection to t_now, left the range its
     indicator can take (at the last inspection a healthy component's fit dips below 0 by its
     scatter: no extrapolation, shown as it is)."""
-    top = p.fits[max(p.weights, key=p.weights.get)]
-    return p.t_now > top.t_ref and not p.bounds[0] <= p.current <= p.bounds[1]
+    return p.t_now > p.top_fit.t_ref and not p.bounds[0] <= p.current <= p.bounds[1]
 
 
 def _now_text(p: Any) -> str:

@@ -485,6 +485,11 @@ class RULPrediction:
     extrapolated: str = ""
 
     @property
+    def top_fit(self) -> TrendFit:
+        """The most weighted trend (the largest Akaike weight)."""
+        return self.fits[max(self.weights, key=self.weights.get)]
+
+    @property
     def p_reach(self) -> float:
         """Share of draws whose trend ever reaches the threshold."""
         return float(np.mean(np.isfinite(self.samples)))
@@ -777,8 +782,7 @@ def growth_rate(fit: TrendFit) -> tuple[float, float]:
 
 def _trend_sign(p: RULPrediction) -> tuple[int, float]:
     """Sign of the growth of the prediction's most weighted trend, 0 within 2 standard errors."""
-    top = max(p.weights, key=p.weights.get)
-    rate, se = growth_rate(p.fits[top])
+    rate, se = growth_rate(p.top_fit)
     if not math.isfinite(rate):
         return 0, rate
     if abs(rate) <= 2.0 * se:
@@ -790,7 +794,7 @@ def level_at_last(p: RULPrediction) -> float:
     """The indicator's level at the last inspection: the value there of its most weighted
     trend (not carried to a later ``t_now``: a trend of scatter, carried forward, could
     reach any level); 0 where it is not finite."""
-    top = p.fits[max(p.weights, key=p.weights.get)]
+    top = p.top_fit
     level = float(top.value(top.t_ref)[0])
     return level if math.isfinite(level) else 0.0
 
@@ -804,18 +808,18 @@ def indicator_state(p: RULPrediction, span: float) -> tuple[str, int, float]:
     out: an exponential fitted to the scatter of a k that sits at zero can cross a
     distant threshold at a finite time without any real growth. Predicted at a ``t_now``
     after the last inspection, a median of 0 is a crossing in between, which is a
-    prediction like any other: past the threshold where the trend was there at the last
-    inspection, rises beyond its scatter, or was off its healthy level already (at least
-    :data:`~emaphm.prognosis.inspection.HEALTHY_SHARE` of the threshold); an exponential
+    prediction like any other: past the threshold where the trend rises beyond its scatter
+    or was off its healthy level at the last inspection (at least
+    :data:`~emaphm.prognosis.inspection.HEALTHY_SHARE` of the threshold, so at or past the
+    threshold there too); an exponential
     through one reading above the scatter of zeros, which can reach any level a few days
     on, is not."""
     from .inspection import HEALTHY_SHARE
 
     sign, rate = _trend_sign(p)
     if p.median <= 0.0:
-        top = p.fits[max(p.weights, key=p.weights.get)]
-        if p.t_now <= top.t_ref or sign > 0 or level_at_last(p) >= HEALTHY_SHARE * p.threshold \
-                or float(top.crossing_time(p.threshold)[0]) <= top.t_ref:
+        if p.t_now <= p.top_fit.t_ref or sign > 0 \
+                or level_at_last(p) >= HEALTHY_SHARE * p.threshold:
             return "past threshold", sign, rate
         return "no growth", sign, rate
     if sign > 0 and math.isfinite(p.median) and not p.no_growth(span):
