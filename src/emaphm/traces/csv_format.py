@@ -185,8 +185,8 @@ def _data_like(cells: Sequence[str], decimal: str) -> bool:
 
 def _mostly_numbers(line: str) -> bool:
     """A line that looks like a row of data (for counting them while sniffing)."""
-    return _data_like(_split(line, _guess_delimiter(line)), ",") \
-        or _data_like(_split(line, _guess_delimiter(line)), ".")
+    cells = _split(line, _guess_delimiter(line))
+    return _data_like(cells, ",") or _data_like(cells, ".")
 
 
 def _is_symbols_row(cells: Sequence[str]) -> bool:

@@ -93,7 +93,7 @@ class CsvSource:
                              f"rows do not split into numbers; {bad[1]}")
         hint = f"{bad[0]}, but {bad[1]}" if bad else ""
         lay = self.layout
-        notes = [f"fields separated by {'tab' if lay.delimiter == chr(9) else repr(lay.delimiter)}",
+        notes = [f"fields separated by {_delimiter_name(lay.delimiter)}",
                  f"decimal {'comma' if lay.decimal == ',' else 'point'}",
                  f"header on line {lay.header_line + 1}"]
         if lay.preamble:
