@@ -381,6 +381,8 @@ def test_physical_fault_model_keeps_the_winding_and_records_the_shorted_turns():
     assert p.motor.mu == (0.0, 0.0, 0.0)
     assert p.motor.R[0] == pytest.approx(m.R[0] * 0.85)
     # the other components map the same way under both models
-    assert f.transmission == p.transmission and f.controller == p.controller
+    assert f.transmission == p.transmission
+    # the drive keeps its data-sheet settings (its decoupling inductance the healthy motor's)
+    assert f.controller.resolved(m, NOMINAL.load) == p.controller.resolved(m, NOMINAL.load)
     with pytest.raises(FaultVectorError, match="unknown fault model 'ideal'; choose 'physical'"):
         apply_faults(NOMINAL, k, "ideal")

@@ -152,7 +152,10 @@ def apply_deviations(params: ActuatorParams, dev: dict[str, float]) -> ActuatorP
     s = params.sensors
     sensors = replace(s, gain=tuple(g * (1 + d[f"gain_{p}"]) for g, p in zip(s.gain, "abc")),
                       offset=tuple(o + d[f"offset_{p}"] for o, p in zip(s.offset, "abc")))
-    return replace(params, motor=motor, transmission=trans, load=load, sensors=sensors)
+    # the drive's own settings stay the data sheet's (emaphm.params.Controller.resolved)
+    drive = params.controller.kept_for(m, ld, motor, load)
+    return replace(params, motor=motor, transmission=trans, load=load, sensors=sensors,
+                   controller=drive)
 
 
 @dataclass(frozen=True)

@@ -196,9 +196,12 @@ def convert(plate: Nameplate, template: ActuatorParams | None = None) -> Datashe
     tune = derive_tuning(motor, f_pwm, J_l, t)
     inverter = Inverter(V_dc=plate.v_dc if plate.v_dc is not None else t.inverter.V_dc,
                         f_pwm=f_pwm, Kp_i=tune.Kp_i, Ki_i=tune.Ki_i, I_trip=tune.I_trip)
+    # the drive's data-sheet settings (limits, feed-forward inertia, decoupling inductance)
+    # are this motor's, resolved again when the actuator is assembled
     controller = replace(t.controller, Kp=tune.Kp, Kp_w=tune.Kp_w, Ki_w=tune.Ki_w, k_T=tune.k_T,
                          omega_max=plate.n_max if plate.n_max is not None
-                         else t.controller.omega_max)
+                         else t.controller.omega_max, torque_feedforward_inertia=None,
+                         decoupling_L=None, T_max=None, I_max=None)
     reduced = 1.0 / (1.0 / motor.J_m + 1.0 / J_l)
     reduced_t = 1.0 / (1.0 / t.motor.J_m + 1.0 / t.load.J_l)
     tr = t.transmission

@@ -200,7 +200,9 @@ def apply_faults(params: ActuatorParams, k: Sequence[float] | np.ndarray,
     fs = float(friction_scale(kk[0]))
     trans = replace(tr, FSJ=tr.FSJ * fs, FDJ=tr.FDJ * fs,
                     backlash=tr.backlash * float(backlash_scale(kk[1])))
-    ctrl = replace(ctl, Kp=ctl.Kp * float(gain_scale(kk[7])))
+    # the drive's data-sheet settings stay the healthy motor's
+    ctrl = replace(ctl.kept_for(m, params.load, motor, params.load),
+                   Kp=ctl.Kp * float(gain_scale(kk[7])))
     return replace(params, motor=motor, transmission=trans, controller=ctrl)
 
 

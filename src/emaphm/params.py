@@ -33,6 +33,9 @@ field                      unit                meaning
 ``Controller.Kp_w``        N m s/rad           speed loop proportional gain
 ``Controller.Ki_w``        N m/rad             speed loop integral gain
 ``Controller.k_T``         N m/A               drive's torque constant setting (peak)
+``Controller.*``           see :class:`Controller` the drive's options: feed-forwards,
+                                               filters, 2-DOF weight, delay, decoupling,
+                                               its own torque and current limits
 ``Transmission.FSJ``       N m                 static (breakaway) dry friction torque
 ``Transmission.FDJ``       N m                 dynamic (Coulomb) dry friction torque
 ``Transmission.backlash``  rad                 total backlash width
@@ -145,6 +148,16 @@ _UNITS: dict[str, str] = {
     "Kp_w": "N m s/rad",
     "Ki_w": "N m/rad",
     "k_T": "N m/A peak",
+    "velocity_feedforward": "-, gain 0..2",
+    "torque_feedforward": "-, gain 0..2",
+    "torque_feedforward_inertia": "kg m^2",
+    "speed_filter_s": "s",
+    "speed_reference_weight": "-, 0..1",
+    "current_reference_filter_s": "s",
+    "delay_periods": "control periods, 0 or 1",
+    "decoupling": "true or false",
+    "decoupling_L": "H",
+    "emf_feedforward": "true or false",
     "FSJ": "N m",
     "FDJ": "N m",
     "backlash": "rad",
@@ -315,15 +328,56 @@ class Inverter:
 
 @dataclass(frozen=True)
 class Controller:
-    """Cascade position controller: position PID -> speed PI -> torque reference.
+    """The drive's firmware: cascade position controller, position PID -> speed PI ->
+    torque reference -> dq current loop (:mod:`emaphm.models.controller`).
 
     ``omega_ref = Kp*e + Ki*int(e) + Kd*de/dt`` (derivative on the measured
     position, i.e. ``-Kd*omega_m``), saturated at ``omega_max``; then
     ``T_ref = Kp_w*(omega_ref - omega_m) + Ki_w*int(...)``, saturated at the
-    motor's ``T_max`` with clamping anti-windup on both integrators. Fault k8
-    scales ``Kp``. The q-axis current reference is ``T_ref / k_T``: ``k_T`` is
-    the drive's setting for the healthy motor (``1.5*c0``), which a motor fault
-    does not change.
+    torque limit with back-calculation anti-windup on both integrators. Fault k8
+    scales ``Kp``. The q-axis current reference is ``T_ref / k_T`` (saturated at the
+    current limit): ``k_T`` is the drive's setting for the healthy motor (``1.5*c0``),
+    which a motor fault does not change.
+
+    The usual options of a servo drive, each defaulting to the plain cascade above:
+
+    ==============================  ============================================================
+    field                           meaning
+    ==============================  ============================================================
+    ``velocity_feedforward``        gain on the command's backward difference over ``T_s``,
+                                    added to the speed reference (after the position PID's
+                                    saturation, saturated again at ``omega_max``)
+    ``torque_feedforward``          gain on ``J`` times the command's second backward
+                                    difference over ``T_s^2``, added to the torque reference
+                                    (after the speed PI, outside its anti-windup, saturated
+                                    at the torque limit)
+    ``torque_feedforward_inertia``  that ``J`` [kg m^2], a drive setting (default the data
+                                    sheet's ``J_m + J_l``: calibrating the unit's inertia
+                                    does not change the firmware)
+    ``speed_filter_s``              time constant of a first-order low-pass on the speed
+                                    feedback (0: none); the filtered speed feeds the speed
+                                    PI and the position loop's derivative, the back-EMF
+                                    feed-forward keeps the raw speed
+    ``speed_reference_weight``      ``b`` of a 2-DOF speed PI: its proportional part on
+                                    ``b omega_ref - omega``
+    ``current_reference_filter_s``  time constant of a low-pass on the q-current reference
+    ``delay_periods``               0: the voltages computed from period k's samples are
+                                    applied in period k; 1: in period k + 1
+    ``decoupling``                  dq cross-coupling terms (``-omega_e L i_q`` on v_d,
+                                    ``+omega_e L i_d`` on v_q) from the measured currents
+                                    and speed, with the drive's ``decoupling_L`` [H]
+                                    (default the data sheet's mean phase inductance)
+    ``emf_feedforward``             the back-EMF feed-forward ``k_T/1.5 omega`` on v_q
+    ``T_max``, ``I_max``            the drive's torque [N m] and current [A peak] limits
+                                    (default the motor's): the current limit is on the
+                                    q-axis reference (``i_d,ref = 0``, so on its magnitude)
+    ==============================  ============================================================
+
+    ``None`` for ``torque_feedforward_inertia``, ``decoupling_L``, ``T_max`` and ``I_max``
+    means the data sheet's value (:meth:`resolved`), and is left out of a written file. A
+    production unit (:func:`emaphm.units.draw_unit`), a calibration and a fault
+    (:func:`emaphm.faults.apply_faults`) change the motor, not the drive: each keeps these
+    settings at the data sheet's (:meth:`kept_for`).
     """
 
     Kp: float = 60.0
@@ -333,6 +387,18 @@ class Controller:
     Kp_w: float = 0.6
     Ki_w: float = 12.0
     k_T: float = 1.5 * C0_1FK7060
+    velocity_feedforward: float = 0.0
+    torque_feedforward: float = 0.0
+    torque_feedforward_inertia: float | None = None
+    speed_filter_s: float = 0.0
+    speed_reference_weight: float = 1.0
+    current_reference_filter_s: float = 0.0
+    delay_periods: int = 0
+    decoupling: bool = False
+    decoupling_L: float | None = None
+    emf_feedforward: bool = True
+    T_max: float | None = None
+    I_max: float | None = None
 
     def __post_init__(self) -> None:
         o = "Controller"
@@ -342,6 +408,59 @@ class Controller:
         object.__setattr__(self, "Kp_w", _check(o, "Kp_w", self.Kp_w, lo=0.0))
         for name in ("Ki", "Kd", "Ki_w"):
             object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0, strict_lo=False))
+        for name in ("velocity_feedforward", "torque_feedforward"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0,
+                                                  strict_lo=False, hi=2.0))
+        for name in ("speed_filter_s", "current_reference_filter_s"):
+            object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0,
+                                                  strict_lo=False, hi=0.1))
+        object.__setattr__(self, "speed_reference_weight",
+                           _check(o, "speed_reference_weight", self.speed_reference_weight,
+                                  lo=0.0, strict_lo=False, hi=1.0))
+        if isinstance(self.delay_periods, bool) or self.delay_periods not in (0, 1):
+            raise ParameterError(f"{o}.delay_periods [control periods, 0 or 1] must be 0 (the "
+                                 "voltages apply in the period they are computed in) or 1 (in "
+                                 f"the next), got {shown(self.delay_periods)}")
+        object.__setattr__(self, "delay_periods", int(self.delay_periods))
+        for name in ("decoupling", "emf_feedforward"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"{o}.{name} [true or false] must be true or false, got "
+                                     f"{shown(getattr(self, name))}")
+        for name in ("torque_feedforward_inertia", "decoupling_L", "T_max", "I_max"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
+
+    def resolved(self, motor: "Motor", load: "Load") -> "Controller":
+        """The controller with each ``None`` setting at the value of the data sheet
+        ``motor`` and ``load``: the torque feed-forward's inertia ``J_m + J_l``, the
+        decoupling's mean phase inductance, the motor's torque and current limits."""
+        return replace(
+            self,
+            torque_feedforward_inertia=(motor.J_m + load.J_l if self.torque_feedforward_inertia
+                                        is None else self.torque_feedforward_inertia),
+            decoupling_L=sum(motor.L) / 3.0 if self.decoupling_L is None else self.decoupling_L,
+            T_max=motor.T_max if self.T_max is None else self.T_max,
+            I_max=motor.I_max if self.I_max is None else self.I_max)
+
+    def kept_for(self, motor: "Motor", load: "Load", new_motor: "Motor",
+                 new_load: "Load") -> "Controller":
+        """The controller of an actuator whose motor and load change from ``motor, load``
+        (the data sheet's) to ``new_motor, new_load`` (a production unit, a calibration, a
+        fault): the settings that default to the data sheet's inertia or inductance keep
+        the data sheet's value where the change moves it (the firmware does not change
+        with the unit), the others are left as they are."""
+        J_moved = motor.J_m + load.J_l != new_motor.J_m + new_load.J_l
+        L_moved = sum(motor.L) != sum(new_motor.L)
+        ctl = self
+        if J_moved and ctl.torque_feedforward_inertia is None:
+            ctl = replace(ctl, torque_feedforward_inertia=motor.J_m + load.J_l)
+        if L_moved and ctl.decoupling_L is None:
+            ctl = replace(ctl, decoupling_L=sum(motor.L) / 3.0)
+        if motor.T_max != new_motor.T_max and ctl.T_max is None:
+            ctl = replace(ctl, T_max=motor.T_max)
+        if motor.I_max != new_motor.I_max and ctl.I_max is None:
+            ctl = replace(ctl, I_max=motor.I_max)
+        return ctl
 
 
 @dataclass(frozen=True)
@@ -560,6 +679,11 @@ _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
 #: the defaults (a healthy winding, the default plant physics, ideal sensors, no calibration).
 _OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
 _OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
+                    "controller": {"velocity_feedforward", "torque_feedforward",
+                                   "torque_feedforward_inertia", "speed_filter_s",
+                                   "speed_reference_weight", "current_reference_filter_s",
+                                   "delay_periods", "decoupling", "decoupling_L",
+                                   "emf_feedforward", "T_max", "I_max"},
                     "transmission": {"K_c", "D_c"},
                     "sensors": {"aa_order", "aa_cutoff", "delay"},
                     "calibration": {"emaphm_version", "trace_sha256", "digest"}}
@@ -597,8 +721,9 @@ class ActuatorParams:
         d: dict[str, Any] = {"name": self.name}
         for sec in _SECTIONS:
             sub = asdict(getattr(self, sec))
+            # a setting left to the data sheet (None) is left out: TOML has no null
             d[sec] = {k: ([list(x) if isinstance(x, tuple) else x for x in v]
-                          if isinstance(v, tuple) else v) for k, v in sub.items()}
+                          if isinstance(v, tuple) else v) for k, v in sub.items() if v is not None}
         if self.thresholds:
             d["thresholds"] = dict(self.thresholds)
         return d

@@ -38,6 +38,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .models.layout import NUISANCE_PARAMETERS
+
 __all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search",
            "least_squares_search", "nuisance_to_box",
            "NUISANCE_RANGE", "nuisance_from_box", "nuisance_text"]
@@ -49,32 +51,23 @@ SC_SEARCH_MAX = 0.6
 
 
 #: Range of each parameter searched beside k (relative deviation from the parameters
-#: given, calibrated or data sheet): a winding warmer than at calibration (up to +30 %,
-#: about 75 K) or cooler, the magnets' flux within +-6 % (temperature), a constant load
-#: torque the trace does not report, in N m (``"load"``: 1.5x the +-0.1 N m of
-#: :data:`emaphm.units.DEFAULT_TOLERANCES`); for the fault modes: the magnets' flux down
-#: to half (``"demag"``, :mod:`emaphm.modes.demagnetization`) and a fault bridge from 0.03x
-#: to 10x the parameters' ``Motor.R_f`` (``"Rf_a"``..``"Rf_c"``, decades,
-#: :mod:`emaphm.modes.short_circuit`).
-NUISANCE_RANGE = {"R": (-0.1, 0.3), "flux": (-0.06, 0.06), "load": (-0.15, 0.15),
-                  "demag": (-0.5, 0.02), "Rf_a": (-1.5, 1.0), "Rf_b": (-1.5, 1.0),
-                  "Rf_c": (-1.5, 1.0)}
-
-_NUISANCE_WORDS = {"R": "winding resistance", "flux": "magnet flux",
-                   "load": "unreported constant load", "demag": "magnet flux",
-                   "Rf_a": "fault resistance of phase A", "Rf_b": "fault resistance of phase B",
-                   "Rf_c": "fault resistance of phase C"}
+#: given, calibrated or data sheet; N m for the load; decades for a fault bridge), from
+#: :data:`emaphm.models.layout.NUISANCE_PARAMETERS`, where each is listed once with what
+#: it is.
+NUISANCE_RANGE = {name: (n.lo, n.hi) for name, n in NUISANCE_PARAMETERS.items()}
 
 
 def nuisance_text(name: str, value: float) -> str:
     """One nuisance value in words: ``"winding resistance +12.0 %"``,
     ``"unreported constant load +0.020 N m"``."""
-    word = _NUISANCE_WORDS.get(name, name)
-    if name == "load":
-        return f"{word} {value:+.3f} N m"
-    if name.startswith("Rf_"):
-        return f"{word} x{10.0 ** value:.3g}"
-    return f"{word} {100 * value:+.1f} %"
+    n = NUISANCE_PARAMETERS.get(name)
+    if n is None:
+        return f"{name} {value:+.4g}"
+    if n.unit == "relative":
+        return f"{n.words} {100 * value:+.1f} %"
+    if n.unit == "decades":
+        return f"{n.words} x{10.0 ** value:.3g}"
+    return f"{n.words} {value:+.3f} {n.unit}"
 
 
 def nuisance_from_box(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:

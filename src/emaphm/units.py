@@ -170,7 +170,9 @@ def draw_unit(params: ActuatorParams, seed: int,
     trans = replace(tr, FSJ=tr.FSJ * (1 + d["friction"]), FDJ=tr.FDJ * (1 + d["friction"]),
                     K_c=tr.K_c * (1 + d["stiffness"]), D_c=tr.D_c * (1 + d["damping"]))
     load = replace(ld, J_l=ld.J_l * (1 + d["J"]))
-    unit_params = replace(params, motor=motor, transmission=trans, load=load)
+    # the drive's own settings stay the data sheet's (emaphm.params.Controller.resolved)
+    drive = params.controller.kept_for(m, ld, motor, load)
+    unit_params = replace(params, motor=motor, transmission=trans, load=load, controller=drive)
     return Unit(params=unit_params, sensor_gain=tuple(1 + g for g in d["sensor_gain"]),
                 sensor_offset=tuple(d["sensor_offset"]), load=d["load"], seed=int(seed),
                 deviations=d)

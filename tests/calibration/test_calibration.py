@@ -125,7 +125,9 @@ def test_apply_deviations_scales_what_it_says():
     assert p.motor.c0[1] == pytest.approx(NOMINAL.motor.c0[1] * 0.95)
     assert p.load.T_0 == pytest.approx(0.2)
     assert p.sensors.gain == pytest.approx((1.0, 1.03, 1.0))
-    assert p.controller == NOMINAL.controller        # the drive keeps its data-sheet k_T
+    # the drive keeps its data-sheet settings (k_T, the feed-forward's inertia)
+    assert p.controller.resolved(NOMINAL.motor, NOMINAL.load) == \
+        NOMINAL.controller.resolved(NOMINAL.motor, NOMINAL.load)
     assert set(PARAMETERS) >= {"J", "flux", "R", "L", "friction", "viscous", "load"}
 
 

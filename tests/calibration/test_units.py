@@ -38,7 +38,8 @@ def test_drawn_units_stay_inside_their_tolerances():
         assert t.stiffness[0] <= tr.K_c / tr0.K_c - 1 <= t.stiffness[1]
         assert t.damping[0] <= tr.D_c / tr0.D_c - 1 <= t.damping[1]
         # the drive keeps its data-sheet torque constant: the firmware does not know the unit
-        assert u.params.controller == NOMINAL.controller
+        assert u.params.controller.resolved(NOMINAL.motor, NOMINAL.load) == \
+            NOMINAL.controller.resolved(NOMINAL.motor, NOMINAL.load)
         devs.append(dJ)
     # uniform over the interval: the draws cover it
     assert min(devs) < -0.08 and max(devs) > 0.08

@@ -16,8 +16,11 @@ import pytest
 from support import fitted_order, nrms, rms
 
 from emaphm.faults import K_NAMES, K_NOMINAL, SCENARIOS, apply_faults, scenario, scenario_fault_model
-from emaphm.models.controller import control_step, pi_step
-from emaphm.models.layout import C_KP, C_PHI, pack_population
+from dataclasses import replace
+
+from emaphm.models.controller import (CTL_FIELDS, N_STATE, STATE_FIELDS, control_step,
+                                      feedforward, pi_step, plain)
+from emaphm.models.layout import C_KP, C_PHI, drive_settings, pack_population
 from emaphm.models.monitoring import (STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, MonitoringModel, _kernel,
                                       simulate_reference)
 from emaphm.models.pmsm import back_emf_coeffs, torque
@@ -97,14 +100,20 @@ def test_pi_step_known_values_and_back_calculation():
     assert y == pytest.approx(97.0, rel=1e-6)
 
 
-def _control(**kw):
-    m, ctl, inv = PARAMS.motor, PARAMS.controller, PARAMS.inverter
-    args = dict(theta_ref=0.0, theta_m=0.0, omega_m=0.0, i_a=0.0, i_b=0.0, i_c=0.0, sin_e=0.0,
-                cos_e=1.0, int_e=0.0, int_w=0.0, int_d=0.0, int_q=0.0, Kp=ctl.Kp, Ki=ctl.Ki,
-                Kd=ctl.Kd, omega_max=ctl.omega_max, Kp_w=ctl.Kp_w, Ki_w=ctl.Ki_w, T_max=m.T_max,
-                k_T=ctl.k_T, I_max=m.I_max, Kp_i=inv.Kp_i, Ki_i=inv.Ki_i, V_dc=inv.V_dc, T_s=T_S)
-    args.update(kw)
-    return control_step(*args.values())
+def _control(params=PARAMS, refs=(0.0, 0.0, 0.0), state=None, **kw):
+    """``control_step`` of ``params``' drive at rest on target, with the measurements in
+    ``kw`` (theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e) and the commands ``refs``
+    (ref_k, ref_{k-1}, ref_{k-2})."""
+    meas = dict(theta_m=0.0, omega_m=0.0, i_a=0.0, i_b=0.0, i_c=0.0, sin_e=0.0, cos_e=1.0)
+    meas.update(kw)
+    ctl = tuple(float(v) for v in drive_settings(params))
+    state = (0.0,) * N_STATE if state is None else state
+    return control_step(feedforward(*refs, ctl), *meas.values(), state, params.controller.Kp, ctl)
+
+
+def _drive(**options):
+    """The preset with these ``[controller]`` options."""
+    return replace(PARAMS, controller=replace(PARAMS.controller, **options))
 
 
 def test_control_step_known_answers():
@@ -112,17 +121,92 @@ def test_control_step_known_answers():
     assert _control()[:4] == (0.0, 0.0, 0.0, 0.0)
     # position error e -> omega_ref = Kp e -> T_ref = Kp_w Kp e (below every limit)
     e = 0.01
-    v_a, v_b, v_c, T_ref, *_ = _control(theta_ref=e)
+    v_a, v_b, v_c, T_ref, *_ = _control(refs=(e, e, e))
     assert T_ref == pytest.approx(PARAMS.controller.Kp_w * PARAMS.controller.Kp * e)
     assert v_a + v_b + v_c == pytest.approx(0.0, abs=1e-9)
     # a large error saturates the torque at T_max
-    assert _control(theta_ref=100.0)[3] == PARAMS.motor.T_max
-    assert _control(theta_ref=-100.0)[3] == -PARAMS.motor.T_max
+    assert _control(refs=(100.0,) * 3)[3] == PARAMS.motor.T_max
+    assert _control(refs=(-100.0,) * 3)[3] == -PARAMS.motor.T_max
     # back-EMF feed-forward on q: at speed with no error the q voltage is c0*omega
     w = 50.0
-    v = _control(omega_m=w, theta_ref=w / PARAMS.controller.Kp)[:3]   # omega_ref = omega
+    r = w / PARAMS.controller.Kp
+    v = _control(omega_m=w, refs=(r, r, r))[:3]   # omega_ref = omega
     # theta_e = 0 (sin 0, cos 1): the q axis is -beta, i.e. v_q = (v_c - v_b)/sqrt(3)
     assert (v[2] - v[1]) / np.sqrt(3) == pytest.approx(PARAMS.controller.k_T / 1.5 * w, rel=1e-9)
+
+
+def test_drive_settings_follow_the_controller_fields():
+    assert len(CTL_FIELDS) == drive_settings(PARAMS).size and len(STATE_FIELDS) == N_STATE
+    assert plain(tuple(drive_settings(PARAMS)))
+    for options in (dict(speed_filter_s=1e-3), dict(current_reference_filter_s=1e-4),
+                    dict(speed_reference_weight=0.5), dict(decoupling=True),
+                    dict(emf_feedforward=False), dict(delay_periods=1)):
+        assert not plain(tuple(drive_settings(_drive(**options)))), options
+    # feed-forwards are terms of the period, not options of the step: a plain step adds them
+    assert plain(tuple(drive_settings(_drive(velocity_feedforward=1.0, torque_feedforward=1.0))))
+    ctl = dict(zip(CTL_FIELDS, drive_settings(_drive(speed_filter_s=1e-3, torque_feedforward=0.5))))
+    assert ctl["a_w"] == pytest.approx(1.0 - np.exp(-T_S / 1e-3))
+    assert ctl["J_tff"] == pytest.approx(0.5 * (PARAMS.motor.J_m + PARAMS.load.J_l))
+    assert ctl["T_max"] == PARAMS.motor.T_max and ctl["I_max"] == PARAMS.motor.I_max
+
+
+def test_feedforward_terms_known_answers():
+    """Velocity feed-forward: gain times the command's backward difference over T_s, added
+    after the position loop; torque feed-forward: gain times J times the second backward
+    difference over T_s^2, added after the speed PI (its integral untouched)."""
+    w = 2.0                                           # rad/s of a ramp command
+    ramp = (w * 2 * T_S, w * T_S, 0.0)
+    drive = _drive(velocity_feedforward=1.0, Kp_w=1e-6, Ki_w=0.0)
+    # on the ramp at the command's speed with no error: the speed reference is the ramp's
+    base = _control(drive, refs=ramp, theta_m=ramp[0], omega_m=w)
+    assert base[3] == pytest.approx(0.0, abs=1e-9)   # omega_ref = omega: no torque asked
+    no_ff = _control(_drive(Kp_w=1e-6, Ki_w=0.0), refs=ramp, theta_m=ramp[0], omega_m=w)
+    assert no_ff[3] == pytest.approx(-1e-6 * w)       # without it, omega_ref = 0
+    a = 500.0                                         # rad/s^2 of a parabola
+    para = (0.5 * a * (2 * T_S) ** 2, 0.5 * a * T_S ** 2, 0.0)
+    J = PARAMS.motor.J_m + PARAMS.load.J_l
+    T = _control(_drive(torque_feedforward=1.0, Kp=1e-9, Kp_w=1e-9, Ki_w=0.0), refs=para)
+    assert T[3] == pytest.approx(J * a, rel=1e-9)
+    assert T[4][1] == 0.0                             # outside the speed PI's integral
+    big = _control(_drive(torque_feedforward=2.0), refs=(1.0, 0.0, 0.0))[3]
+    assert big == PARAMS.motor.T_max                  # saturated at the torque limit
+
+
+def test_speed_filter_delay_and_weight_known_answers():
+    tau = 1e-3
+    drive = _drive(speed_filter_s=tau)
+    a = 1.0 - np.exp(-T_S / tau)
+    out = _control(drive, omega_m=10.0)
+    assert out[4][4] == pytest.approx(a * 10.0)      # omega_f moves a of the way
+    # the filtered speed feeds the speed PI: at rest on target, T_ref = -Kp_w omega_f
+    assert out[3] == pytest.approx(-PARAMS.controller.Kp_w * a * 10.0, rel=1e-9)
+    # a period of delay: the voltages of the period before are applied, this period's kept
+    state = (0.0,) * 6 + (1.0, 2.0, -3.0)
+    late = _control(_drive(delay_periods=1), refs=(0.01,) * 3, state=state)
+    assert late[:3] == (1.0, 2.0, -3.0)
+    now = _control(PARAMS, refs=(0.01,) * 3)
+    assert late[4][6:] == pytest.approx(now[:3], rel=1e-12)
+    # 2-DOF: the proportional part acts on b omega_ref, the integral on the full error
+    e = 0.001
+    b = _control(_drive(speed_reference_weight=0.25, Ki_w=0.0), refs=(e,) * 3)[3]
+    assert b == pytest.approx(0.25 * PARAMS.controller.Kp_w * PARAMS.controller.Kp * e)
+
+
+def test_decoupling_and_emf_feedforward_known_answers():
+    """At theta_e = 0 (sin 0, cos 1) the d axis is -alpha and q is -beta: v_q =
+    (v_c - v_b)/sqrt(3), v_d = -v_a."""
+    w = 50.0
+    r = w / PARAMS.controller.Kp
+    i_q = 2.0                                       # i_beta = -2: i_b = -sqrt(3), i_c = +sqrt(3)
+    meas = dict(omega_m=w, i_b=-np.sqrt(3.0), i_c=np.sqrt(3.0))
+    ref = _control(PARAMS, refs=(r, r, r), **meas)
+    dec = _control(_drive(decoupling=True), refs=(r, r, r), **meas)
+    w_e_L = PARAMS.motor.p * w * PARAMS.motor.L[0]      # the drive's L: the data sheet's
+    assert -dec[0] - (-ref[0]) == pytest.approx(-w_e_L * i_q, rel=1e-9)
+    off = _control(_drive(emf_feedforward=False), refs=(r, r, r), omega_m=w)
+    on = _control(PARAMS, refs=(r, r, r), omega_m=w)
+    assert (on[2] - on[1] - (off[2] - off[1])) / np.sqrt(3) == pytest.approx(
+        PARAMS.controller.k_T / 1.5 * w, rel=1e-9)
 
 
 # =========================================================================== RM power balance
@@ -664,3 +748,50 @@ def test_kernel_cache_goes_where_emaphm_cache_dir_says(tmp_path, monkeypatch):
     monkeypatch.setenv("EMAPHM_CACHE_DIR", str(tmp_path))
     assert _jit.cache_dir("0123") == tmp_path / "kernels-0123"
     assert (tmp_path / "kernels-0123").is_dir()
+
+
+#: A drive with every option of ``[controller]`` on (not the plain cascade the kernels run
+#: without option work): their own branch of the step in every kernel.
+OPTIONS = dict(velocity_feedforward=0.8, torque_feedforward=0.5, speed_filter_s=5e-4,
+               speed_reference_weight=0.7, current_reference_filter_s=2e-4, delay_periods=1,
+               decoupling=True)
+
+
+@pytest.mark.parametrize("fault_model", ["paper", "physical"])
+def test_a_drive_with_options_runs_alike_in_every_kernel(fault_model):
+    """The readable loop, the scalar kernel and the SIMD kernel run the options' branch of
+    the step alike (a full block of 8 in the SIMD lanes, one alone in the scalar kernel)."""
+    params = _drive(**OPTIONS)
+    rng = np.random.default_rng(5)
+    K = np.vstack([_random_k(rng, 7), scenario("turn-short-15pct")])
+    simd = MonitoringModel(params, PROFILE, fault_model=fault_model).simulate_population(K)
+    scalar = MonitoringModel(params, PROFILE, fault_model=fault_model,
+                             kernel="scalar").simulate_population(K)
+    # a random short may make this drive's delayed current loop trip, the same in both
+    np.testing.assert_array_equal(simd.status, scalar.status)
+    assert simd.status[0] == STATUS_OK and simd.status[-1] == STATUS_OK
+    np.testing.assert_allclose(simd.i_abc, scalar.i_abc, rtol=0, atol=ROUND_OFF_A)
+    for j in (0, len(K) - 1):
+        ref = simulate_reference(params, K[j], PROFILE, fault_model=fault_model)
+        np.testing.assert_allclose(scalar.i_abc[j], ref["i_abc"], rtol=0, atol=ROUND_OFF_A)
+        np.testing.assert_allclose(scalar.omega_m[j], ref["omega_m"], rtol=0, atol=1e-7)
+    # and the options change what the drive does (not a branch that computes the plain one)
+    plain_run = MonitoringModel(PARAMS, PROFILE, fault_model=fault_model).simulate_population(K)
+    assert nrms(simd.i_abc[0], plain_run.i_abc[0]) > 0.05
+
+
+@pytest.mark.slow
+def test_the_plant_runs_the_drive_the_parameters_describe():
+    """The monitoring model follows the reference plant on a drive with every option on as
+    on the plain cascade (both run the one controller of ``emaphm.models.controller``): the
+    same agreement, and each far from the other drive's traces."""
+    params = _drive(**OPTIONS)
+    k = scenario("friction-high")
+    rm_opt = run_reference(params, k, PROFILE, fault_model="paper")
+    rm_plain = run_reference(PARAMS, k, PROFILE, fault_model="paper")
+    mm_opt = MonitoringModel(params, PROFILE).simulate(k)
+    mm_plain = MonitoringModel(PARAMS, PROFILE).simulate(k)
+    agree_opt = nrms(mm_opt.i_abc[0], rm_opt["i_abc"])
+    agree_plain = nrms(mm_plain.i_abc[0], rm_plain["i_abc"])
+    assert agree_opt < max(1.5 * agree_plain, 0.05)
+    assert nrms(mm_opt.i_abc[0], rm_plain["i_abc"]) > 3 * agree_opt

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
@@ -36,14 +37,23 @@ import numpy as np
 from ..faults import (as_k, backlash_scale, check_fault_model, eccentricity_phase,
                       friction_scale, gain_scale, shorted_fraction, N_K)
 from ..params import ActuatorParams
+from .controller import (CTL_A_I, CTL_A_W, CTL_B_W, CTL_DECOUPLING, CTL_DELAY, CTL_EMF_FF,
+                         CTL_I_MAX, CTL_J_TFF, CTL_K_T, CTL_K_VFF, CTL_KD, CTL_KI, CTL_KI_I,
+                         CTL_KI_W, CTL_KP_I, CTL_KP_W, CTL_L_D, CTL_OMEGA_MAX, CTL_P, CTL_T_MAX,
+                         CTL_T_S, CTL_V_DC, N_CTL)
 from .mechanics import CONTACT_RESOLVED
 from .windings import N_Z, reduced, winding_matrices, zoh
 
-# shared parameters P[...]
-(P_POLES, P_J_M, P_C_M, P_T_MAX, P_I_MAX, P_V_DC, P_T_S, P_KP_I, P_KI_I, P_KI, P_KD,
- P_OMEGA_MAX, P_KP_W, P_KI_W, P_K_T, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT,
- P_K_C, P_D_C) = range(22)
-N_P = 22
+# shared parameters P[...]: first the drive's settings in the controller's order
+# (:data:`emaphm.models.controller.CTL_FIELDS`, the tuple ``control_step`` reads), then the rest
+P_CTL = 0
+(P_KI, P_KD, P_OMEGA_MAX, P_KP_W, P_KI_W, P_T_MAX, P_K_T, P_I_MAX, P_KP_I, P_KI_I, P_V_DC,
+ P_T_S) = (P_CTL + CTL_KI, P_CTL + CTL_KD, P_CTL + CTL_OMEGA_MAX, P_CTL + CTL_KP_W,
+           P_CTL + CTL_KI_W, P_CTL + CTL_T_MAX, P_CTL + CTL_K_T, P_CTL + CTL_I_MAX,
+           P_CTL + CTL_KP_I, P_CTL + CTL_KI_I, P_CTL + CTL_V_DC, P_CTL + CTL_T_S)
+P_POLES = P_CTL + CTL_P
+(P_J_M, P_C_M, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT, P_K_C, P_D_C) = range(N_CTL, N_CTL + 9)
+N_P = N_CTL + 9
 
 # per-candidate parameters CP[:, ...]
 (C_KP, C_FSJ, C_FDJ, C_BACKLASH, C_R_A, C_R_B, C_R_C, C_L_A, C_L_B, C_L_C,
@@ -51,6 +61,8 @@ N_P = 22
 #: ``Phi`` (25 entries, row-major) and ``Gamma`` (25) of the winding circuit's exact step
 C_PHI = 18
 C_GAMMA = C_PHI + N_Z * N_Z
+C_PHI_END = C_GAMMA
+C_GAMMA_END = C_GAMMA + N_Z * N_Z
 #: a constant load torque [N m] the candidate adds to the profile's: the unit's unreported
 #: load ``Load.T_0``, plus the ``"load"`` nuisance (read by the monitoring model's kernels;
 #: the reference plant takes its whole load from ``run_reference(extra_load=)``)
@@ -105,24 +117,12 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> 
     ``P[P_DT] = T_s / n_sub`` the sub-step the electrics are packed for;
     ``P[P_K_C], P[P_D_C]`` the backlash contact the kernels step, ``K_c = 0`` (rigid)
     where ``dt`` does not resolve it (:func:`contact_resolved`)."""
-    m, inv, ctl, load = params.motor, params.inverter, params.controller, params.load
+    m, inv, load = params.motor, params.inverter, params.load
     tr = params.transmission
     P = np.empty(N_P)
-    P[P_POLES] = m.p
+    P[P_CTL:P_CTL + N_CTL] = drive_settings(params)
     P[P_J_M] = m.J_m
     P[P_C_M] = m.C_m
-    P[P_T_MAX] = m.T_max
-    P[P_I_MAX] = m.I_max
-    P[P_V_DC] = inv.V_dc
-    P[P_T_S] = inv.T_s
-    P[P_KP_I] = inv.Kp_i
-    P[P_KI_I] = inv.Ki_i
-    P[P_KI] = ctl.Ki
-    P[P_KD] = ctl.Kd
-    P[P_OMEGA_MAX] = ctl.omega_max
-    P[P_KP_W] = ctl.Kp_w
-    P[P_KI_W] = ctl.Ki_w
-    P[P_K_T] = ctl.k_T
     P[P_J_L] = load.J_l
     P[P_C_L] = load.C_l
     P[P_THETA0] = theta0
@@ -132,6 +132,48 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> 
     P[P_K_C] = tr.K_c if resolved else 0.0
     P[P_D_C] = tr.D_c if resolved else 0.0
     return P
+
+
+def drive_settings(params: ActuatorParams) -> np.ndarray:
+    """The drive's settings as :func:`emaphm.models.controller.control_step` reads them
+    (:data:`~emaphm.models.controller.CTL_FIELDS`), from the parameters' ``[controller]``
+    and ``[inverter]``: the options as the controller's coefficients (a filter's time
+    constant as ``1 - exp(-T_s / tau)``, 1 without a filter; the torque feed-forward as its
+    gain times its inertia), the limits and the data-sheet settings as the parameters
+    resolved them (:meth:`emaphm.params.Controller.resolved`)."""
+    m, inv = params.motor, params.inverter
+    ctl = params.controller.resolved(m, params.load)
+    T_s = inv.T_s
+    out = np.empty(N_CTL)
+    out[CTL_KI] = ctl.Ki
+    out[CTL_KD] = ctl.Kd
+    out[CTL_OMEGA_MAX] = ctl.omega_max
+    out[CTL_KP_W] = ctl.Kp_w
+    out[CTL_KI_W] = ctl.Ki_w
+    out[CTL_T_MAX] = ctl.T_max
+    out[CTL_K_T] = ctl.k_T
+    out[CTL_I_MAX] = ctl.I_max
+    out[CTL_KP_I] = inv.Kp_i
+    out[CTL_KI_I] = inv.Ki_i
+    out[CTL_V_DC] = inv.V_dc
+    out[CTL_T_S] = T_s
+    out[CTL_K_VFF] = ctl.velocity_feedforward
+    out[CTL_J_TFF] = ctl.torque_feedforward * ctl.torque_feedforward_inertia
+    out[CTL_A_W] = _filter_coefficient(ctl.speed_filter_s, T_s)
+    out[CTL_B_W] = ctl.speed_reference_weight
+    out[CTL_A_I] = _filter_coefficient(ctl.current_reference_filter_s, T_s)
+    out[CTL_DECOUPLING] = 1.0 if ctl.decoupling else 0.0
+    out[CTL_L_D] = ctl.decoupling_L
+    out[CTL_EMF_FF] = 1.0 if ctl.emf_feedforward else 0.0
+    out[CTL_DELAY] = float(ctl.delay_periods)
+    out[CTL_P] = m.p
+    return out
+
+
+def _filter_coefficient(tau: float, T_s: float) -> float:
+    """``1 - exp(-T_s / tau)`` of a first-order low-pass of time constant ``tau`` [s]
+    sampled every ``T_s`` [s]; 1 (no filter) for ``tau = 0``."""
+    return 1.0 if tau <= 0.0 else -math.expm1(-T_s / tau)
 
 
 def contact_resolved(params: ActuatorParams, dt: float) -> bool:
@@ -190,15 +232,42 @@ def _one_winding(R: tuple, L: tuple, sigma: float, mu: tuple, R_f: tuple,
     return Phi, Gamma
 
 
-#: Parameters a candidate may carry beside its k: relative deviations of the winding
-#: resistance (``"R"``, a warmer winding) and of the magnet flux (``"flux"``: the
-#: back-EMF coefficient, so the torque per ampere; ``"demag"``: the same, searched over
-#: the losses of a demagnetized rotor) from the nominal parameters, a constant load
-#: torque (``"load"``, in N m, added to the profile's: a load the bench does not report),
-#: and each phase's fault-bridge resistance as a decade ratio to ``Motor.R_f``
-#: (``"Rf_a"``, ``"Rf_b"``, ``"Rf_c"``: ``R_f x 10**value``; it changes the winding step
-#: of a shorted phase only).
-NUISANCE = ("R", "flux", "load", "demag", "Rf_a", "Rf_b", "Rf_c")
+@dataclass(frozen=True)
+class Nuisance:
+    """A parameter a candidate may carry beside its k: its ``name``, the range ``lo..hi``
+    it is searched over, its ``unit`` (``"relative"``: a deviation from the nominal value,
+    ``"N m"``, ``"decades"``) and what it is, in ``words``."""
+
+    name: str
+    lo: float
+    hi: float
+    unit: str
+    words: str
+
+
+#: Every parameter a candidate may carry beside its k, listed once (the search ranges and
+#: the words of :mod:`emaphm.search` read them from here): relative deviations of the
+#: winding resistance (``"R"``: a winding warmer than at calibration, up to +30 %, about
+#: 75 K, or cooler) and of the magnet flux (``"flux"``: the back-EMF coefficient, so the
+#: torque per ampere, within +-6 % with temperature; ``"demag"``: the same, searched over
+#: the losses of a demagnetized rotor, down to half, :mod:`emaphm.modes.demagnetization`)
+#: from the nominal parameters, a constant load torque (``"load"``, in N m, added to the
+#: profile's: a load the bench does not report, 1.5x the +-0.1 N m of
+#: :data:`emaphm.units.DEFAULT_TOLERANCES`), and each phase's fault-bridge resistance as a
+#: decade ratio to ``Motor.R_f`` (``"Rf_a"``, ``"Rf_b"``, ``"Rf_c"``: ``R_f x 10**value``
+#: from 0.03x to 10x; it changes the winding step of a shorted phase only,
+#: :mod:`emaphm.modes.short_circuit`).
+NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
+    Nuisance("R", -0.1, 0.3, "relative", "winding resistance"),
+    Nuisance("flux", -0.06, 0.06, "relative", "magnet flux"),
+    Nuisance("load", -0.15, 0.15, "N m", "unreported constant load"),
+    Nuisance("demag", -0.5, 0.02, "relative", "magnet flux"),
+    Nuisance("Rf_a", -1.5, 1.0, "decades", "fault resistance of phase A"),
+    Nuisance("Rf_b", -1.5, 1.0, "decades", "fault resistance of phase B"),
+    Nuisance("Rf_c", -1.5, 1.0, "decades", "fault resistance of phase C"),
+)}
+#: Their names.
+NUISANCE = tuple(NUISANCE_PARAMETERS)
 
 #: The extra parameters that scale the back-EMF coefficients.
 _FLUX = ("flux", "demag")
@@ -338,5 +407,6 @@ def _population_matrices(R, L, sigma, mu, R_f, dt):
     return Phi, Gamma
 
 
-__all__ = ["pack", "pack_shared", "contact_resolved", "pack_population", "PopulationPacker", "winding_step_matrices", "MU_MIN", "N_P",
+__all__ = ["pack", "pack_shared", "contact_resolved", "drive_settings", "Nuisance",
+           "NUISANCE_PARAMETERS", "pack_population", "PopulationPacker", "winding_step_matrices", "MU_MIN", "N_P",
            "N_CP", "C_T0", "NUISANCE", "as_k"]

@@ -52,12 +52,12 @@ from ._jit import jit
 from . import step
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
                                  STATUS_TRIPPED, _check_step)
-from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
-                     C_GAMMA, C_KP, C_MU_A, C_MU_B, C_MU_C, C_PHI, C_T0, P_C_L, P_C_M, P_I_MAX,
-                     P_D_C, P_J_L, P_J_M, P_K_C, P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W,
-                     P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S, P_THETA0, P_V_DC, pack,
-                     PopulationPacker)
-from .step import control_inline, healthy_inline, sincos_inline, substep_inline
+from .controller import N_CTL, feedforward
+from .layout import (C_ECC, C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_J_L, P_J_M,
+                     P_K_C, P_POLES, P_I_TRIP, P_T_S, P_THETA0, pack, PopulationPacker)
+from .step import (N_Q, N_X, control_inline, control_plain_inline, healthy_inline, plain_inline, initial_q, initial_x,
+                   initial_x_inline, row_reader, row_writer, sincos_inline, substep_inline,
+                   vector_reader)
 
 __all__ = ["MonitoringModel", "PopulationResult", "simulate_reference", "I_DIVERGED",
            "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
@@ -91,6 +91,19 @@ def _trig(thm, ecc, ecc_phase, p, fdlibm):
     return s_e, c_e, s_g, c_g
 
 
+#: A candidate's constants (its CP row) and the drive's settings (the head of P), as the
+#: step's tuples; the plant's and the drive's state to and from their arrays.
+_read_c = row_reader(N_CP, "read_c")
+_read_x = row_reader(N_X, "read_x")
+_read_q = row_reader(N_Q, "read_q")
+_write_x = row_writer(N_X, "write_x")
+_write_q = row_writer(N_Q, "write_q")
+#: a drive without options keeps the trip, the sum and the integrals (the rest of its state
+#: is what the options read)
+_write_q_plain = row_writer(6, "write_q_plain")
+_read_ctl = vector_reader(N_CTL, "read_ctl")
+
+
 @jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             out_i, out_theta, out_omega, out_torque, fitness, status, fdlibm=False):
@@ -116,19 +129,14 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     dt = T_s / n_sub
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
     K_c, D_c = P[P_K_C], P[P_D_C]
-    V_dc = P[P_V_DC]
-    Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
-    T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
-    ctl = (Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, P[P_I_TRIP])
-    # state: the winding circuit's z = [y_alpha, y_beta, f_a, f_b, f_c] and i_abc = Q y
-    th_m = np.full(n_pop, P[P_THETA0])
-    w_m = np.zeros(n_pop)
-    th_l = np.full(n_pop, P[P_THETA0])
-    w_l = np.zeros(n_pop)
-    Z = np.zeros((n_pop, 5))
-    I = np.zeros((n_pop, 3))
-    integ = np.zeros((n_pop, 4))
+    ctl = _read_ctl(P, P_CTL)
+    I_trip = P[P_I_TRIP]
+    no_options = plain_inline(ctl)
+    # state: the plant's x (:data:`~emaphm.models.step.X_FIELDS`) and the drive's q
+    X = np.zeros((n_pop, N_X))
+    Q = np.zeros((n_pop, N_Q))
     for j in range(n_pop):
+        _write_x(X, 0, j, initial_x_inline(P[P_THETA0]))
         fitness[j] = 0.0
         status[j] = STATUS_OK
     ta = tb = tc = wa = wb = wc = 0.0
@@ -136,50 +144,47 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
         if with_fit:
             ta, tb, tc = i_target[k, 0], i_target[k, 1], i_target[k, 2]
             wa, wb, wc = weights[k, 0], weights[k, 1], weights[k, 2]
-        period = (ta, tb, tc, wa, wb, wc, theta_ref[k])
+        ref, w_ff, T_ff = feedforward(theta_ref[k], theta_ref[max(k - 1, 0)],
+                                      theta_ref[max(k - 2, 0)], ctl)
+        period = (ta, tb, tc, wa, wb, wc, ref, w_ff, T_ff)
         mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt)
         for j in range(n_pop):
             if status[j] == STATUS_DIVERGED:
                 continue
-            thm, wm, thl, wl = th_m[j], w_m[j], th_l[j], w_l[j]
-            ia, ib, ic = I[j, 0], I[j, 1], I[j, 2]
-            z0, z1, z2, z3, z4 = Z[j, 0], Z[j, 1], Z[j, 2], Z[j, 3], Z[j, 4]
-            c0 = (CP[j, C_C0_A], CP[j, C_C0_B], CP[j, C_C0_C])
-            mu = (CP[j, C_MU_A], CP[j, C_MU_B], CP[j, C_MU_C])
-            ecc, ecc_phase = CP[j, C_ECC], CP[j, C_ECC_PHASE]
-            Phi = CP[j, C_PHI:C_GAMMA]
-            Gam = CP[j, C_GAMMA:C_GAMMA + 25]
-            s_e, c_e, s_g, c_g = _trig(thm, ecc, ecc_phase, p, fdlibm)
-            fit, trip, e0, e1, e2, e3, u_a, u_b, u_c = control_inline(
-                thm, wm, ia, ib, ic, s_e, c_e, 1.0 if status[j] == STATUS_TRIPPED else 0.0,
-                fitness[j], integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3], CP[j, C_KP],
-                period, ctl)
+            c = _read_c(CP, 0, j)
+            x = _read_x(X, 0, j)
+            ecc, ecc_phase = c[C_ECC], c[C_ECC_PHASE]
+            s_e, c_e, s_g, c_g = _trig(x[0], ecc, ecc_phase, p, fdlibm)
+            if no_options:
+                q, u_a, u_b, u_c = control_plain_inline(x, _read_q(Q, 0, j), c, ctl, I_trip,
+                                                        period, s_e, c_e)
+            else:
+                q, u_a, u_b, u_c = control_inline(x, _read_q(Q, 0, j), c, ctl, I_trip, period,
+                                                  s_e, c_e)
             for s in range(n_sub):
                 if s > 0:
-                    s_e, c_e, s_g, c_g = _trig(thm, ecc, ecc_phase, p, fdlibm)
+                    s_e, c_e, s_g, c_g = _trig(x[0], ecc, ecc_phase, p, fdlibm)
                 if s == 0 and store:
-                    out_i[j, k, 0] = ia
-                    out_i[j, k, 1] = ib
-                    out_i[j, k, 2] = ic
-                    out_theta[j, k] = thm
-                    out_omega[j, k] = wm
-                thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, tq = substep_inline(
-                    thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g,
-                    u_a, u_b, u_c, c0, ecc, mu, Phi, Gam, CP[j, C_FSJ], CP[j, C_FDJ],
-                    CP[j, C_BACKLASH], CP[j, C_T0], mech)
+                    out_i[j, k, 0] = x[9]
+                    out_i[j, k, 1] = x[10]
+                    out_i[j, k, 2] = x[11]
+                    out_theta[j, k] = x[0]
+                    out_omega[j, k] = x[1]
+                x, tq = substep_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
                 if s == 0 and store:
                     out_torque[j, k] = tq
-            if not healthy_inline(ia, ib, ic, wm, thm):
+            if not healthy_inline(x[9], x[10], x[11], x[1], x[0]):
                 status[j] = STATUS_DIVERGED
                 fitness[j] = np.inf
                 continue
-            fitness[j] = fit
-            if trip != 0.0:
+            fitness[j] = q[1]
+            if q[0] != 0.0:
                 status[j] = STATUS_TRIPPED
-            integ[j, 0], integ[j, 1], integ[j, 2], integ[j, 3] = e0, e1, e2, e3
-            th_m[j], w_m[j], th_l[j], w_l[j] = thm, wm, thl, wl
-            I[j, 0], I[j, 1], I[j, 2] = ia, ib, ic
-            Z[j, 0], Z[j, 1], Z[j, 2], Z[j, 3], Z[j, 4] = z0, z1, z2, z3, z4
+            if no_options:
+                _write_q_plain(Q, 0, j, q)
+            else:
+                _write_q(Q, 0, j, q)
+            _write_x(X, 0, j, x)
 
 
 def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1,
@@ -195,38 +200,32 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
     from ..faults import apply_faults  # local: keep module import light
 
     faulty = apply_faults(params, k, fault_model)
-    m, inv, ctl, tr, ld = faulty.motor, faulty.inverter, faulty.controller, faulty.transmission, faulty.load
-    T_s = inv.T_s
+    m = faulty.motor
+    T_s = faulty.inverter.T_s
     t = profile.grid(T_s)
     ref = profile.theta_ref(t)
     T_load = profile.load_torque(t)
     P, cp = pack(faulty, theta0, fault_model, n_sub=n_sub)
-    Phi = tuple(cp[0, C_PHI:C_GAMMA])                 # row by row
-    Gam = tuple(cp[0, C_GAMMA:C_GAMMA + 25])
-    shared = (ctl.Ki, ctl.Kd, ctl.omega_max, ctl.Kp_w, ctl.Ki_w, m.T_max, ctl.k_T, m.I_max,
-              inv.Kp_i, inv.Ki_i, inv.V_dc, T_s, inv.I_trip)
-    thm = thl = theta0
-    wm = wl = 0.0
-    z = (0.0,) * 5                                    # [y_alpha, y_beta, f_a, f_b, f_c]
-    ia = ib = ic = fit = trip = 0.0
-    integ = (0.0, 0.0, 0.0, 0.0)
+    c = tuple(float(v) for v in cp[0])
+    ctl = tuple(float(v) for v in P[P_CTL:P_CTL + N_CTL])
+    x, q = initial_x(theta0), initial_q()
     out = {name: np.zeros(t.size) for name in ("theta_m", "omega_m", "torque")}
     out["i_abc"] = np.zeros((t.size, 3))
     out["f_abc"] = np.zeros((t.size, 3))
     for n in range(t.size):
-        out["theta_m"][n], out["omega_m"][n] = thm, wm
-        out["i_abc"][n] = ia, ib, ic
-        out["f_abc"][n] = z[2:]
-        mech = (T_load[n], m.J_m, m.C_m, ld.J_l, ld.C_l, P[P_K_C], P[P_D_C], T_s / n_sub)
-        fit, trip, *integ, u_a, u_b, u_c = step.control(
-            thm, wm, ia, ib, ic, *_libm_trig(m.p * thm, 0.0)[:2], trip, fit, *integ, ctl.Kp,
-            (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, ref[n]), shared)
+        out["theta_m"][n], out["omega_m"][n] = x[0], x[1]
+        out["i_abc"][n] = x[9:12]
+        out["f_abc"][n] = x[6:9]
+        mech = (T_load[n], m.J_m, m.C_m, faulty.load.J_l, faulty.load.C_l, P[P_K_C], P[P_D_C],
+                T_s / n_sub)
+        period = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0) + step.feedforward(
+            ref[n], ref[max(n - 1, 0)], ref[max(n - 2, 0)], ctl)
+        q, u_a, u_b, u_c = step.control(x, q, c, ctl, P[P_I_TRIP], period,
+                                        *_libm_trig(m.p * x[0], 0.0)[:2])
         for s in range(n_sub):
-            s_e, c_e = _libm_trig(m.p * thm, 0.0)[:2]
-            s_g, c_g = _libm_trig(thm + m.ecc_phase, m.ecc)[2:]
-            thm, wm, thl, wl, *z, ia, ib, ic, tq = step.substep(
-                thm, wm, thl, wl, *z, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c, m.c0, m.ecc,
-                m.mu, Phi, Gam, tr.FSJ, tr.FDJ, tr.backlash, cp[0, C_T0], mech)
+            s_e, c_e = _libm_trig(m.p * x[0], 0.0)[:2]
+            s_g, c_g = _libm_trig(x[0] + m.ecc_phase, m.ecc)[2:]
+            x, tq = step.substep(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
             if s == 0:
                 out["torque"][n] = tq
     out.update(t=t, theta_ref=ref)

@@ -60,13 +60,12 @@ import math
 import numpy as np
 
 from ._jit import cached_njit
-from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ,
-                     C_GAMMA, C_KP, C_MU_A, C_PHI, C_T0, P_C_L, P_C_M, P_I_MAX, P_I_TRIP, P_D_C, P_J_L, P_J_M, P_K_C,
-                     P_K_T, P_KD, P_KI, P_KI_I, P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES,
-                     P_T_MAX, P_T_S, P_THETA0, P_V_DC)
+from .controller import N_CTL, feedforward
+from .layout import C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_I_TRIP, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S, P_THETA0
 from ._monitoring_common import STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, _check_step
-from .step import (TRIG_LIMIT, control_inline, healthy_inline, inline, llvm_select as select,
-                   sincos_inline as sincos, substep_inline)
+from .step import (N_Q, N_X, TRIG_LIMIT, control_inline, control_plain_inline, healthy_inline,
+                   initial_x_inline, inline, inlined, lane_reader, plain_inline, lane_writer, llvm_select as select,
+                   sincos_inline as sincos, substep_inline, vector_reader)
 
 #: The kernel: IEEE division (``error_model="numpy"``), as a ZeroDivisionError check on
 #: every ``/`` is an early exit from the lane loop that the vectoriser cannot handle. For a
@@ -83,24 +82,34 @@ LANES = 8
 
 # ---- rows of the scratch array B[block, row, lane] -------------------------------------
 
-# per-candidate parameters; the winding step's Phi and Gamma row by row (25 rows each)
-(R_KP, R_FSJ, R_FDJ, R_BACKLASH, R_C0A, R_C0B, R_C0C, R_ECC, R_ECCPH,
- R_MUA, R_MUB, R_MUC) = range(12)
-R_PHI = 12
-R_GAM = R_PHI + 25
-# committed state (start of the control period): the winding circuit's z = [y, f] with
-# i_abc = Q y alongside; R_TRIP, R_ALIVE: 1.0 or 0.0
-(R_THM, R_WM, R_THL, R_WL, R_IA, R_IB, R_IC, R_Z0, R_Z1, R_Z2, R_Z3, R_Z4,
- R_E0, R_E1, R_E2, R_E3, R_TRIP, R_FIT, R_ALIVE) = range(R_GAM + 25, R_GAM + 44)
-# working state (during the control period), in the same order as the committed rows
-(W_THM, W_WM, W_THL, W_WL, W_IA, W_IB, W_IC, W_Z0, W_Z1, W_Z2, W_Z3, W_Z4,
- W_E0, W_E1, W_E2, W_E3, W_TRIP, W_FIT) = range(R_ALIVE + 1, R_ALIVE + 19)
-# per-period intermediates: leg voltages, sines and cosines, torque at the control instant
-(R_UA, R_UB, R_UC, R_SE, R_CE, R_SG, R_CG, R_TQ) = range(W_FIT + 1, W_FIT + 9)
-# the candidate's constant load torque beside the profile's (layout's C_T0)
-R_T0 = R_TQ + 1
-N_ROWS = R_T0 + 1
-N_STATE = 18      # rows R_THM..R_FIT and W_THM..W_FIT
+#: the candidate's constants: its CP row, column for column (the layout's C_* + R_C)
+R_C = 0
+#: committed state (start of the control period): the plant's x and the drive's q
+#: (:data:`~emaphm.models.step.X_FIELDS`, :data:`~emaphm.models.step.Q_FIELDS`), then
+#: R_ALIVE (1.0 or 0.0)
+R_X = R_C + N_CP
+R_Q = R_X + N_X
+R_ALIVE = R_Q + N_Q
+#: working state (during the control period), in the same order as the committed rows
+W_X = R_ALIVE + 1
+W_Q = W_X + N_X
+#: per-period intermediates: leg voltages, sines and cosines, torque at the control instant
+(R_UA, R_UB, R_UC, R_SE, R_CE, R_SG, R_CG, R_TQ) = range(W_Q + N_Q, W_Q + N_Q + 8)
+N_ROWS = R_TQ + 1
+N_STATE = N_X + N_Q      # rows R_X.. and W_X.. of the state, committed and working
+#: the Eq. 4 sum and the trip flag, rows of the drive's state
+Q_TRIP, Q_FIT = 0, 1
+
+_lane_c = lane_reader(N_CP, "lane_c")
+_lane_x = lane_reader(N_X, "lane_x")
+_lane_q = lane_reader(N_Q, "lane_q")
+_put_x = lane_writer(N_X, "put_x")
+_put_q = lane_writer(N_Q, "put_q")
+#: a drive without options keeps only the trip, the sum and the integrals of its state: the
+#: rest (filters, held voltages) are what the options' helpers read
+N_Q_PLAIN = 2 + 4
+_put_q_plain = lane_writer(N_Q_PLAIN, "put_q_plain")
+_read_ctl = vector_reader(N_CTL, "read_ctl")
 
 
 @inline
@@ -123,7 +132,7 @@ def _trig_stage(B, p):
     big = False
     for b in range(B.shape[0]):
         for l in range(LANES):
-            s_e, c_e, s_g, c_g, out = _trig(B[b, W_THM, l], B[b, R_ECCPH, l], p)
+            s_e, c_e, s_g, c_g, out = _trig(B[b, W_X, l], B[b, R_C + C_ECC_PHASE, l], p)
             B[b, R_SE, l] = s_e
             B[b, R_CE, l] = c_e
             B[b, R_SG, l] = s_g
@@ -132,8 +141,8 @@ def _trig_stage(B, p):
     if big:
         for b in range(B.shape[0]):
             for l in range(LANES):
-                x = p * B[b, W_THM, l]
-                g = B[b, W_THM, l] + B[b, R_ECCPH, l]
+                x = p * B[b, W_X, l]
+                g = B[b, W_X, l] + B[b, R_C + C_ECC_PHASE, l]
                 if abs(x) > TRIG_LIMIT:
                     B[b, R_SE, l] = math.sin(x)
                     B[b, R_CE, l] = math.cos(x)
@@ -147,85 +156,55 @@ def _plant_stage(B, first, mech):
     """One sub-step of every lane (vector); the first also keeps the torque for the traces."""
     for b in range(B.shape[0]):
         for l in range(LANES):
-            # the winding step's matrices, row-major, as tuples of scalars
-            Phi = (B[b, R_PHI + 0, l], B[b, R_PHI + 1, l], B[b, R_PHI + 2, l], B[b, R_PHI + 3, l],
-                   B[b, R_PHI + 4, l], B[b, R_PHI + 5, l], B[b, R_PHI + 6, l], B[b, R_PHI + 7, l],
-                   B[b, R_PHI + 8, l], B[b, R_PHI + 9, l], B[b, R_PHI + 10, l],
-                   B[b, R_PHI + 11, l], B[b, R_PHI + 12, l], B[b, R_PHI + 13, l],
-                   B[b, R_PHI + 14, l], B[b, R_PHI + 15, l], B[b, R_PHI + 16, l],
-                   B[b, R_PHI + 17, l], B[b, R_PHI + 18, l], B[b, R_PHI + 19, l],
-                   B[b, R_PHI + 20, l], B[b, R_PHI + 21, l], B[b, R_PHI + 22, l],
-                   B[b, R_PHI + 23, l], B[b, R_PHI + 24, l])
-            Gam = (B[b, R_GAM + 0, l], B[b, R_GAM + 1, l], B[b, R_GAM + 2, l], B[b, R_GAM + 3, l],
-                   B[b, R_GAM + 4, l], B[b, R_GAM + 5, l], B[b, R_GAM + 6, l], B[b, R_GAM + 7, l],
-                   B[b, R_GAM + 8, l], B[b, R_GAM + 9, l], B[b, R_GAM + 10, l],
-                   B[b, R_GAM + 11, l], B[b, R_GAM + 12, l], B[b, R_GAM + 13, l],
-                   B[b, R_GAM + 14, l], B[b, R_GAM + 15, l], B[b, R_GAM + 16, l],
-                   B[b, R_GAM + 17, l], B[b, R_GAM + 18, l], B[b, R_GAM + 19, l],
-                   B[b, R_GAM + 20, l], B[b, R_GAM + 21, l], B[b, R_GAM + 22, l],
-                   B[b, R_GAM + 23, l], B[b, R_GAM + 24, l])
-            thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, tq = substep_inline(
-                B[b, W_THM, l], B[b, W_WM, l], B[b, W_THL, l], B[b, W_WL, l],
-                B[b, W_Z0, l], B[b, W_Z1, l], B[b, W_Z2, l], B[b, W_Z3, l], B[b, W_Z4, l],
-                B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
-                B[b, R_SE, l], B[b, R_CE, l], B[b, R_SG, l], B[b, R_CG, l],
-                B[b, R_UA, l], B[b, R_UB, l], B[b, R_UC, l],
-                (B[b, R_C0A, l], B[b, R_C0B, l], B[b, R_C0C, l]), B[b, R_ECC, l],
-                (B[b, R_MUA, l], B[b, R_MUB, l], B[b, R_MUC, l]), Phi, Gam,
-                B[b, R_FSJ, l], B[b, R_FDJ, l], B[b, R_BACKLASH, l], B[b, R_T0, l], mech)
-            B[b, W_THM, l] = thm
-            B[b, W_WM, l] = wm
-            B[b, W_THL, l] = thl
-            B[b, W_WL, l] = wl
-            B[b, W_Z0, l] = z0
-            B[b, W_Z1, l] = z1
-            B[b, W_Z2, l] = z2
-            B[b, W_Z3, l] = z3
-            B[b, W_Z4, l] = z4
-            B[b, W_IA, l] = ia
-            B[b, W_IB, l] = ib
-            B[b, W_IC, l] = ic
+            x, tq = substep_inline(_lane_x(B, W_X, b, l), _lane_c(B, R_C, b, l), mech,
+                                   B[b, R_SE, l], B[b, R_CE, l], B[b, R_SG, l], B[b, R_CG, l],
+                                   B[b, R_UA, l], B[b, R_UB, l], B[b, R_UC, l])
+            _put_x(B, W_X, b, l, x)
             if first:
                 B[b, R_TQ, l] = tq
 
 
-@inline
-def _control_stage(B, period, ctl):
+def _control_stage(B, ctl, I_trip, period):
     """Fitness term, trip, controller and modulation of every lane (vector)."""
     for b in range(B.shape[0]):
         for l in range(LANES):
-            fit, trip, e0, e1, e2, e3, u_a, u_b, u_c = control_inline(
-                B[b, W_THM, l], B[b, W_WM, l], B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l],
-                B[b, R_SE, l], B[b, R_CE, l], B[b, W_TRIP, l], B[b, W_FIT, l],
-                B[b, W_E0, l], B[b, W_E1, l], B[b, W_E2, l], B[b, W_E3, l], B[b, R_KP, l],
-                period, ctl)
-            B[b, W_FIT, l] = fit
-            B[b, W_TRIP, l] = trip
-            B[b, W_E0, l] = e0
-            B[b, W_E1, l] = e1
-            B[b, W_E2, l] = e2
-            B[b, W_E3, l] = e3
+            q, u_a, u_b, u_c = control_inline(_lane_x(B, W_X, b, l), _lane_q(B, W_Q, b, l),
+                                              _lane_c(B, R_C, b, l), ctl, I_trip, period,
+                                              B[b, R_SE, l], B[b, R_CE, l])
+            _put_q(B, W_Q, b, l, q)
             B[b, R_UA, l] = u_a
             B[b, R_UB, l] = u_b
             B[b, R_UC, l] = u_c
 
 
-@inline
+#: the stage of a drive with options, and of one without (the same numbers, less work)
+_control_stage_plain = inlined(_control_stage, control_inline=control_plain_inline,
+                               _put_q=_put_q_plain)
+_control_stage = inlined(_control_stage, control_inline=control_inline)
+
+
 def _commit_stage(B):
     """Divergence check (vector): keep the period's state, or freeze the lane at its last
     good state with infinite fitness (the scalar kernel's ``status``/``continue``)."""
     for b in range(B.shape[0]):
         for l in range(LANES):
             ok = (B[b, R_ALIVE, l] != 0.0) & healthy_inline(
-                B[b, W_IA, l], B[b, W_IB, l], B[b, W_IC, l], B[b, W_WM, l], B[b, W_THM, l])
-            for r in range(N_STATE - 1):
-                x = select(ok, B[b, W_THM + r, l], B[b, R_THM + r, l])
-                B[b, R_THM + r, l] = x
-                B[b, W_THM + r, l] = x
-            f = select(ok, B[b, W_FIT, l], np.inf)
-            B[b, R_FIT, l] = f
-            B[b, W_FIT, l] = f
+                B[b, W_X + 9, l], B[b, W_X + 10, l], B[b, W_X + 11, l], B[b, W_X + 1, l],
+                B[b, W_X, l])
+            for r in range(N_STATE):
+                x = select(ok, B[b, W_X + r, l], B[b, R_X + r, l])
+                B[b, R_X + r, l] = x
+                B[b, W_X + r, l] = x
+            f = select(ok, B[b, W_Q + Q_FIT, l], np.inf)
+            B[b, R_Q + Q_FIT, l] = f
+            B[b, W_Q + Q_FIT, l] = f
             B[b, R_ALIVE, l] = select(ok, 1.0, 0.0)
+
+
+#: the commit of a drive with options, and of one without (the head of its state: the rest
+#: stays zero)
+_commit_stage_plain = inlined(_commit_stage, N_STATE=N_X + N_Q_PLAIN)
+_commit_stage = inlined(_commit_stage)
 
 
 @kernel_jit
@@ -254,48 +233,35 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     dt = T_s / n_sub
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
     K_c, D_c = P[P_K_C], P[P_D_C]
-    V_dc = P[P_V_DC]
-    Ki, Kd, omega_max, Kp_w, Ki_w = P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W]
-    T_max, k_T, I_max, Kp_i, Ki_i = P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I]
+    ctl = _read_ctl(P, P_CTL)
     I_trip = P[P_I_TRIP]
-    ctl = (Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, I_trip)
-    theta0 = P[P_THETA0]
+    no_options = plain_inline(ctl)
     n_blk = (n_pop + LANES - 1) // LANES
     B = np.zeros((n_blk, N_ROWS, LANES))
+    x0 = initial_x_inline(P[P_THETA0])
     for b in range(n_blk):
         for l in range(LANES):
             # padding lanes repeat the last candidate; their results are not written out
             j = min(b * LANES + l, n_pop - 1)
-            B[b, R_KP, l] = CP[j, C_KP]
-            B[b, R_FSJ, l] = CP[j, C_FSJ]
-            B[b, R_FDJ, l] = CP[j, C_FDJ]
-            B[b, R_BACKLASH, l] = CP[j, C_BACKLASH]
-            B[b, R_C0A, l] = CP[j, C_C0_A]
-            B[b, R_C0B, l] = CP[j, C_C0_B]
-            B[b, R_C0C, l] = CP[j, C_C0_C]
-            B[b, R_ECC, l] = CP[j, C_ECC]
-            B[b, R_ECCPH, l] = CP[j, C_ECC_PHASE]
-            B[b, R_T0, l] = CP[j, C_T0]
-            for ph in range(3):
-                B[b, R_MUA + ph, l] = CP[j, C_MU_A + ph]
-            for e in range(25):
-                B[b, R_PHI + e, l] = CP[j, C_PHI + e]
-                B[b, R_GAM + e, l] = CP[j, C_GAMMA + e]
-            B[b, R_THM, l] = theta0
-            B[b, R_THL, l] = theta0
-            B[b, W_THM, l] = theta0
-            B[b, W_THL, l] = theta0
+            for e in range(N_CP):
+                B[b, R_C + e, l] = CP[j, e]
+            _put_x(B, R_X, b, l, x0)
+            _put_x(B, W_X, b, l, x0)
             B[b, R_ALIVE, l] = 1.0
     ta = tb = tc = wa = wb = wc = 0.0
     for k in range(n):
-        ref = theta_ref[k]
-        T_l = T_load[k]
         if with_fit:
             ta, tb, tc = i_target[k, 0], i_target[k, 1], i_target[k, 2]
             wa, wb, wc = weights[k, 0], weights[k, 1], weights[k, 2]
         _trig_stage(B, p)
-        _control_stage(B, (ta, tb, tc, wa, wb, wc, ref), ctl)
-        mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)
+        ref, w_ff, T_ff = feedforward(theta_ref[k], theta_ref[max(k - 1, 0)],
+                                      theta_ref[max(k - 2, 0)], ctl)
+        period = (ta, tb, tc, wa, wb, wc, ref, w_ff, T_ff)
+        if no_options:
+            _control_stage_plain(B, ctl, I_trip, period)
+        else:
+            _control_stage(B, ctl, I_trip, period)
+        mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt)
         _plant_stage(B, True, mech)
         for s in range(1, n_sub):
             _trig_stage(B, p)
@@ -305,18 +271,21 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                 b = j // LANES
                 l = j - b * LANES
                 if B[b, R_ALIVE, l] != 0.0:
-                    out_i[j, k, 0] = B[b, R_IA, l]
-                    out_i[j, k, 1] = B[b, R_IB, l]
-                    out_i[j, k, 2] = B[b, R_IC, l]
-                    out_theta[j, k] = B[b, R_THM, l]
-                    out_omega[j, k] = B[b, R_WM, l]
+                    out_i[j, k, 0] = B[b, R_X + 9, l]
+                    out_i[j, k, 1] = B[b, R_X + 10, l]
+                    out_i[j, k, 2] = B[b, R_X + 11, l]
+                    out_theta[j, k] = B[b, R_X, l]
+                    out_omega[j, k] = B[b, R_X + 1, l]
                     out_torque[j, k] = B[b, R_TQ, l]
-        _commit_stage(B)
+        if no_options:
+            _commit_stage_plain(B)
+        else:
+            _commit_stage(B)
     for j in range(n_pop):
         b = j // LANES
         l = j - b * LANES
-        fitness[j] = B[b, R_FIT, l]
+        fitness[j] = B[b, R_Q + Q_FIT, l]
         if B[b, R_ALIVE, l] == 0.0:
             status[j] = STATUS_DIVERGED
-        elif B[b, R_TRIP, l] != 0.0:
+        elif B[b, R_Q + Q_TRIP, l] != 0.0:
             status[j] = STATUS_TRIPPED

@@ -68,19 +68,21 @@ from ..faults import apply_faults, as_k, check_fault_model
 from ..params import ActuatorParams, Motor
 from ..profiles import Profile
 from ._jit import jit
-from .controller import control_step
+from .controller import N_CTL, N_STATE, control_step, feedforward
 from .inverter import modulate, on_fraction, overcurrent, triangle
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
-                     C_R_A, P_C_L, P_C_M, P_I_MAX, P_J_L, P_J_M, P_K_T, P_KD, P_KI, P_KI_I,
-                     P_KI_W, P_KP_I, P_KP_W, P_OMEGA_MAX, P_POLES, P_I_TRIP, P_T_MAX, P_T_S,
-                     P_K_C, P_D_C,
-                     P_THETA0, P_V_DC, pack)
+                     C_R_A, P_C_L, P_C_M, P_CTL, P_J_L, P_J_M, P_POLES, P_I_TRIP, P_T_S,
+                     P_K_C, P_D_C, P_THETA0, P_V_DC, pack)
 from .mechanics import transmission_step
 from .plant_mechanics import plant_step
 from .pmsm import back_emf_coeffs
+from .step import vector_reader
 from .windings import Q, winding_matrices
 
 __all__ = ["ElectricalStep", "electrical_step", "run_reference"]
+
+_read_ctl = vector_reader(N_CTL, "read_ctl")
+_read_state = vector_reader(N_STATE, "read_state")
 
 # i = Q y with Q's structure: i_a = Q_A y0, i_b = Q_B y0 + Q_C y1, i_c = Q_B y0 - Q_C y1
 Q_A = float(Q[0, 0])
@@ -185,10 +187,8 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
     ia = 0.0
     ib = 0.0
     ic = 0.0
-    i0 = 0.0
-    i1 = 0.0
-    i2 = 0.0
-    i3 = 0.0
+    ctl = _read_ctl(P, P_CTL)
+    cs = _read_state(np.zeros(N_STATE), 0)         # the drive's state, at rest
     E_in = 0.0
     E_loss = 0.0
     E_ag = 0.0
@@ -224,10 +224,9 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
         if tripped:                    # active short circuit, controller stopped
             d_a = d_b = d_c = 0.0
         else:
-            v_a, v_b, v_c, T_ref, i0, i1, i2, i3 = control_step(
-                theta_ref[k], thm, wm, ia, ib, ic, s_e, c_e, i0, i1, i2, i3,
-                cp[C_KP], P[P_KI], P[P_KD], P[P_OMEGA_MAX], P[P_KP_W], P[P_KI_W],
-                P[P_T_MAX], P[P_K_T], P[P_I_MAX], P[P_KP_I], P[P_KI_I], V_dc, T_s)
+            v_a, v_b, v_c, T_ref, cs = control_step(
+                feedforward(theta_ref[k], theta_ref[max(k - 1, 0)], theta_ref[max(k - 2, 0)], ctl),
+                thm, wm, ia, ib, ic, s_e, c_e, cs, cp[C_KP], ctl)
             d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
         for j in range(3):
             f_sum[j] = 0.0

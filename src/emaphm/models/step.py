@@ -38,11 +38,16 @@ from . import inverter as _inverter
 from . import mechanics as _mechanics
 from . import pmsm as _pmsm
 from ._monitoring_common import I_DIVERGED, OMEGA_DIVERGED
+from .controller import N_STATE as N_CTL_STATE
+from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_FDJ, C_FSJ, C_GAMMA, C_KP,
+                     C_MU_A, C_MU_B, C_MU_C, C_PHI, C_PHI_END, C_GAMMA_END, C_T0)
 from .pmsm import COS_2PI_3, SIN_2PI_3
 
 __all__ = ["select", "llvm_select", "sincos", "TRIG_LIMIT", "back_emf", "overcurrent", "control", "substep",
            "healthy", "inline", "inlined", "control_inline", "substep_inline", "sincos_inline",
-           "healthy_inline"]
+           "healthy_inline", "X_FIELDS", "N_X", "Q_FIELDS", "N_Q", "PERIOD_FIELDS", "initial_x",
+           "initial_q", "initial_x_inline", "row_reader", "row_writer", "vector_reader", "lane_reader",
+           "lane_writer", "keep", "control_plain_inline", "plain_inline"]
 
 #: Compile a function into its caller at Numba IR level. LLVM's inliner leaves the larger
 #: physics functions as calls, and every call returns Numba's status code, whose check is
@@ -95,9 +100,17 @@ _park = inlined(_inverter.park)
 _inv_park = inlined(_inverter.inv_park)
 _inv_clarke = inlined(_inverter.inv_clarke)
 _pi_step = inlined(_controller.pi_step, _sat=_sat)
-control_step_inline = inlined(_controller.control_step, _sat=_sat, pi_step=_pi_step,
-                              clarke=_clarke, park=_park, inv_park=_inv_park,
-                              inv_clarke=_inv_clarke)
+_pi2_step = inlined(_controller.pi2_step, _sat=_sat)
+_lowpass = inlined(_controller._lowpass)
+_control_parts = dict(_sat=_sat, pi_step=_pi_step, pi2_step=_pi2_step, clarke=_clarke,
+                      park=_park, inv_park=_inv_park, inv_clarke=_inv_clarke)
+control_step_inline = inlined(_controller.control_step, **_control_parts,
+                              **{name: inlined(getattr(_controller, name))
+                                 for name in _controller.PLAIN})
+#: :func:`~emaphm.models.controller.control_step` of a drive without options
+#: (:func:`~emaphm.models.controller.plain`): the same numbers, none of the options' work
+control_step_plain_inline = inlined(_controller.control_step, **_control_parts,
+                                    **{name: inline(f) for name, f in _controller.PLAIN.items()})
 modulate_inline = inlined(_inverter.modulate)
 winding_input_inline = inlined(_pmsm.winding_input)
 winding_step_inline = inlined(_pmsm.winding_step)
@@ -110,6 +123,7 @@ transmission_step_inline = inlined(_mechanics.transmission_step, friction_step=_
 
 # the names the step's source calls (plain Python resolves them to the jitted functions)
 control_step = _controller.control_step
+feedforward = _controller.feedforward
 modulate = _inverter.modulate
 winding_input = _pmsm.winding_input
 winding_step = _pmsm.winding_step
@@ -209,19 +223,108 @@ def overcurrent(i_a, i_b, i_c, I_trip):
     return (abs(i_a) > I_trip) | (abs(i_b) > I_trip) | (abs(i_c) > I_trip)
 
 
-def control(thm, wm, ia, ib, ic, s_e, c_e, trip, fit, i0, i1, i2, i3, Kp, period, ctl):
+# ---- the structures the step takes ---------------------------------------------------------
+#
+# A candidate's constants are its row of the layout's CP (a tuple, ``c``: read by the
+# layout's column numbers); the drive's settings the controller's tuple (``ctl``,
+# :data:`emaphm.models.controller.CTL_FIELDS`, the head of the layout's P); its state two
+# tuples, the plant's ``x`` and the drive's ``q``. A new column of the physics changes the
+# layout and this module; the kernels move the tuples whole.
+
+#: The plant's state of a candidate: motor and load angle [rad] and speed [rad/s], the
+#: winding circuit's ``z`` [A] and its phase currents ``i = Q y`` [A].
+X_FIELDS = ("theta_m", "omega_m", "theta_l", "omega_l", "z0", "z1", "z2", "z3", "z4",
+            "i_a", "i_b", "i_c")
+N_X = len(X_FIELDS)
+(X_THM, X_WM, X_THL, X_WL, X_Z0, X_Z1, X_Z2, X_Z3, X_Z4, X_IA, X_IB, X_IC) = range(N_X)
+#: The drive's state of a candidate: tripped (1.0) or not, the Eq. 4 sum so far, then the
+#: controller's state (:data:`emaphm.models.controller.STATE_FIELDS`).
+Q_FIELDS = ("trip", "fit") + _controller.STATE_FIELDS
+N_Q = len(Q_FIELDS)
+#: What a control period brings: the target currents [A] and their Eq. 4 weights, the
+#: position command [rad] and its feed-forward terms [rad/s, N m]
+#: (:func:`emaphm.models.controller.feedforward`).
+PERIOD_FIELDS = ("t_a", "t_b", "t_c", "w_a", "w_b", "w_c", "ref", "omega_ff", "T_ff")
+
+
+def initial_x(theta0):
+    """The plant at rest at the angle ``theta0`` [rad], no current."""
+    return (theta0, 0.0, theta0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def initial_q():
+    """The drive before the first period: not tripped, nothing summed, every integral,
+    filter and held voltage at zero."""
+    return tuple(0.0 for _ in Q_FIELDS)
+
+
+def row_reader(n, name="read_row"):
+    """A function ``f(A, r, *index)`` returning ``(A[*index_head, r + 0, *index_tail], ...)``
+    as a tuple of ``n`` scalars: compiled for inlining, it moves a structure of the step
+    between the kernels' arrays and the step without a loop (a tuple's length must be
+    known when it is compiled). ``row_reader(n)`` reads ``A[i, r + e]`` (``f(A, r, i)``);
+    :func:`lane_reader` reads the SIMD kernel's ``B[b, r + e, l]``."""
+    body = ", ".join(f"A[i, r + {e}]" for e in range(n))
+    return _compiled(f"def {name}(A, r, i):\n    return ({body},)\n", name)
+
+
+def vector_reader(n, name="read_vector"):
+    """A function ``f(A, r)`` returning ``(A[r + 0], ..., A[r + n - 1])``."""
+    body = ", ".join(f"A[r + {e}]" for e in range(n))
+    return _compiled(f"def {name}(A, r):\n    return ({body},)\n", name)
+
+
+def lane_reader(n, name="read_lane"):
+    """A function ``f(B, r, b, l)`` returning ``(B[b, r + 0, l], ..., B[b, r + n - 1, l])``."""
+    body = ", ".join(f"B[b, r + {e}, l]" for e in range(n))
+    return _compiled(f"def {name}(B, r, b, l):\n    return ({body},)\n", name)
+
+
+def row_writer(n, name="write_row"):
+    """A function ``f(A, r, i, x)`` storing the ``n`` scalars of the tuple ``x`` at
+    ``A[i, r + e]``."""
+    body = "".join(f"    A[i, r + {e}] = x[{e}]\n" for e in range(n))
+    return _compiled(f"def {name}(A, r, i, x):\n{body}", name)
+
+
+def lane_writer(n, name="write_lane"):
+    """A function ``f(B, r, b, l, x)`` storing the tuple ``x`` at ``B[b, r + e, l]``."""
+    body = "".join(f"    B[b, r + {e}, l] = x[{e}]\n" for e in range(n))
+    return _compiled(f"def {name}(B, r, b, l, x):\n{body}", name)
+
+
+def _compiled(source, name):
+    return inline(_python(source, name))
+
+
+def _python(source, name, **namespace):
+    """The function ``name`` that ``source`` defines, with ``namespace`` as its globals."""
+    exec(compile(source, f"<emaphm.models.step.{name}>", "exec"), namespace)
+    return namespace[name]
+
+
+#: ``keep(tripped, old, new)``: the controller's state ``old`` where the drive tripped,
+#: else ``new``, element by element (selects, no branch).
+keep = _python("def keep(tripped, old, new):\n    return ("
+               + ", ".join(f"select(tripped, old[{e}], new[{e}])" for e in range(N_CTL_STATE))
+               + ",)\n", "keep", select=select)
+
+
+def control(x, q, c, ctl, I_trip, period, s_e, c_e):
     """Fitness term, overcurrent trip, controller and modulation of one candidate.
 
-    ``period = (ta, tb, tc, wa, wb, wc, ref)``: target currents [A], Eq. 4 weights and
-    position command [rad] of this control period (weights 0 without a target);
-    ``ctl = (Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s,
-    I_trip)``: the shared controller parameters; ``trip`` 1.0 once the drive has
-    tripped; ``i0..i3`` the controller's integrals. Returns ``(fit, trip, e0, e1, e2,
-    e3, u_a, u_b, u_c)`` (leg voltages ``u = d V_dc`` [V]; 0 V and the integrals frozen
+    ``x`` its plant state (:data:`X_FIELDS`), ``q`` its drive state (:data:`Q_FIELDS`),
+    ``c`` its constants (its row of the layout's CP), ``ctl`` the drive's settings
+    (:data:`emaphm.models.controller.CTL_FIELDS`), ``I_trip`` [A] the overcurrent trip,
+    ``period`` (:data:`PERIOD_FIELDS`): target currents, Eq. 4 weights (0 without a
+    target) and the position command with its feed-forward terms. Returns ``(q, u_a, u_b, u_c)``: the new drive state
+    and the leg voltages ``u = d V_dc`` [V] of the period (0 V and the controller frozen
     once tripped: active short circuit, controller stopped).
     """
-    ta, tb, tc, wa, wb, wc, ref = period
-    Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s, I_trip = ctl
+    ta, tb, tc, wa, wb, wc, ref, w_ff, T_ff = period
+    thm, wm = x[X_THM], x[X_WM]
+    ia, ib, ic = x[X_IA], x[X_IB], x[X_IC]
+    trip, fit = q[0], q[1]
     # unconditional (a conditional store stops the vectoriser): without a target the
     # weights are 0 and so is the term, but for a non-finite current, which diverges
     da = ia - ta
@@ -229,46 +332,43 @@ def control(thm, wm, ia, ib, ic, s_e, c_e, trip, fit, i0, i1, i2, i3, Kp, period
     dc = ic - tc
     fit = fit + (wa * da * da + wb * db * db + wc * dc * dc)
     tripped = (trip != 0.0) | overcurrent(ia, ib, ic, I_trip)
-    v_a, v_b, v_c, _, e0, e1, e2, e3 = control_step(
-        ref, thm, wm, ia, ib, ic, s_e, c_e, i0, i1, i2, i3,
-        Kp, Ki, Kd, omega_max, Kp_w, Ki_w, T_max, k_T, I_max, Kp_i, Ki_i, V_dc, T_s)
+    old = q[2:]
+    v_a, v_b, v_c, _, new = control_step((ref, w_ff, T_ff), thm, wm, ia, ib, ic, s_e, c_e, old,
+                                         c[C_KP], ctl)
+    V_dc = ctl[_controller.CTL_V_DC]
     d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
-    return (fit, select(tripped, 1.0, 0.0),
-            select(tripped, i0, e0), select(tripped, i1, e1),
-            select(tripped, i2, e2), select(tripped, i3, e3),
+    return ((select(tripped, 1.0, 0.0), fit) + keep(tripped, old, new),
             select(tripped, 0.0, d_a) * V_dc, select(tripped, 0.0, d_b) * V_dc,
             select(tripped, 0.0, d_c) * V_dc)
 
 
-def substep(thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic, s_e, c_e, s_g, c_g, u_a, u_b, u_c,
-            c0, ecc, mu, Phi, Gam, FSJ, FDJ, backlash, T_0, mech):
+def substep(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c):
     """One integration step of the plant of one candidate: back-EMF, winding circuit,
     transmission.
 
-    ``z0..z4`` the winding circuit's state [A], ``ia, ib, ic`` its phase currents;
-    ``c0, mu``: per-phase tuples (back-EMF coefficient [V s/rad], shorted fraction);
-    ``Phi, Gam``: the 25 entries of the winding step row by row (tuples or arrays);
-    ``T_0`` [N m] the candidate's load torque beside the profile's ``T_l`` in
-    ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``. Returns ``(theta_m, omega_m,
-    theta_l, omega_l, z0..z4, i_a, i_b, i_c, torque at the start of the step)``. (At most
-    30 arguments: past that CPython passes them as ``*args``, which Numba's inliner
-    refuses.)
+    ``x`` its plant state (:data:`X_FIELDS`), ``c`` its constants (its CP row: back-EMF
+    coefficients, shorted fractions, eccentricity, the winding step's ``Phi`` and
+    ``Gamma``, friction, backlash and its own load torque ``T_0`` [N m]) beside the
+    profile's ``T_l`` in ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``; the sines and
+    cosines of the electrical angle and of ``theta_m + ecc_phase``; the leg voltages [V].
+    Returns ``(x, torque at the start of the step)``.
     """
     T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt = mech
-    c0_a, c0_b, c0_c = c0
-    mu_a, mu_b, mu_c = mu
-    ca, cb, cc = back_emf(s_e, c_e, s_g, c_g, c0_a, c0_b, c0_c, ecc)
+    thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic = x
+    mu_a, mu_b, mu_c = c[C_MU_A], c[C_MU_B], c[C_MU_C]
+    ca, cb, cc = back_emf(s_e, c_e, s_g, c_g, c[C_C0_A], c[C_C0_B], c[C_C0_C], c[C_ECC])
     tq = torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c)
     w0, w1, w2, w3, w4 = winding_input(u_a, u_b, u_c, ca * wm, cb * wm, cc * wm,
                                        mu_a, mu_b, mu_c)
-    z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4, Phi, Gam)
+    z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4,
+                                      c[C_PHI:C_PHI_END], c[C_GAMMA:C_GAMMA_END])
     ja, jb, jc = phase_currents(z0, z1)
     # the mechanics see the step's mean torque (trapezoid): second order in the fast
     # current transients of the coarse step
     T_m = 0.5 * (tq + torque_loops(ja, jb, jc, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c))
-    thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + T_0, J_m, C_m, FSJ, FDJ,
-                                         J_l, C_l, backlash, K_c, D_c, dt)
-    return thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc, tq
+    thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
+                                         c[C_FSJ], c[C_FDJ], J_l, C_l, c[C_BACKLASH], K_c, D_c, dt)
+    return (thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc), tq
 
 
 def healthy(ia, ib, ic, wm, thm):
@@ -286,8 +386,14 @@ sincos_inline = inlined(sincos)
 overcurrent_inline = inlined(overcurrent)
 back_emf_inline = inlined(back_emf)
 healthy_inline = inlined(healthy)
-control_inline = inlined(control, overcurrent=overcurrent_inline,
+keep_inline = inlined(keep)
+initial_x_inline = inlined(initial_x)
+control_inline = inlined(control, overcurrent=overcurrent_inline, keep=keep_inline,
                          control_step=control_step_inline, modulate=modulate_inline)
+#: :func:`control` of a drive without options (:func:`emaphm.models.controller.plain`)
+control_plain_inline = inlined(control, overcurrent=overcurrent_inline, keep=keep_inline,
+                               control_step=control_step_plain_inline, modulate=modulate_inline)
+plain_inline = inlined(_controller.plain)
 substep_inline = inlined(substep, back_emf=back_emf_inline, torque_loops=torque_loops_inline,
                          winding_input=winding_input_inline, winding_step=winding_step_inline,
                          phase_currents=phase_currents_inline,
