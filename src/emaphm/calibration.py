@@ -84,11 +84,21 @@ PARAMETERS: dict[str, tuple[float, float, str]] = {
 }
 _NAMES = tuple(PARAMETERS)
 
+#: Estimated beside them on traces with the drive's voltage commands (the recorded-voltage
+#: path, :mod:`emaphm.recorded`): the voltage the inverter's legs lose to dead time and
+#: device drops [V] and the encoder's offset [rad, electrical]. A diagnosis searches them
+#: again every time (:data:`emaphm.recorded.DRIVE_NUISANCE`); the calibration estimates
+#: them so that the unit's own parameters do not absorb them.
+DRIVE_PARAMETERS: dict[str, tuple[float, float, str]] = {
+    "V_dt": (0.0, 30.0, "V"), "angle": (-0.2, 0.2, "rad (electrical)")}
+PARAMETERS.update(DRIVE_PARAMETERS)
+
 #: A typical deviation of each parameter (the width of the production tolerance,
 #: :data:`emaphm.units.DEFAULT_TOLERANCES`), in the parameter's unit.
 TYPICAL: dict[str, float] = {"J": 0.2, "flux": 0.1, "R": 0.25, "L": 0.1, "friction": 0.4,
                              "viscous": 0.4, "gain_a": 0.06, "gain_b": 0.06, "gain_c": 0.06,
-                             "offset_a": 0.04, "offset_b": 0.04, "offset_c": 0.04, "load": 0.2}
+                             "offset_a": 0.04, "offset_b": 0.04, "offset_c": 0.04, "load": 0.2,
+                             "V_dt": 5.0, "angle": 0.05}
 
 #: A parameter whose typical deviation moves the fit ratio (Eq. 4 over the noise floor)
 #: by less than this -- or less than the fit's own excess over the floor, which is what
@@ -194,6 +204,66 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
                    w, np.sqrt(w) / sigma, float(np.sum(w * sigma ** 2)))
 
 
+class _DrivenTarget:
+    """One healthy trace with the drive's voltage commands, on the recorded-voltage path
+    (:class:`emaphm.recorded.RecordedVoltageObjective`): its residuals (currents and
+    mechanics, each over the currents' white noise) at a unit's parameters."""
+
+    columns = 4
+
+    def __init__(self, trace: Trace, params: ActuatorParams, source: str) -> None:
+        from .recorded import DRIVE_NUISANCE, RecordedVoltageObjective
+
+        validate(trace)
+        try:
+            obj = RecordedVoltageObjective.from_trace(
+                trace, replace(params, sensors=CurrentSensors()), fault_model="physical",
+                nuisance=DRIVE_NUISANCE)
+        except TraceError as exc:
+            raise CalibrationError(f"{source}: {exc}") from None
+        sigma = np.asarray(obj.noise_sigma)
+        if not np.all(sigma > MIN_NOISE):
+            raise CalibrationError(f"{source}: the phase currents carry no measurement noise (a "
+                                   "simulated trace without sensors, or a dead channel); "
+                                   "calibrate on recorded traces")
+        self.source, self.model, self.i_raw = source, obj.model, obj.model.i_meas
+        s_max = float(np.max(sigma))
+        self.w = np.concatenate([obj.weights, obj.mech_weights[:, None]], axis=1)
+        self.sqrt_w = np.sqrt(self.w) / np.append(sigma, s_max)[None, :]
+        self.floor = float(np.sum(self.w * np.append(sigma, s_max)[None, :] ** 2))
+        self.size = self.w.size
+
+    def run(self, params: ActuatorParams, dev: dict[str, float], **outputs: bool):
+        """The recorded-voltage model at a unit's ``params`` (its sensors' gains and offsets
+        undone on the measured currents) and the inverter's and encoder's values in
+        ``dev``."""
+        from .recorded import DrivenModel
+
+        s = params.sensors
+        i = np.ascontiguousarray(s.correct(self.i_raw)) if not s.ideal else self.i_raw
+        m = self.model
+        model = DrivenModel(replace(params, sensors=CurrentSensors()), "physical",
+                            ("V_dt", "angle"), m.t, m.u, m.theta, m.omega, m.theta_ref, i,
+                            m.T_load)
+        K = np.concatenate([K_NOMINAL, [dev.get("V_dt", 0.0), dev.get("angle", 0.0)]])[None]
+        return model.run(K, self.w[:, :3], self.w[:, 3], **outputs)
+
+    def residual(self, params: ActuatorParams, dev: dict[str, float]) -> np.ndarray | None:
+        """The normalised residuals (currents, mechanics) at ``params``, or None where the
+        model diverged."""
+        _, status, out = self.run(params, dev, residuals=True)
+        if status[0] != 0:
+            return None
+        return (out["residuals"][0] * self.sqrt_w).ravel()
+
+    def fit(self, params: ActuatorParams, dev: dict[str, float]):
+        """``(t, measured, model)`` currents and the fit ratio at ``params``."""
+        sse, _, out = self.run(params, dev, traces=True)
+        s = params.sensors
+        model_i = out["i_abc"][0] * np.asarray(s.gain) + np.asarray(s.offset)
+        return (self.model.t, self.i_raw, model_i), float(np.sum(sse[0])) / self.floor
+
+
 def _model_currents(params: ActuatorParams, tg: _Target) -> np.ndarray:
     from .models.monitoring import MonitoringModel
 
@@ -270,8 +340,11 @@ class _Fitter:
                  progress: Callable[[int], Any] | None) -> None:
         self.base, self.targets, self.progress = base, targets, progress
         self.count = 0                    # model simulations so far
-        self.m = sum(t.i_meas.size for t in targets)
+        self.m = sum(t.size if isinstance(t, _DrivenTarget) else t.i_meas.size for t in targets)
         self._cache: dict[bytes, list[np.ndarray] | None] = {}
+        #: traces on the recorded-voltage path: every column by differences (the sensors'
+        #: gains and offsets act on the measured currents the model reads, not after it)
+        self.driven = any(isinstance(t, _DrivenTarget) for t in targets)
 
     def currents(self, x: np.ndarray, names: list[str]) -> list[np.ndarray] | None:
         """Model currents of each trace at ``x``, before the sensors' gains and offsets
@@ -298,7 +371,27 @@ class _Fitter:
         s = apply_deviations(self.base, dict(zip(names, x))).sensors
         return np.asarray(s.gain), np.asarray(s.offset)
 
+    def _driven_residual(self, x: np.ndarray, names: list[str]) -> np.ndarray:
+        dev = dict(zip(names, (float(v) for v in x)))
+        p = apply_deviations(self.base, dev)
+        out = []
+        for tg in self.targets:
+            self.count += 1
+            r = tg.residual(p, dev) if isinstance(tg, _DrivenTarget) else None
+            if not isinstance(tg, _DrivenTarget):
+                i = _model_currents(replace(p, sensors=CurrentSensors()), tg)
+                g, o = np.asarray(p.sensors.gain), np.asarray(p.sensors.offset)
+                r = ((i * g + o - tg.i_meas) * tg.sqrt_w).ravel() if np.all(np.isfinite(i)) else None
+            if self.progress is not None:
+                self.progress(self.count)
+            if r is None or not np.all(np.isfinite(r)):
+                return np.full(self.m, 1e6)
+            out.append(r)
+        return np.concatenate(out)
+
     def residual(self, x: np.ndarray, names: list[str]) -> np.ndarray:
+        if self.driven:
+            return self._driven_residual(x, names)
         cur = self.currents(x, names)
         if cur is None:
             return np.full(self.m, 1e6)
@@ -308,11 +401,11 @@ class _Fitter:
 
     def jacobian(self, x: np.ndarray, names: list[str]) -> np.ndarray:
         r0 = self.residual(x, names)
-        cur = self.currents(x, names)
+        cur = None if self.driven else self.currents(x, names)
         J = np.zeros((self.m, len(names)))
         g0 = np.asarray(self.base.sensors.gain)
         for c, n in enumerate(names):
-            if n.startswith("gain_") or n.startswith("offset_"):
+            if (n.startswith("gain_") or n.startswith("offset_")) and not self.driven:
                 j = "abc".index(n[-1])
                 col = []
                 for i, tg in zip(cur or [np.zeros_like(t.i_meas) for t in self.targets],
@@ -328,7 +421,8 @@ class _Fitter:
             xh = np.array(x, dtype=float)
             xh[c] += h
             J[:, c] = (self.residual(xh, names) - r0) / h
-        self.currents(x, names)             # leave the cache at x
+        if not self.driven:
+            self.currents(x, names)         # leave the cache at x
         return J
 
     def fit(self, names: list[str], x0: np.ndarray) -> Any:
@@ -468,17 +562,27 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     if unknown:
         raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from "
                          + ", ".join(_NAMES))
-    targets = [_target(tr, base, src) for tr, src in zip(traces, sources)]
+    from .recorded import drive_model_of, RECORDED_VOLTAGES
+
+    targets = [_DrivenTarget(tr, base, src) if drive_model_of(tr) == RECORDED_VOLTAGES
+               else _target(tr, base, src) for tr, src in zip(traces, sources)]
+    if any(isinstance(tg, _DrivenTarget) for tg in targets):
+        free += [n for n in DRIVE_PARAMETERS if n not in free]
     t0 = time.perf_counter()
     fitter = _Fitter(base, targets, progress)
     sel = select_identifiable(fitter, free, correlation_limit=correlation_limit,
                               multiple_limit=multiple_limit)
     res, names = sel["res"], sel["names"]
-    unit = apply_deviations(base, dict(zip(names, res.x)))
+    dev = dict(zip(names, (float(v) for v in res.x)))
+    unit = apply_deviations(base, dev)
     # the fit of each trace against its own noise floor
     fits = []
     ratios: dict[str, float] = {}
     for tg in targets:
+        if isinstance(tg, _DrivenTarget):
+            fit, ratios[tg.source] = tg.fit(unit, dev)
+            fits.append(fit)
+            continue
         i = _model_currents(unit, tg)
         fits.append((np.arange(i.shape[0]) * base.inverter.T_s, tg.i_meas, i))
         ratios[tg.source] = float(np.sum(tg.w * (i - tg.i_meas) ** 2) / tg.floor)
@@ -527,8 +631,9 @@ def _covariance(res: Any, targets: list[_Target]) -> tuple[np.ndarray, np.ndarra
     n_eff = 0.0
     off = 0
     for tg in targets:
-        k = tg.i_meas.size
-        n_eff += effective_samples(r[off:off + k].reshape(-1, 3))[0]
+        cols = getattr(tg, "columns", 3)
+        k = tg.size if cols == 4 else tg.i_meas.size
+        n_eff += effective_samples(r[off:off + k].reshape(-1, cols))[0]
         off += k
     inflate = max(m / max(n_eff, 1.0), 1.0)
     JtJ = Jm.T @ Jm

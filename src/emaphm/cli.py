@@ -33,6 +33,7 @@ from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_optio
                           plot_path, warn_if_long)
 from ._cli_common import seed as _seed
 from ._text import one_line, shown
+from .firmware import DRIVE_MODELS, FOREIGN_DRIVES
 
 __all__ = ["main", "build_parser", "EXIT_USAGE", "UsageError"]
 
@@ -105,10 +106,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if sensors.current_noise > 0 and args.seed is None:
         raise UsageError("sensor noise needs --seed S (randomness always flows from an explicit seed)")
     profile = _profile_option(args.profile)
+    if (args.drive_signals or args.firmware) and args.model != "reference":
+        raise UsageError("--drive-signals and --firmware describe the plant's drive: use them "
+                         "with --model reference")
     t0 = time.perf_counter()
     with compile_notice():
         trace = simulate(k, model=args.model, params=params, sensors=sensors, seed=args.seed,
-                         fault_model=fault_model, faults=faults, profile=profile, **unit)
+                         fault_model=fault_model, faults=faults, profile=profile,
+                         drive_signals=args.drive_signals, drive=args.firmware, **unit)
     if args.scenario:
         trace = trace.with_meta(scenario=args.scenario)
     elapsed = time.perf_counter() - t0
@@ -224,6 +229,10 @@ def _table(ident, diag) -> str:
             row += f" {ident.k_true[i]:8.4f}"
         lines.append(row)
     lines.append("")
+    not_seen = getattr(ident, "not_observable", ())
+    lines.append(f"drive model {getattr(ident, 'drive_model', 'modelled controller')}"
+                 + (f" ({', '.join(m.replace('_', ' ') for m in not_seen)} not observable on it: "
+                    "reported healthy, not measured)" if not_seen else ""))
     lines.append(f"fault model {ident.fault_model}"
                  + ("; searched with " + ", ".join(nuisance_text(n, v)
                                                    for n, v in ident.nuisance.items())
@@ -238,7 +247,9 @@ def _table(ident, diag) -> str:
     noiseless = NOISELESS_NOTE in diag.notes
     if noiseless:
         ratio = float("nan")              # a floor of round-off: no ratio worth printing
-    lines.append(f"fitness (Eq. 4) {ident.fitness:.4e}"
+    recorded = getattr(ident, "drive_model", "") == "recorded voltages"
+    lines.append(f"fitness ({'Eq. 4 of the currents and the mechanical residual' if recorded else 'Eq. 4'}) "
+                 f"{ident.fitness:.4e}"
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
                  + (f" ({ident.restarts} restart{'s' if ident.restarts > 1 else ''})"
                     if ident.restarts else ""))
@@ -328,6 +339,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         with compile_notice(progress, enabled=not args.quiet):
             config = IdentificationConfig(algorithm=args.algorithm, budget=budget,
                                           fault_model=args.fault_model,
+                                          drive_model=args.drive_model,
                                           nuisance=_nuisance_option(args.nuisance),
                                           **({} if args.min_rotation is None
                                              else {"min_rotation": args.min_rotation}))
@@ -443,6 +455,23 @@ def _plant_arguments(p: argparse.ArgumentParser, *, diagnose: bool = False) -> N
                    help=f"constant load torque [N m] on {where} that the trace does not report")
 
 
+def _drive_arguments(p: argparse.ArgumentParser, diagnose: bool = False) -> None:
+    """The drive's options: what the plant's drive runs and logs (simulate), or what
+    stands in for it (diagnose)."""
+    if diagnose:
+        p.add_argument("--drive-model", choices=DRIVE_MODELS, default=None,
+                       help="what stands in for the drive's controller: 'recorded voltages' (the "
+                            "default for a trace with voltage commands: no controller is "
+                            "modelled) or 'modelled controller' ([controller] of the parameters)")
+        return
+    p.add_argument("--drive-signals", action="store_true",
+                   help="also record what the plant's drive logs: the phase voltages it applied "
+                        "(v_a, v_b, v_c), its current and speed references")
+    p.add_argument("--firmware", choices=sorted(FOREIGN_DRIVES), default=None,
+                   help="the plant's drive runs this firmware, not emaphm's cascade: "
+                        + "; ".join(f"{k}: {v}" for k, v in FOREIGN_DRIVES.items()))
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog="emaphm", description=__doc__.split("\n")[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -470,6 +499,7 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--aa-cutoff", type=float, default=None,
                    help="anti-alias low-pass cut-off [Hz] before the ADC (needs --f-sample)")
     s.add_argument("--aa-order", type=int, default=2, help="anti-alias Butterworth order (default 2)")
+    _drive_arguments(s)
     s.add_argument("--profile", metavar="NAME|FILE.csv",
                    help="the command: a built-in profile (diagnostic, the default; sine, chirp, "
                         "step, ramp, trapezoid) or a CSV file of columns t [s], theta_ref [rad] "
@@ -500,6 +530,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="least motor rotation range the trace must show [rad] (default 6.283, "
                         "one revolution, which the eccentricity needs; 0 skips the check, and "
                         "the eccentricity read from a shorter trace is then a guess)")
+    _drive_arguments(d, diagnose=True)
     d.add_argument("--nuisance", default=None,
                    help="parameters searched with k so that a drift is not read as a fault: "
                         "none, or a comma-separated subset of R (winding resistance), flux "

@@ -36,6 +36,7 @@ from .optim import (ALL_ALGORITHMS, MaxEvaluations, Optimizer, Termination, Wall
 from .optim.lsq import MultistartLeastSquares
 from .optim.solvers import CallableSolver, Metaheuristic, Solver, optimizer_options, solve
 from .params import ActuatorParams
+from .recorded import DRIVE_MODELS
 from .problem import (DRIFT_NUISANCE, LSQ_SAMPLE, LSQ_SINGLE_FAULT_LEVELS,
                       IdentificationProblem, default_nuisance, single_fault_points)
 from .seeds import check_seed
@@ -145,7 +146,10 @@ class Identification:
     time to compile (or load from the disk cache) the model kernels and run the model
     once, before ``elapsed_s`` starts; ``config``: the settings it was made with (None for
     a solver that has no name in :data:`ALGORITHM_NAMES`: a user's own); ``noise_sigma``:
-    the trace's white-noise level [A rms], the largest of the phases'.
+    the trace's white-noise level [A rms], the largest of the phases'; ``drive_model``:
+    what stood in for the drive's controller (:data:`emaphm.recorded.DRIVE_MODELS`), and
+    ``not_observable`` the fault modes that path cannot see (their components of k are
+    reported healthy, not measured).
     """
 
     algorithm: str
@@ -177,6 +181,8 @@ class Identification:
     nuisance: dict = field(default_factory=dict)
     config: "IdentificationConfig | None" = field(default=None, compare=False, repr=False)
     noise_sigma: float = float("nan")
+    drive_model: str = "modelled controller"
+    not_observable: tuple[str, ...] = ()
 
     @property
     def evals_per_s(self) -> float:
@@ -211,6 +217,8 @@ class Identification:
             "suspect": bool(self.suspect),
             "k_raw": None if self.k_raw is None else [float(x) for x in self.k_raw],
             "fitness_raw": self.fitness_raw,
+            "drive_model": self.drive_model,
+            "not_observable": list(self.not_observable),
         }
         if self.k_true is not None:
             d["k_true"] = [float(x) for x in self.k_true]
@@ -331,6 +339,8 @@ class IdentificationConfig:
     nuisance        parameters searched beside k (None: by the parameters' calibration)
     min_rotation    least motor rotation range the trace must show [rad] (default one
                     revolution, which the eccentricity needs; 0 skips the check)
+    drive_model     what stands in for the drive's controller (None: the trace's best,
+                    :func:`emaphm.recorded.drive_model_of`)
     ==============  ========================================================================
 
     The first group chooses and tunes the solver, the second (``search`` on) describes
@@ -349,9 +359,13 @@ class IdentificationConfig:
     fault_model: str | None = None
     nuisance: tuple[str, ...] | None = None
     min_rotation: float = 2 * math.pi
+    drive_model: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "options", dict(_jsonable(dict(self.options or {}))))
+        if self.drive_model is not None and self.drive_model not in DRIVE_MODELS:
+            raise ValueError(f"unknown drive model {self.drive_model!r}; choose one of "
+                             + ", ".join(repr(d) for d in DRIVE_MODELS))
         if isinstance(self.min_rotation, bool) or not isinstance(self.min_rotation, (int, float)) \
                 or not (math.isfinite(self.min_rotation) and self.min_rotation >= 0):
             raise ValueError(f"min_rotation [rad] must be a finite number >= 0 (0 skips the "
@@ -389,7 +403,7 @@ class IdentificationConfig:
         return IdentificationProblem(trace, params=params, fault_model=self.fault_model,
                                      nuisance=self.nuisance, n_sub=self.n_sub, mode=self.mode,
                                      search=self.search, start=start,
-                                     min_rotation=self.min_rotation)
+                                     min_rotation=self.min_rotation, drive_model=self.drive_model)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON values; :meth:`from_dict` of it gives an equal config."""
@@ -473,7 +487,8 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         restarts=int(res.starts) - 1, noise_floor=floor,
         suspect=bool(res.fun > (ratio * floor if floor > 0 else np.inf)),
         run_evaluations=int(res.run_evaluations), noise_sigma=problem.noise_sigma,
-        config=_config_of(problem, solver, budget, options, polish))
+        config=_config_of(problem, solver, budget, options, polish),
+        drive_model=problem.drive_model, not_observable=problem.not_observable)
 
 
 def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, options: dict,
@@ -489,7 +504,7 @@ def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, opti
         suspect_ratio=getattr(solver, "settle_ratio", getattr(solver, "restart_ratio", None)),
         search=problem.search, n_sub=problem.n_sub, mode=problem.mode,
         fault_model=problem.fault_model, nuisance=problem.nuisance,
-        min_rotation=problem.min_rotation)
+        min_rotation=problem.min_rotation, drive_model=problem.drive_model)
 
 
 # ----------------------------------------------------------------------------- identify

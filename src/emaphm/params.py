@@ -44,6 +44,8 @@ field                      unit                meaning
 ``Load.J_l``               kg m^2              load inertia behind the backlash
 ``Load.C_l``               N m s/rad           load viscous damping
 ``Plant.omega_s``          rad/s               Stribeck velocity of the dry friction
+``Plant.dead_time``        s                   the inverter's dead time (plant only)
+``Plant.device_drop``      V                   its devices' on-state drop (plant only)
 ``CurrentSensors.gain``    --                  per-phase current sensor gain (calibrated)
 ``CurrentSensors.offset``  A                   per-phase current sensor offset (calibrated)
 ``CurrentSensors.aa_*``    --, Hz              declared anti-alias filter order, cut-off
@@ -167,6 +169,8 @@ _UNITS: dict[str, str] = {
     "mu": "-, shorted fraction 0..1",
     "R_f": "ohm",
     "omega_s": "rad/s",
+    "dead_time": "s",
+    "device_drop": "V",
     "K_c": "N m/rad",
     "D_c": "N m s/rad",
     "T_0": "N m",
@@ -661,14 +665,23 @@ class Plant:
 
     Dry friction falls from ``FSJ`` to ``FDJ`` with speed (Stribeck):
     ``T_f = FDJ + (FSJ - FDJ) exp(-(omega/omega_s)^2)`` while moving; default
-    ``omega_s = 1 rad/s``. (Files written before 0.3 also held the backlash
-    contact's ``K_c`` and ``D_c`` here; they are read into ``[transmission]``.)
+    ``omega_s = 1 rad/s``. The inverter's legs lose ``V_dc dead_time / T_s +
+    device_drop`` [V] to the dead time between their switches and to the devices' on-state
+    drops, against the phase current's sign (the PWM ripple smooths it near zero current,
+    which the plant resolves); default none. (Files written before 0.3 also held the
+    backlash contact's ``K_c`` and ``D_c`` here; they are read into ``[transmission]``.)
     """
 
     omega_s: float = 1.0
+    dead_time: float = 0.0
+    device_drop: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "omega_s", _check("Plant", "omega_s", self.omega_s, lo=0.0))
+        object.__setattr__(self, "dead_time", _check("Plant", "dead_time", self.dead_time,
+                                                     lo=0.0, strict_lo=False, hi=2e-5))
+        object.__setattr__(self, "device_drop", _check("Plant", "device_drop", self.device_drop,
+                                                       lo=0.0, strict_lo=False, hi=20.0))
 
 
 _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
@@ -679,6 +692,7 @@ _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
 #: the defaults (a healthy winding, the default plant physics, ideal sensors, no calibration).
 _OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
 _OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
+                    "plant": {"dead_time", "device_drop"},
                     "controller": {"velocity_feedforward", "torque_feedforward",
                                    "torque_feedforward_inertia", "speed_filter_s",
                                    "speed_reference_weight", "current_reference_filter_s",

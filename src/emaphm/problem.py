@@ -31,6 +31,8 @@ from .diagnosis import diagnose
 from .faults import K_NOMINAL, N_K, as_k, loop_report, shorted_fraction
 from .fitness import Eq4Objective
 from .params import ActuatorParams
+from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
+                       drive_model_of)
 from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_to_box,
                      to_k)
 from .traces import Trace, validate
@@ -119,10 +121,14 @@ class IdentificationProblem:
                   actuator's previous inspection), before the healthy actuator
     min_rotation  least motor rotation range the trace must show [rad]
     objective     a prebuilt objective for this trace (its settings must agree)
+    drive_model   what stands in for the drive's controller
+                  (:data:`emaphm.recorded.DRIVE_MODELS`); default the trace's best
+                  (:func:`emaphm.recorded.drive_model_of`: its recorded voltages where
+                  it has them, else the modelled controller)
     ============  ===================================================================
 
-    After construction ``params``, ``fault_model`` and ``nuisance`` hold the resolved
-    values.
+    After construction ``params``, ``fault_model``, ``nuisance`` and ``drive_model`` hold
+    the resolved values.
     """
 
     trace: Trace
@@ -134,7 +140,8 @@ class IdentificationProblem:
     search: str | None = None
     start: Any = None
     min_rotation: float = 2 * math.pi
-    objective: Eq4Objective | None = field(default=None, repr=False)
+    objective: Any = field(default=None, repr=False)
+    drive_model: str | None = None
 
     def __post_init__(self) -> None:
         if self.search is not None and self.search not in SEARCH_SPACES:
@@ -143,11 +150,22 @@ class IdentificationProblem:
         if self.start is not None:
             object.__setattr__(self, "start", as_k(self.start))
         obj = self.objective
+        drive = drive_model_of(self.trace, self.drive_model)
+        object.__setattr__(self, "drive_model", drive)
         if obj is None:
             nuisance = default_nuisance(self.params) if self.nuisance is None else tuple(self.nuisance)
             validate(self.trace, min_rotation=self.min_rotation)
-            obj = Eq4Objective.from_trace(self.trace, self.params, n_sub=self.n_sub, mode=self.mode,
-                                          fault_model=self.fault_model, nuisance=nuisance)
+            if drive == RECORDED_VOLTAGES:
+                if self.mode != "phases" or self.n_sub != 1:
+                    raise ValueError("the recorded-voltage path compares the phase currents at "
+                                     "the drive's control instants: mode 'phases', n_sub 1")
+                obj = RecordedVoltageObjective.from_trace(self.trace, self.params,
+                                                          fault_model=self.fault_model,
+                                                          nuisance=nuisance)
+            else:
+                obj = Eq4Objective.from_trace(self.trace, self.params, n_sub=self.n_sub,
+                                              mode=self.mode, fault_model=self.fault_model,
+                                              nuisance=nuisance)
         else:
             if self.nuisance is not None and tuple(self.nuisance) != obj.model.nuisance:
                 raise ValueError(f"nuisance {tuple(self.nuisance)} differs from the prebuilt "
@@ -168,6 +186,20 @@ class IdentificationProblem:
     def n_var(self) -> int:
         """Search variables: the 8 of k and one per nuisance parameter."""
         return N_K + len(self.nuisance)
+
+    @property
+    def not_observable(self) -> tuple[str, ...]:
+        """The fault modes this problem's drive path cannot see
+        (:data:`emaphm.recorded.NOT_OBSERVABLE`): their components of k stay healthy."""
+        return NOT_OBSERVABLE[self.drive_model]
+
+    def _fixed(self, K: np.ndarray) -> np.ndarray:
+        """``K`` with the components of the modes this path cannot see at their healthy
+        values (k8 at 0.5 where no position loop is modelled)."""
+        if "gain_drift" in self.not_observable:
+            K = np.array(K, dtype=float, copy=True)
+            K[..., 7] = K_NOMINAL[7]
+        return K
 
     @property
     def noise_floor(self) -> float:
@@ -213,7 +245,7 @@ class IdentificationProblem:
         """``(k, nuisance values)`` of a point ``z`` of the search space (k clipped to
         [0, 1])."""
         Z = np.atleast_2d(z)
-        k = np.clip(to_k(Z[:, :N_K], search)[0], 0.0, 1.0)
+        k = np.clip(self._fixed(to_k(Z[:, :N_K], search))[0], 0.0, 1.0)
         nu = nuisance_from_box(Z[:, N_K:], self.nuisance)[0] if self.nuisance else np.zeros(0)
         return k, nu
 
@@ -252,9 +284,16 @@ class IdentificationProblem:
             return {"fault_current_a_rms": [0.0] * 3, "fault_power_w": [0.0] * 3,
                     "fault_mmf_a_rms": [0.0] * 3, "R_f_ohm": list(params.motor.R_f)}
         model = self.objective.model
-        out = simulate_reference(params, k, model.profile, n_sub=model.n_sub,
-                                 theta0=model.theta0, fault_model="physical")
-        return loop_report(np.mean(out["f_abc"] ** 2, axis=0), params.motor.R_f,
+        if self.drive_model == RECORDED_VOLTAGES:
+            # the inverter's and the encoder's values as searched, the actuator's as given
+            drive = {n: float(v) for n, v in zip(self.nuisance, np.zeros(len(self.nuisance))
+                                                 if nu is None else nu) if n in DRIVE_NUISANCE}
+            trial = replace(self, params=params, nuisance=tuple(drive), objective=None)
+            f_abc = trial.objective.model.simulate(k, list(drive.values())).f_abc[0]
+        else:
+            f_abc = simulate_reference(params, k, model.profile, n_sub=model.n_sub,
+                                       theta0=model.theta0, fault_model="physical")["f_abc"]
+        return loop_report(np.mean(f_abc ** 2, axis=0), params.motor.R_f,
                            shorted_fraction(np.asarray(k, dtype=float)[2:5]))
 
     def model_trace(self, k: np.ndarray, nu: np.ndarray | None = None) -> Trace:
@@ -286,7 +325,7 @@ def apply_extra(params: ActuatorParams, names: tuple[str, ...], values: Any) -> 
         elif name.startswith("Rf_"):
             j = "abc".index(name[-1])
             R_f[j] = R_f[j] * 10.0 ** float(v)
-        else:
+        elif name not in DRIVE_NUISANCE:       # the inverter's and the encoder's, not the actuator's
             raise ValueError(f"unknown parameter {name!r} beside k")
     return replace(params, motor=replace(m, R=tuple(R), c0=tuple(c0), R_f=tuple(R_f)),
                    load=replace(ld, T_0=T_0))
@@ -336,9 +375,10 @@ class SearchView:
         """Search points (n, n_var) -> candidate rows ``[k, nuisance]``."""
         Z = np.atleast_2d(Z)
         names = self.problem.nuisance
+        K = self.problem._fixed(to_k(Z[:, :N_K], self.search))
         if not names:
-            return to_k(Z, self.search)
-        return np.hstack([to_k(Z[:, :N_K], self.search), nuisance_from_box(Z[:, N_K:], names)])
+            return K
+        return np.hstack([K, nuisance_from_box(Z[:, N_K:], names)])
 
     def _count(self, t0: float, n: int, bad: int) -> None:
         self.kernel_s += time.perf_counter() - t0

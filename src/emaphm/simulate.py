@@ -43,7 +43,9 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
              unit_seed: int | None = None,
              tolerances: Tolerances | None = None,
              unreported_load: float | None = None,
-             faults: Sequence[Injection | str] = ()) -> Trace:
+             faults: Sequence[Injection | str] = (),
+             drive_signals: bool = False,
+             drive: str | None = None) -> Trace:
     """Simulate the actuator with fault vector ``k`` (or a named ``scenario``).
 
     Parameters
@@ -83,9 +85,23 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         ``"short_circuit:a:0.3:0.05"``) or their :class:`~emaphm.modes.Injection`: the
         components of k they set, what they change in the plant, a faulty current sensor
         of the recording chain.
+    drive_signals
+        Reference model only: the trace also carries what the plant's drive logs
+        (:attr:`emaphm.traces.Trace.drive`): the phase voltages it applied in each control
+        period (``v_a, v_b, v_c``, star-referenced, as applied: ``voltage_delay_periods``
+        0), its current references ``i_d_ref, i_q_ref`` and its speed reference
+        ``omega_ref``, digital and exact, held over each period at the recording's
+        samples.
+    drive
+        Reference model only: the firmware the plant's drive runs: emaphm's own cascade as
+        ``params.controller`` describes it (None or ``"emaphm"``), or a drive that is not
+        emaphm's (:data:`emaphm.models.drives.FOREIGN_DRIVES`).
     """
     if model not in MODELS:
         raise ValueError(f"unknown model {model!r}; choose 'reference' or 'monitoring'")
+    if (drive_signals or drive not in (None, "emaphm")) and model != "reference":
+        raise ValueError("the drive's signals (drive_signals) and its firmware (drive) are the "
+                         "plant's: use model='reference'")
     injections = [parse_fault(f) if isinstance(f, str) else f for f in faults]
     kk, fault_model = _fault_vector(k, scenario, fault_model, injections)
     if seed is not None:
@@ -94,23 +110,32 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     profile = profile if profile is not None else diagnostic()
     sensors = sensors if sensors is not None else Sensors()
     unit = _production_unit(params, model, unit, unit_seed, tolerances, unreported_load)
-    plant = _plant_of(injections)
-    if model == "reference":
-        sensors = _faulty_sensors(sensors.with_unit(unit.sensor_gain, unit.sensor_offset),
-                                  injections)
-        plant_params = plant(unit.params)
-        out = run_reference(plant_params, kk, profile, fault_model=fault_model,
-                            n_sub=n_sub or 128, pwm=pwm, extra_load=unit.load + unit.params.load.T_0)
-        status = "tripped" if out["trip_time"] is not None else "ok"
-    else:
-        sensors = _faulty_sensors(sensors, injections)
-        out, status = _run_monitoring(plant(params), profile, kk, n_sub or 1, fault_model)
+    out, status, sensors, plant_params = _run_model(model, params, unit, injections, sensors, kk,
+                                                    profile, fault_model, n_sub, pwm, drive)
     rng = np.random.default_rng(seed) if seed is not None else None
     t_rec, rec = sensors.record(out["t"], {k: out[k] for k in ("theta_ref", "theta_m", "omega_m",
                                                                 "i_abc", "torque")}, rng)
+    meta = _metadata(model, kk, fault_model, scenario, params, profile, seed, sensors, n_sub, pwm,
+                     status, faults, drive)
+    if model == "reference":
+        meta["unit"] = unit.to_dict()
+        meta["plant"] = _plant_report(out, plant_params, kk, fault_model)
+    log = {}
+    if drive_signals:
+        log = _drive_log(out["t"], out["drive"], t_rec)
+        meta["voltage_delay_periods"] = 0
+    return Trace(t=t_rec, theta_ref=rec["theta_ref"], theta_m=rec["theta_m"], omega_m=rec["omega_m"],
+                 i_abc=rec["i_abc"], torque=rec["torque"], meta=meta, drive=log)
+
+
+def _metadata(model: str, k: np.ndarray, fault_model: str, scenario: str | None,
+              params: ActuatorParams, profile: Profile, seed: int | None, sensors: Sensors,
+              n_sub: int | None, pwm: bool, status: str, faults: Sequence[Any],
+              drive: str | None) -> dict[str, Any]:
+    """A simulated trace's metadata: how it was made."""
     meta = {
         "model": model,
-        "k": kk.tolist(),
+        "k": k.tolist(),
         "fault_model": fault_model,
         "scenario": scenario,
         "parameters": params.to_dict(),
@@ -122,13 +147,42 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         "drive": status,
         "emaphm_version": __version__,
     }
+    if drive not in (None, "emaphm"):
+        meta["firmware"] = drive
     if faults:
         meta["faults"] = [f if isinstance(f, str) else repr(f) for f in faults]
+    return meta
+
+
+#: The columns of the plant's drive log (:func:`emaphm.models.reference.run_reference`).
+_DRIVE_LOG = ("v_a", "v_b", "v_c", "i_d_ref", "i_q_ref", "omega_ref")
+
+
+def _drive_log(t: np.ndarray, log: np.ndarray, t_rec: np.ndarray) -> dict[str, np.ndarray]:
+    """The drive's log at the recording's samples ``t_rec``: each period's values held
+    (a command is not interpolated between control instants)."""
+    idx = np.clip(np.searchsorted(t, t_rec + 1e-9 * (t[1] - t[0]), side="right") - 1, 0,
+                  t.size - 1)
+    return {name: np.ascontiguousarray(log[idx, j]) for j, name in enumerate(_DRIVE_LOG)}
+
+
+def _run_model(model: str, params: ActuatorParams, unit: Unit, injections: Sequence[Injection],
+               sensors: Sensors, k: np.ndarray, profile: Profile, fault_model: str,
+               n_sub: int | None, pwm: bool, drive: str | None):
+    """``(signals, drive status, the recording chain, the plant's parameters)`` of one
+    simulation: the plant (a production unit, the injections' changes, its drive's
+    firmware) or the monitoring model."""
+    plant = _plant_of(injections)
     if model == "reference":
-        meta["unit"] = unit.to_dict()
-        meta["plant"] = _plant_report(out, plant_params, kk, fault_model)
-    return Trace(t=t_rec, theta_ref=rec["theta_ref"], theta_m=rec["theta_m"], omega_m=rec["omega_m"],
-                 i_abc=rec["i_abc"], torque=rec["torque"], meta=meta)
+        sensors = _faulty_sensors(sensors.with_unit(unit.sensor_gain, unit.sensor_offset),
+                                  injections)
+        plant_params = plant(unit.params)
+        out = run_reference(plant_params, k, profile, fault_model=fault_model,
+                            n_sub=n_sub or 128, pwm=pwm, extra_load=unit.load + unit.params.load.T_0,
+                            drive=None if drive == "emaphm" else drive)
+        return out, ("tripped" if out["trip_time"] is not None else "ok"), sensors, plant_params
+    out, status = _run_monitoring(plant(params), profile, k, n_sub or 1, fault_model)
+    return out, status, _faulty_sensors(sensors, injections), None
 
 
 def _fault_vector(k: Any, scenario: str | None, fault_model: str | None,

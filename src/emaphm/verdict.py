@@ -102,7 +102,8 @@ def _problem_of(trace: Trace | IdentificationProblem, ident: Any,
         nuisance=tuple(getattr(ident, "nuisance", {}) or ()),
         n_sub=int(config.n_sub if config is not None else opts.get("n_sub", 1)),
         mode=str(config.mode if config is not None else opts.get("mode", "phases")),
-        min_rotation=config.min_rotation if config is not None else 2 * np.pi)
+        min_rotation=config.min_rotation if config is not None else 2 * np.pi,
+        drive_model=getattr(ident, "drive_model", None))
 
 
 def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis, seed: int,

@@ -118,15 +118,15 @@ def _drive(**options):
 
 def test_control_step_known_answers():
     # at rest on target: no voltage, no torque
-    assert _control()[:4] == (0.0, 0.0, 0.0, 0.0)
+    assert _control()[:3] == (0.0, 0.0, 0.0) and _control()[3] == (0.0, 0.0, 0.0)
     # position error e -> omega_ref = Kp e -> T_ref = Kp_w Kp e (below every limit)
     e = 0.01
-    v_a, v_b, v_c, T_ref, *_ = _control(refs=(e, e, e))
+    v_a, v_b, v_c, (_, T_ref, _), _ = _control(refs=(e, e, e))
     assert T_ref == pytest.approx(PARAMS.controller.Kp_w * PARAMS.controller.Kp * e)
     assert v_a + v_b + v_c == pytest.approx(0.0, abs=1e-9)
     # a large error saturates the torque at T_max
-    assert _control(refs=(100.0,) * 3)[3] == PARAMS.motor.T_max
-    assert _control(refs=(-100.0,) * 3)[3] == -PARAMS.motor.T_max
+    assert _control(refs=(100.0,) * 3)[3][1] == PARAMS.motor.T_max
+    assert _control(refs=(-100.0,) * 3)[3][1] == -PARAMS.motor.T_max
     # back-EMF feed-forward on q: at speed with no error the q voltage is c0*omega
     w = 50.0
     r = w / PARAMS.controller.Kp
@@ -159,16 +159,16 @@ def test_feedforward_terms_known_answers():
     drive = _drive(velocity_feedforward=1.0, Kp_w=1e-6, Ki_w=0.0)
     # on the ramp at the command's speed with no error: the speed reference is the ramp's
     base = _control(drive, refs=ramp, theta_m=ramp[0], omega_m=w)
-    assert base[3] == pytest.approx(0.0, abs=1e-9)   # omega_ref = omega: no torque asked
+    assert base[3][1] == pytest.approx(0.0, abs=1e-9)   # omega_ref = omega: no torque asked
     no_ff = _control(_drive(Kp_w=1e-6, Ki_w=0.0), refs=ramp, theta_m=ramp[0], omega_m=w)
-    assert no_ff[3] == pytest.approx(-1e-6 * w)       # without it, omega_ref = 0
+    assert no_ff[3][1] == pytest.approx(-1e-6 * w)       # without it, omega_ref = 0
     a = 500.0                                         # rad/s^2 of a parabola
     para = (0.5 * a * (2 * T_S) ** 2, 0.5 * a * T_S ** 2, 0.0)
     J = PARAMS.motor.J_m + PARAMS.load.J_l
     T = _control(_drive(torque_feedforward=1.0, Kp=1e-9, Kp_w=1e-9, Ki_w=0.0), refs=para)
-    assert T[3] == pytest.approx(J * a, rel=1e-9)
+    assert T[3][1] == pytest.approx(J * a, rel=1e-9)
     assert T[4][1] == 0.0                             # outside the speed PI's integral
-    big = _control(_drive(torque_feedforward=2.0), refs=(1.0, 0.0, 0.0))[3]
+    big = _control(_drive(torque_feedforward=2.0), refs=(1.0, 0.0, 0.0))[3][1]
     assert big == PARAMS.motor.T_max                  # saturated at the torque limit
 
 
@@ -179,7 +179,7 @@ def test_speed_filter_delay_and_weight_known_answers():
     out = _control(drive, omega_m=10.0)
     assert out[4][4] == pytest.approx(a * 10.0)      # omega_f moves a of the way
     # the filtered speed feeds the speed PI: at rest on target, T_ref = -Kp_w omega_f
-    assert out[3] == pytest.approx(-PARAMS.controller.Kp_w * a * 10.0, rel=1e-9)
+    assert out[3][1] == pytest.approx(-PARAMS.controller.Kp_w * a * 10.0, rel=1e-9)
     # a period of delay: the voltages of the period before are applied, this period's kept
     state = (0.0,) * 6 + (1.0, 2.0, -3.0)
     late = _control(_drive(delay_periods=1), refs=(0.01,) * 3, state=state)
@@ -188,7 +188,7 @@ def test_speed_filter_delay_and_weight_known_answers():
     assert late[4][6:] == pytest.approx(now[:3], rel=1e-12)
     # 2-DOF: the proportional part acts on b omega_ref, the integral on the full error
     e = 0.001
-    b = _control(_drive(speed_reference_weight=0.25, Ki_w=0.0), refs=(e,) * 3)[3]
+    b = _control(_drive(speed_reference_weight=0.25, Ki_w=0.0), refs=(e,) * 3)[3][1]
     assert b == pytest.approx(0.25 * PARAMS.controller.Kp_w * PARAMS.controller.Kp * e)
 
 

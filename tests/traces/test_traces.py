@@ -107,9 +107,13 @@ def write_bench_csv(path: Path, columns: dict[str, np.ndarray], *, delimiter: st
 
 def test_constants_describe_si_columns():
     assert COLUMNS == ("t", "theta_ref", "theta_m", "omega_m", "i_a", "i_b", "i_c")
-    assert OPTIONAL_COLUMNS == ("torque",)
+    assert OPTIONAL_COLUMNS == ("torque", "v_a", "v_b", "v_c", "v_d", "v_q", "d_a", "d_b", "d_c",
+                                "v_dc", "i_d_ref", "i_q_ref", "omega_ref")
     assert UNITS == {"t": "s", "theta_ref": "rad", "theta_m": "rad", "omega_m": "rad/s",
-                     "i_a": "A", "i_b": "A", "i_c": "A", "torque": "N m"}
+                     "i_a": "A", "i_b": "A", "i_c": "A", "torque": "N m",
+                     "v_a": "V", "v_b": "V", "v_c": "V", "v_d": "V", "v_q": "V",
+                     "d_a": "1", "d_b": "1", "d_c": "1", "v_dc": "V", "i_d_ref": "A",
+                     "i_q_ref": "A", "omega_ref": "rad/s"}
 
 
 def test_properties(trace):

@@ -180,8 +180,10 @@ def control_step(refs, theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e, state, Kp,
     terms (:func:`feedforward`); ``sin_e, cos_e``:
     sine and cosine of the electrical angle ``p*theta_m``; ``state`` (:data:`STATE_FIELDS`),
     ``Kp`` the position gain [1/s] (k8 drifts it), ``ctl`` the settings
-    (:data:`CTL_FIELDS`). Returns ``(v_a, v_b, v_c, T_ref, state)``: the phase voltage
-    references applied in this period [V], the torque reference [N m] and the new state.
+    (:data:`CTL_FIELDS`). Returns ``(v_a, v_b, v_c, refs, state)``: the phase voltage
+    references applied in this period [V], the references ``(omega_ref, T_ref, i_q_ref)``
+    [rad/s, N m, A] (the speed reference into the speed PI, the torque reference, the
+    q-current reference into the current loop: what a drive logs) and the new state.
     """
     int_e, int_w, int_d, int_q, w_f, iq_f, va1, vb1, vc1 = state
     ref, w_ff, T_ff = refs
@@ -215,4 +217,4 @@ def control_step(refs, theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e, state, Kp,
     v_a, v_b, v_c = inv_clarke(v_al, v_be)
     delay = ctl[CTL_DELAY]
     return (_applied(v_a, va1, delay), _applied(v_b, vb1, delay), _applied(v_c, vc1, delay),
-            T_ref, (int_e, int_w, int_d, int_q, w_f, iq_f, v_a, v_b, v_c))
+            (w_ref, T_ref, iq_f), (int_e, int_w, int_d, int_q, w_f, iq_f, v_a, v_b, v_c))

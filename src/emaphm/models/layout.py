@@ -67,7 +67,13 @@ C_GAMMA_END = C_GAMMA + N_Z * N_Z
 #: load ``Load.T_0``, plus the ``"load"`` nuisance (read by the monitoring model's kernels;
 #: the reference plant takes its whole load from ``run_reference(extra_load=)``)
 C_T0 = C_GAMMA + N_Z * N_Z
-N_CP = C_T0 + 1
+#: what only the recorded-voltage model reads (:mod:`emaphm.models.driven`): the voltage
+#: [V] a leg loses to the inverter's dead time and device drops, and the offset [rad,
+#: mechanical] of the encoder's zero from the magnet's axis (the ``"V_dt"`` and
+#: ``"angle"`` nuisance; zero as packed)
+C_V_DT = C_T0 + 1
+C_DELTA = C_T0 + 2
+N_CP = C_T0 + 3
 
 
 #: Shorted fraction [-] below which a phase has no fault loop. Such a loop (inductance
@@ -214,6 +220,8 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     row[C_PHI:C_GAMMA], row[C_GAMMA:C_T0] = _one_winding(
         tuple(m.R), tuple(m.L), float(sigma), tuple(m.mu), tuple(m.R_f), float(P[P_DT]))
     row[C_T0] = params.load.T_0
+    row[C_V_DT] = 0.0
+    row[C_DELTA] = 0.0
     return P, row[None, :]
 
 
@@ -256,7 +264,10 @@ class Nuisance:
 #: :data:`emaphm.units.DEFAULT_TOLERANCES`), and each phase's fault-bridge resistance as a
 #: decade ratio to ``Motor.R_f`` (``"Rf_a"``, ``"Rf_b"``, ``"Rf_c"``: ``R_f x 10**value``
 #: from 0.03x to 10x; it changes the winding step of a shorted phase only,
-#: :mod:`emaphm.modes.short_circuit`).
+#: :mod:`emaphm.modes.short_circuit`). Read on the recorded-voltage path only
+#: (:mod:`emaphm.models.driven`): the voltage a leg loses to the inverter's dead time and its
+#: devices' drops (``"V_dt"``, V, the same on every leg, opposing its current) and the
+#: offset of the encoder's zero from the magnet's axis (``"angle"``, electrical radians).
 NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("R", -0.1, 0.3, "relative", "winding resistance"),
     Nuisance("flux", -0.06, 0.06, "relative", "magnet flux"),
@@ -265,6 +276,8 @@ NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("Rf_a", -1.5, 1.0, "decades", "fault resistance of phase A"),
     Nuisance("Rf_b", -1.5, 1.0, "decades", "fault resistance of phase B"),
     Nuisance("Rf_c", -1.5, 1.0, "decades", "fault resistance of phase C"),
+    Nuisance("V_dt", 0.0, 30.0, "V", "inverter dead time and device drops"),
+    Nuisance("angle", -0.2, 0.2, "rad (electrical)", "encoder offset"),
 )}
 #: Their names.
 NUISANCE = tuple(NUISANCE_PARAMETERS)
@@ -335,6 +348,12 @@ class PopulationPacker:
         for j, name in enumerate(nuisance):
             if name == "load":
                 CP[:, C_T0] += NU[:, j]
+                continue
+            if name == "V_dt":
+                CP[:, C_V_DT] += NU[:, j]
+                continue
+            if name == "angle":
+                CP[:, C_DELTA] += NU[:, j] / self.nominal.motor.p
                 continue
             if name.startswith("Rf_"):
                 if R_f is None:

@@ -69,6 +69,7 @@ from ..params import ActuatorParams, Motor
 from ..profiles import Profile
 from ._jit import jit
 from .controller import N_CTL, N_STATE, control_step, feedforward
+from .drives import N_FOREIGN_STATE, kind_of, settings as foreign_settings, step as foreign_step
 from .inverter import modulate, on_fraction, overcurrent, triangle
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_R_A, P_C_L, P_C_M, P_CTL, P_J_L, P_J_M, P_POLES, P_I_TRIP, P_T_S,
@@ -146,13 +147,22 @@ def electrical_step(motor: Motor, h: float, fault_model: str = "paper") -> Elect
 
 
 @jit
+def _sign(x):
+    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else 0.0)
+
+
+@jit
 def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, n_sub, pwm,
                mm_mechanics, out_i, out_f, out_ripple, out_theta, out_omega, out_torque, out_energy,
-               trip_index):
+               out_drive, trip_index, kind, foreign):
     """One actuator over ``theta_ref.shape[0]`` control periods at step ``T_s/n_sub``.
 
-    ``plant = [omega_s, K_c, D_c]``; ``A, B_v, G, L_r`` from :func:`electrical_step`
+    ``plant = [omega_s, K_c, D_c, V_lost]`` (``V_lost`` [V]: what a leg loses to dead
+    time and device drops, against the sign of its current at the sub-step's start);
+    ``A, B_v, G, L_r`` from :func:`electrical_step`
     at that step, ``loops`` the phases with a fault loop, ``mu, R_f`` per phase.
+    ``kind``: the drive's firmware (:data:`emaphm.models.drives.DRIVE_KINDS`; 0 emaphm's
+    own, run on ``P``'s settings; else a foreign drive on its settings ``foreign``).
     ``mm_mechanics`` swaps the plant mechanics for the monitoring model's
     (:func:`emaphm.models.mechanics.transmission_step` with ``P``'s contact; for
     comparisons only).
@@ -160,8 +170,10 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
     over the sub-step ends of control period ``k`` (the PWM ripple the samples miss).
     ``out_energy (n, 4)`` receives cumulative [input, copper and fault-loop
     loss, air-gap (T_m * omega_m), stored magnetic] energies in J at each
-    sample; ``trip_index[0]`` the sample at which the drive tripped on
-    overcurrent (-1: never).
+    sample; ``out_drive (n, 6)`` what the drive logs each period: the phase voltage
+    references it applies [V] (star-referenced), ``i_d_ref`` (0), ``i_q_ref`` [A] and
+    ``omega_ref`` [rad/s] (zero once tripped); ``trip_index[0]`` the sample at which the
+    drive tripped on overcurrent (-1: never).
     """
     n = theta_ref.shape[0]
     nz = A.shape[0]
@@ -171,7 +183,7 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
     dt = T_s / n_sub
     V_dc = P[P_V_DC]
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
-    omega_s, K_c, D_c = plant[0], plant[1], plant[2]
+    omega_s, K_c, D_c, V_lost = plant[0], plant[1], plant[2], plant[3]
     R_a, R_b, R_c = cp[C_R_A], cp[C_R_A + 1], cp[C_R_A + 2]
     mu_a, mu_b, mu_c = mu[0], mu[1], mu[2]
     thm = P[P_THETA0]
@@ -189,6 +201,8 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
     ic = 0.0
     ctl = _read_ctl(P, P_CTL)
     cs = _read_state(np.zeros(N_STATE), 0)         # the drive's state, at rest
+    fst = np.zeros(N_FOREIGN_STATE)                # a foreign drive's
+    fst[0] = thm
     E_in = 0.0
     E_loss = 0.0
     E_ag = 0.0
@@ -223,11 +237,25 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
             trip_index[0] = k
         if tripped:                    # active short circuit, controller stopped
             d_a = d_b = d_c = 0.0
+            for j in range(6):
+                out_drive[k, j] = 0.0
         else:
-            v_a, v_b, v_c, T_ref, cs = control_step(
-                feedforward(theta_ref[k], theta_ref[max(k - 1, 0)], theta_ref[max(k - 2, 0)], ctl),
-                thm, wm, ia, ib, ic, s_e, c_e, cs, cp[C_KP], ctl)
+            if kind == 0:
+                v_a, v_b, v_c, refs, cs = control_step(
+                    feedforward(theta_ref[k], theta_ref[max(k - 1, 0)], theta_ref[max(k - 2, 0)],
+                                ctl), thm, wm, ia, ib, ic, s_e, c_e, cs, cp[C_KP], ctl)
+                w_ref, i_q_ref = refs[0], refs[2]
+            else:
+                v_a, v_b, v_c, w_ref, _, i_q_ref = foreign_step(
+                    kind, (theta_ref[k], theta_ref[max(k - 1, 0)]), thm, wm, ia, ib, ic, s_e, c_e,
+                    fst, foreign)
             d_a, d_b, d_c = modulate(v_a, v_b, v_c, V_dc)
+            out_drive[k, 0] = v_a
+            out_drive[k, 1] = v_b
+            out_drive[k, 2] = v_c
+            out_drive[k, 3] = 0.0
+            out_drive[k, 4] = i_q_ref
+            out_drive[k, 5] = w_ref
         for j in range(3):
             f_sum[j] = 0.0
             f_sq[j] = 0.0
@@ -247,6 +275,10 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
                 va = V_dc * d_a
                 vb = V_dc * d_b
                 vc = V_dc * d_c
+            if V_lost > 0.0 and not tripped:    # dead time and device drops, against i
+                va -= V_lost * _sign(ia)
+                vb -= V_lost * _sign(ib)
+                vc -= V_lost * _sign(ic)
             ea = ca * wm
             eb = cb * wm
             ec = cc * wm
@@ -299,38 +331,44 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
 
 
 def _run(params: ActuatorParams, k, profile: Profile, *, fault_model: str, n_sub: int, pwm: bool,
-         extra_load: float, mm_mechanics: bool) -> dict:
+         extra_load: float, mm_mechanics: bool, drive: str | None = None) -> dict:
     if isinstance(n_sub, bool) or not isinstance(n_sub, int) or n_sub < 2 or n_sub % 2:
         raise ValueError(f"reference model n_sub must be an even integer >= 2 (sub-steps per "
                          f"PWM period, so that none straddles the carrier peak), got {n_sub!r}")
     if isinstance(extra_load, bool) or not isinstance(extra_load, (int, float, np.floating)) \
             or not math.isfinite(extra_load):
         raise ValueError(f"extra_load [N m] must be a finite number, got {extra_load!r}")
+    kind = kind_of(drive)
+    # a foreign drive's settings are the healthy actuator's data sheet, as its commissioning
+    foreign = foreign_settings(params)
     faulty = apply_faults(params, as_k(k), fault_model)
     P, CP = pack(faulty, fault_model=fault_model, n_sub=n_sub)
     T_s = params.inverter.T_s
     el = electrical_step(faulty.motor, T_s / n_sub, fault_model)
     pl = faulty.plant
     tr = faulty.transmission
-    plant = np.array([pl.omega_s, tr.K_c, tr.D_c])
+    plant = np.array([pl.omega_s, tr.K_c, tr.D_c, pl.dead_time * params.inverter.V_dc / T_s
+                      + pl.device_drop])
     t = profile.grid(T_s)
     ref = np.ascontiguousarray(profile.theta_ref(t))
     load = np.ascontiguousarray(profile.load_torque(t) + float(extra_load))
     n = t.size
     out = {"i_abc": np.zeros((n, 3)), "i_fault": np.zeros((n, 3)),
            "i_fault_ripple": np.zeros((n, 3)), "theta_m": np.zeros(n),
-           "omega_m": np.zeros(n), "torque": np.zeros(n), "energy": np.zeros((n, 4))}
+           "omega_m": np.zeros(n), "torque": np.zeros(n), "energy": np.zeros((n, 4)),
+           "drive": np.zeros((n, 6))}
     trip = np.full(1, -1, dtype=np.int64)
     _rm_kernel(P, CP[0], plant, el.A, el.B_v, el.G, el.L_r, el.loops, el.mu, el.R_f, ref, load,
                n_sub, bool(pwm), bool(mm_mechanics), out["i_abc"], out["i_fault"], out["i_fault_ripple"],
-               out["theta_m"], out["omega_m"], out["torque"], out["energy"], trip)
+               out["theta_m"], out["omega_m"], out["torque"], out["energy"], out["drive"], trip,
+               kind, foreign)
     out.update(t=t, theta_ref=ref, trip_time=None if trip[0] < 0 else float(t[trip[0]]))
     return out
 
 
 def run_reference(params: ActuatorParams, k, profile: Profile, *, fault_model: str = "paper",
-                  n_sub: int = 128, pwm: bool = True,
-                  extra_load: float = 0.0) -> dict[str, np.ndarray]:
+                  n_sub: int = 128, pwm: bool = True, extra_load: float = 0.0,
+                  drive: str | None = None) -> dict[str, np.ndarray]:
     """Simulate the faulty plant ``apply_faults(params, k, fault_model)`` with ideal sensors.
 
     ``n_sub`` even sub-steps per control period; ``pwm`` switching (True) or
@@ -343,8 +381,14 @@ def run_reference(params: ActuatorParams, k, profile: Profile, *, fault_model: s
     that starts at the sample: the PWM ripple the samples miss), ``torque`` (air-gap,
     fault loops included), ``energy (n, 4)`` (cumulative input, copper and
     fault-loop loss, air-gap work, and the stored magnetic energy, J) sampled at
-    the control instants ``k*T_s``, and ``trip_time`` [s] when the drive tripped
-    on overcurrent (None if never).
+    the control instants ``k*T_s``, ``drive (n, 6)`` (what the drive logs each period:
+    the phase voltage references it applies, star-referenced [V], ``i_d_ref`` [A, 0],
+    ``i_q_ref`` [A] and ``omega_ref`` [rad/s]), and ``trip_time`` [s] when the drive
+    tripped on overcurrent (None if never). ``params.plant.dead_time`` and
+    ``device_drop`` take their voltage off each leg against its current's sign.
+    ``drive``: the firmware the plant's drive runs, emaphm's own (None, ``"emaphm"``: the
+    cascade ``params.controller`` describes) or a foreign one of
+    :data:`emaphm.models.drives.FOREIGN_DRIVES`, set up from ``params``' data sheet.
     """
     return _run(params, k, profile, fault_model=fault_model, n_sub=n_sub, pwm=pwm,
-                extra_load=extra_load, mm_mechanics=False)
+                extra_load=extra_load, mm_mechanics=False, drive=drive)

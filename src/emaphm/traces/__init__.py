@@ -21,6 +21,14 @@ i_c         A        phase current c
 torque      N m      motor torque T_m (optional, simulations only)
 ==========  =======  ===========================================
 
+and, optionally, what the drive logs (:data:`DRIVE_COLUMNS`, :attr:`Trace.drive`): the
+phase voltages commanded for each control period ``v_a, v_b, v_c`` [V, star-referenced]
+or ``v_d, v_q`` [V, the dq frame], or the legs' duty cycles ``d_a, d_b, d_c`` [1] with
+the DC link ``v_dc`` [V]; the current references ``i_d_ref, i_q_ref`` [A]; the speed
+reference ``omega_ref`` [rad/s]. The metadata key ``voltage_delay_periods`` (0 or 1,
+default 0) says whether a logged command was applied in the period it was logged in or in
+the next (:mod:`emaphm.drive`).
+
 File formats (chosen by suffix, see :func:`write_trace` / :func:`read_trace`):
 
 * ``.csv``: first line ``# emaphm-trace 1 {json metadata}``, then a header row with the
@@ -40,8 +48,8 @@ Writes are atomic: the file is written to a temporary sibling and moved over the
 with :func:`os.replace`, so a failure never leaves a half-written file.
 """
 
-from .container import (COLUMNS, OPTIONAL_COLUMNS, UNITS, Trace, TraceError, TraceWarning,
-                        fingerprint, resample)
+from .container import (COLUMNS, DRIVE_COLUMNS, DRIVE_GROUPS, OPTIONAL_COLUMNS, UNITS, Trace,
+                        TraceError, TraceWarning, fingerprint, resample)
 from .files import SUFFIXES, read_trace, write_trace
 from .limits import MAX_FILE_BYTES, MAX_SAMPLES
 from .metadata import FORMAT_VERSION
@@ -50,6 +58,8 @@ from .validation import MIN_SAMPLES, validate
 __all__ = [
     "COLUMNS",
     "OPTIONAL_COLUMNS",
+    "DRIVE_COLUMNS",
+    "DRIVE_GROUPS",
     "UNITS",
     "MIN_SAMPLES",
     "MAX_SAMPLES",

@@ -16,10 +16,23 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["COLUMNS", "OPTIONAL_COLUMNS", "UNITS", "TraceError", "Trace", "resample", "fingerprint"]
+__all__ = ["COLUMNS", "OPTIONAL_COLUMNS", "DRIVE_COLUMNS", "DRIVE_GROUPS", "UNITS", "TraceError",
+           "Trace", "resample", "fingerprint"]
 
 COLUMNS: tuple[str, ...] = ("t", "theta_ref", "theta_m", "omega_m", "i_a", "i_b", "i_c")
-OPTIONAL_COLUMNS: tuple[str, ...] = ("torque",)
+#: What drives log, each optional: the phase voltages commanded for each control period
+#: (star-referenced, ``v_a, v_b, v_c``), or the same in the dq frame (``v_d, v_q``: d along
+#: the magnet's flux, amplitude invariant, :mod:`emaphm.models.inverter`), or the legs'
+#: duty cycles ``d_a, d_b, d_c`` with the DC link ``v_dc``; the current references
+#: ``i_d_ref, i_q_ref`` and the speed reference ``omega_ref``.
+DRIVE_COLUMNS: tuple[str, ...] = ("v_a", "v_b", "v_c", "v_d", "v_q", "d_a", "d_b", "d_c", "v_dc",
+                                  "i_d_ref", "i_q_ref", "omega_ref")
+#: The drive signals that only come together: each group whole or not at all (``v_dc``
+#: may come alone, ``i_d_ref`` only with ``i_q_ref``).
+DRIVE_GROUPS: dict[str, tuple[str, ...]] = {
+    "phase voltages": ("v_a", "v_b", "v_c"), "dq voltages": ("v_d", "v_q"),
+    "duty cycles": ("d_a", "d_b", "d_c", "v_dc")}
+OPTIONAL_COLUMNS: tuple[str, ...] = ("torque",) + DRIVE_COLUMNS
 UNITS: dict[str, str] = {
     "t": "s",
     "theta_ref": "rad",
@@ -29,6 +42,12 @@ UNITS: dict[str, str] = {
     "i_b": "A",
     "i_c": "A",
     "torque": "N m",
+    **{f"v_{x}": "V" for x in "abcdq"},
+    **{f"d_{x}": "1" for x in "abc"},
+    "v_dc": "V",
+    "i_d_ref": "A",
+    "i_q_ref": "A",
+    "omega_ref": "rad/s",
 }
 
 
@@ -158,6 +177,9 @@ class Trace:
     i_abc        (n, 3)    A        phase currents a, b, c
     torque       (n,)      N m      motor torque T_m, or None (measured traces)
     meta         dict               JSON metadata, see below
+    drive        dict               the drive's own signals, by name (each (n,)):
+                                    :data:`DRIVE_COLUMNS`, any of them, each group
+                                    of :data:`DRIVE_GROUPS` whole; empty if none
     ===========  ========  =======  ==============================================
 
     Arrays are copied to float64 and made read-only (an input that already is a read-only
@@ -182,6 +204,7 @@ class Trace:
     i_abc: np.ndarray
     torque: np.ndarray | None = None
     meta: dict = field(default_factory=dict)
+    drive: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         for name in _FIELDS_1D:
@@ -209,6 +232,7 @@ class Trace:
                     "torque sampled on t, or None"
                 )
             object.__setattr__(self, "torque", torque)
+        object.__setattr__(self, "drive", _drive_signals(self.drive, n))
         if not isinstance(self.meta, Mapping):
             raise TraceError(
                 f"Trace.meta is a {type(self.meta).__name__}, expected a dict; pass e.g. "
@@ -253,18 +277,20 @@ class Trace:
 
     # -------------------------------------------------------------------------- helpers
     def columns(self) -> dict[str, np.ndarray]:
-        """The signals as 1-D read-only arrays: :data:`COLUMNS` order, then ``torque`` if set."""
+        """The signals as 1-D read-only arrays: :data:`COLUMNS` order, then ``torque`` if set,
+        then the drive's signals in :data:`DRIVE_COLUMNS` order."""
         cols = {name: getattr(self, name) for name in COLUMNS}
         if self.torque is not None:
             cols["torque"] = self.torque
+        cols.update((name, self.drive[name]) for name in DRIVE_COLUMNS if name in self.drive)
         return cols
 
     @classmethod
     def from_columns(cls, columns: Mapping[str, Any], meta: Mapping | None = None) -> Trace:
         """Build a trace from a mapping of column name -> 1-D array.
 
-        Needs every name of :data:`COLUMNS`; ``torque`` is used when present; other keys
-        are ignored.
+        Needs every name of :data:`COLUMNS`; ``torque`` and the drive's signals
+        (:data:`DRIVE_COLUMNS`) are used when present; other keys are ignored.
         """
         _require_columns(columns.keys())
         try:
@@ -289,20 +315,18 @@ class Trace:
             i_abc=i_abc,
             torque=columns.get("torque"),
             meta=dict(meta) if meta is not None else {},
+            drive={name: columns[name] for name in DRIVE_COLUMNS if name in columns},
         )
 
     def to_pandas(self):
         """The signals as a pandas DataFrame, one column per quantity (``t``, ``theta_ref``,
-        ``theta_m``, ``omega_m``, ``i_a``, ``i_b``, ``i_c``, and ``torque`` if set, SI
-        units), the metadata in ``df.attrs["emaphm"]``. Needs pandas
+        ``theta_m``, ``omega_m``, ``i_a``, ``i_b``, ``i_c``, and ``torque`` and the drive's
+        signals if set, SI units), the metadata in ``df.attrs["emaphm"]``. Needs pandas
         (``pip install 'emaphm[pandas]'``)."""
         from ..frames import require_pandas
 
         pd = require_pandas("Trace.to_pandas()")
-        cols = {name: getattr(self, name) for name in ("t", "theta_ref", "theta_m", "omega_m")}
-        cols.update(i_a=self.i_a, i_b=self.i_b, i_c=self.i_c)
-        if self.torque is not None:
-            cols["torque"] = self.torque
+        cols = self.columns()
         df = pd.DataFrame({k: np.array(v) for k, v in cols.items()})
         df.attrs["emaphm"] = json.loads(json.dumps(self.meta))
         return df
@@ -332,7 +356,9 @@ class Trace:
     def __eq__(self, other: object) -> bool:
         if not isinstance(other, Trace):
             return NotImplemented
-        if (self.torque is None) != (other.torque is None):
+        if (self.torque is None) != (other.torque is None) or set(self.drive) != set(other.drive):
+            return False
+        if not all(_bitwise_equal(a, other.drive[name]) for name, a in self.drive.items()):
             return False
         names = ("t", "theta_ref", "theta_m", "omega_m", "i_abc", "torque")
         for name in names:
@@ -347,10 +373,44 @@ class Trace:
 
     def __repr__(self) -> str:
         torque = "yes" if self.torque is not None else "no"
+        drive = f", drive={list(self.drive)}" if self.drive else ""
         return (
             f"Trace(n={self.n}, dt={self.dt:.6g} s, duration={self.duration:.6g} s, "
-            f"torque={torque}, meta keys={sorted(self.meta)})"
+            f"torque={torque}{drive}, meta keys={sorted(self.meta)})"
         )
+
+
+def _drive_signals(drive: Any, n: int) -> dict[str, np.ndarray]:
+    """The drive's signals of a trace of ``n`` samples, checked: known names, (n,) each,
+    every group of :data:`DRIVE_GROUPS` whole."""
+    if drive is None:
+        return {}
+    if not isinstance(drive, Mapping):
+        raise TraceError(f"Trace.drive is a {type(drive).__name__}, expected a dict of the "
+                         f"drive's signals by name ({', '.join(DRIVE_COLUMNS)})")
+    unknown = sorted(set(drive) - set(DRIVE_COLUMNS))
+    if unknown:
+        raise TraceError(f"Trace.drive has unknown signal(s) {unknown}; a drive's signals are "
+                         f"{', '.join(DRIVE_COLUMNS)} (SI units)")
+    out = {}
+    for name in DRIVE_COLUMNS:
+        if name in drive and drive[name] is not None:
+            arr = _as_readonly(name, drive[name], 1)
+            if arr.shape != (n,):
+                raise TraceError(f"Trace.drive['{name}'] has {arr.shape[0]} samples but t has "
+                                 f"{n}; a drive signal is sampled on t")
+            out[name] = arr
+    for group, names in DRIVE_GROUPS.items():
+        have = [x for x in names if x in out]
+        if have and len(have) < len(names) and have != ["v_dc"]:
+            missing = [x for x in names if x not in out]
+            raise TraceError(f"the drive's {group} come together ({', '.join(names)}); the "
+                             f"trace has {', '.join(have)} without {', '.join(missing)}: give "
+                             "the whole group, or none of it")
+    if "i_d_ref" in out and "i_q_ref" not in out:
+        raise TraceError("the drive's current references: i_d_ref without i_q_ref; give i_q_ref "
+                         "(i_d_ref is 0 when left out)")
+    return out
 
 
 def _bitwise_equal(a: np.ndarray, b: np.ndarray) -> bool:
@@ -382,10 +442,15 @@ def fingerprint(trace: Any) -> str:
     """SHA-256 (hex) of a trace's signals (t, theta_ref, theta_m, omega_m, i_abc) as
     little-endian float64: the same signals give the same fingerprint whatever the file
     format they were stored in (the health history recognises a trace it has seen by it;
-    a calibration records those of its sources)."""
+    a calibration records those of its sources); the drive's signals, where a trace has
+    them, after the rest."""
     h = hashlib.sha256(b"emaphm-trace-v1")
-    for name in ("t", "theta_ref", "theta_m", "omega_m", "i_abc"):
-        a = np.ascontiguousarray(np.asarray(getattr(trace, name), dtype="<f8"))
+    drive = getattr(trace, "drive", None) or {}
+    arrays = [(name, getattr(trace, name)) for name in ("t", "theta_ref", "theta_m", "omega_m",
+                                                        "i_abc")]
+    arrays += [(name, drive[name]) for name in DRIVE_COLUMNS if name in drive]
+    for name, value in arrays:
+        a = np.ascontiguousarray(np.asarray(value, dtype="<f8"))
         h.update(name.encode())
         h.update(str(a.shape).encode())
         h.update(a.tobytes())
@@ -435,12 +500,15 @@ def resample(trace: Trace, t_new: Any) -> Trace:
     idx = np.clip(np.searchsorted(t, t_new, side="right") - 1, 0, trace.n - 2)
     t0, t1 = t[idx], t[idx + 1]
     w = ((t_new - t0) / (t1 - t0))[:, None]
+    drive = [name for name in DRIVE_COLUMNS if name in trace.drive]
     signals = np.column_stack(
         [trace.theta_ref, trace.theta_m, trace.omega_m, trace.i_abc]
         + ([trace.torque] if trace.torque is not None else [])
+        + [trace.drive[name] for name in drive]
     )
     y0, y1 = signals[idx], signals[idx + 1]
     out = np.where(w == 1.0, y1, y0 + w * (y1 - y0))
+    first = 7 if trace.torque is not None else 6
     return Trace(
         t=t_new,
         theta_ref=out[:, 0],
@@ -449,4 +517,5 @@ def resample(trace: Trace, t_new: Any) -> Trace:
         i_abc=out[:, 3:6],
         torque=out[:, 6] if trace.torque is not None else None,
         meta=trace.meta,
+        drive={name: out[:, first + j] for j, name in enumerate(drive)},
     )

@@ -45,7 +45,10 @@ _STAR_EXPLAINED = 0.08
 #: The quantity (:mod:`emaphm.quantities`) each column measures.
 _KINDS: dict[str, str] = {"t": "time", "theta_ref": "angle", "theta_m": "angle",
                           "omega_m": "angular speed", "i_a": "current", "i_b": "current",
-                          "i_c": "current", "torque": "torque"}
+                          "i_c": "current", "torque": "torque",
+                          **{f"v_{x}": "voltage" for x in "abcdq"}, "v_dc": "voltage",
+                          **{f"d_{x}": "dimensionless" for x in "abc"}, "i_d_ref": "current",
+                          "i_q_ref": "current", "omega_ref": "angular speed"}
 
 
 def _unbracket(unit: str) -> str:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..container import Trace, TraceError, TraceWarning
+from ..container import DRIVE_COLUMNS, Trace, TraceError, TraceWarning
 from ..limits import MAX_SAMPLES, too_many_samples
 from ..timebase import warn_if_shorter_than_profile
 from ..validation import validate
@@ -30,7 +30,7 @@ from .registry import open_source
 __all__ = ["import_trace", "Window", "file_digest"]
 
 #: Order the channels are asked for: the first one's time base is an MDF file's master.
-_ORDER = ("i_a", "i_b", "i_c", "theta_ref", "theta_m", "omega_m", "torque", "t")
+_ORDER = ("i_a", "i_b", "i_c", "theta_ref", "theta_m", "omega_m", "torque", "t") + DRIVE_COLUMNS
 #: Relative spread of the time steps above which an import puts the samples on a uniform
 #: grid (validation's own tolerance), and above which it refuses to.
 _UNIFORM_RTOL = 1e-3
@@ -305,6 +305,8 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
     if measured == 2:
         meta["derived"] = {**meta.get("derived", {}),
                            "i_c": "-(i_a + i_b): current sensor faults are not observable"}
+    if cmap.source.voltage_delay_periods is not None:
+        meta["voltage_delay_periods"] = cmap.source.voltage_delay_periods
     if cmap.profile:
         from ...profiles import diagnostic
 
@@ -317,7 +319,8 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
     trace = Trace(t=t, theta_ref=cols["theta_ref"], theta_m=cols["theta_m"],
                   omega_m=cols["omega_m"],
                   i_abc=np.column_stack([cols["i_a"], cols["i_b"], cols["i_c"]]),
-                  torque=cols.get("torque"), meta=meta)
+                  torque=cols.get("torque"), meta=meta,
+                  drive={name: cols[name] for name in DRIVE_COLUMNS if name in cols})
     warn_if_shorter_than_profile(trace, where)
     try:
         validate(trace)

@@ -47,13 +47,18 @@ __all__ = ["TARGETS", "REQUIRED", "MapError", "ChannelSpec", "TimeSpec", "Source
 #: The emaphm columns a map may fill, with the quantity each measures.
 TARGETS: dict[str, str] = {"t": "time", "theta_ref": "angle", "theta_m": "angle",
                            "omega_m": "angular speed", "i_a": "current", "i_b": "current",
-                           "i_c": "current", "torque": "torque"}
+                           "i_c": "current", "torque": "torque",
+                           # what the drive logs (emaphm.traces.container.DRIVE_COLUMNS)
+                           **{f"v_{x}": "voltage" for x in "abcdq"},
+                           **{f"d_{x}": "dimensionless" for x in "abc"}, "v_dc": "voltage",
+                           "i_d_ref": "current", "i_q_ref": "current",
+                           "omega_ref": "angular speed"}
 #: Columns every map needs (t, omega_m and i_c can be derived or given by [time]).
 REQUIRED: tuple[str, ...] = ("theta_ref", "theta_m", "i_a", "i_b")
 #: Test profiles a map can name in ``[profile] name``.
 PROFILES: tuple[str, ...] = ("diagnostic",)
 _CHANNEL_FIELDS = ("name", "group", "unit", "scale", "offset")
-_SOURCE_FIELDS = ("format", "delimiter", "decimal", "encoding", "group")
+_SOURCE_FIELDS = ("format", "delimiter", "decimal", "encoding", "group", "voltage_delay_periods")
 _FORMATS = ("csv", "parquet", "mat", "tdms", "mf4")
 
 
@@ -191,6 +196,9 @@ class SourceOptions:
     decimal: str | None = None
     encoding: str | None = None
     group: str | None = None
+    #: whether a logged voltage command was applied in the period it was logged in (0) or
+    #: in the next (1): the imported trace's metadata ``voltage_delay_periods``
+    voltage_delay_periods: int | None = None
 
 
 @dataclass(frozen=True)
@@ -218,7 +226,8 @@ class ChannelMap:
         if self.time != TimeSpec():
             d["time"] = {k: v for k, v in (("rate", self.time.rate), ("start", self.time.start))
                          if v is not None}
-        src = {k: getattr(self.source, k) for k in _SOURCE_FIELDS if getattr(self.source, k)}
+        src = {k: getattr(self.source, k) for k in _SOURCE_FIELDS
+               if getattr(self.source, k) is not None and getattr(self.source, k) != ""}
         if src:
             d["source"] = src
         if self.profile:
@@ -285,7 +294,12 @@ def _source_options(t: dict, source: str) -> SourceOptions:
     if extra:
         raise MapError(f"{source}: unknown field(s) {extra} in [source]; known: "
                        f"{', '.join(_SOURCE_FIELDS)}")
-    kw = {k: _text(v, f"{source}: [source] {k}") if k != "delimiter" else v for k, v in t.items()}
+    kw = {k: _text(v, f"{source}: [source] {k}") if k not in ("delimiter", "voltage_delay_periods")
+          else v for k, v in t.items()}
+    delay = kw.get("voltage_delay_periods")
+    if delay is not None and (isinstance(delay, bool) or delay not in (0, 1)):
+        raise MapError(f"{source}: [source] voltage_delay_periods = {delay!r:.20}: give 0 (a logged "
+                       "voltage command applies in the period it was logged in) or 1 (in the next)")
     if "delimiter" in kw:
         d = kw["delimiter"]
         d = "\t" if d in ("\\t", "tab") else d

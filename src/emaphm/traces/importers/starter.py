@@ -8,6 +8,7 @@ import re
 
 from ...quantities import QuantityError, measure
 from .base import ChannelInfo, SourceInfo
+from ..container import DRIVE_COLUMNS, UNITS as _SI
 from .channel_map import TARGETS
 
 __all__ = ["describe", "starter_map"]
@@ -108,6 +109,13 @@ def starter_map(info: SourceInfo) -> str:
             optional = {"t": "from [time] rate or the file's time base",
                         "omega_m": "derived from theta_m", "i_c": "-(i_a + i_b)",
                         "torque": "optional"}
+            if target in DRIVE_COLUMNS:         # what a drive logs, if it does
+                if target == DRIVE_COLUMNS[0]:
+                    lines.append("# what the drive logs, if it does (docs/drives.md): voltage "
+                                 "commands v_a, v_b, v_c (or v_d, v_q; or d_a, d_b, d_c with "
+                                 "v_dc), i_d_ref, i_q_ref, omega_ref")
+                lines.append(f"# {target} = {{ name = \"...\", unit = \"{_SI[target]}\" }}")
+                continue
             if target in optional:
                 lines.append(f"# {target} = {{ name = \"...\", unit = \"...\" }}  "
                              f"# left out: {optional[target]}")

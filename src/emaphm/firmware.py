@@ -1,0 +1,29 @@
+"""The vocabulary of drives: the firmwares the reference plant can run and the drive paths
+of the identification. Names only (no imports): the command line's choices read them
+without loading the models.
+
+* :data:`FOREIGN_DRIVES`: firmwares that are not emaphm's cascade
+  (:mod:`emaphm.models.drives`), by name, with what they are;
+* :data:`DRIVE_MODELS`: what stands in for a drive's controller when a trace is identified
+  (:mod:`emaphm.recorded`): the controller as ``[controller]`` describes it, or the voltage
+  commands the drive recorded.
+"""
+
+from __future__ import annotations
+
+__all__ = ["FOREIGN_DRIVES", "MODELLED", "RECORDED_VOLTAGES", "DRIVE_MODELS"]
+
+#: Firmwares that are not emaphm's, by name, with what they are.
+FOREIGN_DRIVES = {
+    "observer-ip": "position P + velocity feed-forward, I-P speed loop on an observed speed, "
+                   "decoupled dq current PI, one period of delay with the angle advanced",
+    "deadbeat": "position PI, speed PI on a filtered speed, predictive (deadbeat) current "
+                "control",
+}
+
+#: The drive's controller as the parameters' ``[controller]`` describes it.
+MODELLED = "modelled controller"
+#: No controller: the winding driven by the voltage commands the drive recorded.
+RECORDED_VOLTAGES = "recorded voltages"
+#: What stands in for a drive's controller when a trace is identified.
+DRIVE_MODELS = (MODELLED, RECORDED_VOLTAGES)

@@ -1,0 +1,238 @@
+"""Identification from what the drive recorded: the drive paths and their objective.
+
+Every drive runs firmware of its own (feed-forwards, filters, a 2-DOF speed loop, an
+observed speed): a monitoring model that simulates emaphm's cascade controller
+(:mod:`emaphm.models.controller`) explains only drives that run it, or that
+``[controller]`` describes. A drive that logs its voltage commands needs no model of its
+controller at all: the **drive paths** (:data:`DRIVE_MODELS`) say what stands in for it.
+
+=============================  ==========================================================
+drive model                    what the monitoring model runs
+=============================  ==========================================================
+``"modelled controller"``      the drive's controller as ``[controller]`` describes it
+                               (:class:`emaphm.fitness.Eq4Objective`), residual Eq. 4
+``"recorded voltages"``        the winding driven by the logged voltage commands and the
+                               measured angle, the mechanics by its torque as an observer
+                               of the measured angle (:mod:`emaphm.models.driven`):
+                               :class:`RecordedVoltageObjective`, two residuals
+=============================  ==========================================================
+
+By default a trace with voltage commands (:func:`emaphm.traces.drive_signals.voltage_form`)
+takes the recorded voltages, any other the modelled controller (:func:`drive_model_of`;
+``--drive-model`` forces one).
+
+On the recorded-voltage path the drive's own proportional gain (k8, ``gain_drift``) is not
+observable: no position loop is modelled (:data:`NOT_OBSERVABLE`). The inverter's dead
+time and device drops (``"V_dt"``) and the encoder's offset (``"angle"``) are searched
+beside k there (:data:`DRIVE_NUISANCE`), as a real inverter and encoder add them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .faults import as_k, check_fault_model
+from .firmware import DRIVE_MODELS, MODELLED, RECORDED_VOLTAGES
+from .fitness import (check_diagnosable, check_load, eq4_weights, on_model_grid,
+                      trace_fault_model, white_noise_sigma)
+from .models import driven
+from .models.layout import PopulationPacker
+from .models.monitoring import STATUS_DIVERGED, PopulationResult
+from .params import ActuatorParams, siemens_1fk7060
+from .traces import Trace, TraceError, validate
+from .traces.drive_signals import (applied_voltages, check_commands, control_samples,
+                                   voltage_form)
+
+__all__ = ["DRIVE_MODELS", "MODELLED", "RECORDED_VOLTAGES", "DRIVE_NUISANCE", "NOT_OBSERVABLE",
+           "drive_model_of", "DrivenModel", "RecordedVoltageObjective"]
+
+
+#: Searched beside k on the recorded-voltage path, always: the voltage the inverter's legs
+#: lose to dead time and device drops, and the encoder's offset from the magnet's axis.
+DRIVE_NUISANCE = ("V_dt", "angle")
+
+#: The fault modes a path cannot see, by drive model: the drive's own position gain (k8)
+#: where no position loop is modelled.
+NOT_OBSERVABLE = {MODELLED: (), RECORDED_VOLTAGES: ("gain_drift",)}
+
+
+def drive_model_of(trace: Trace, forced: str | None = None) -> str:
+    """The drive path for ``trace``: ``forced`` where given (checked against what the trace
+    carries), else the recorded voltages where it has voltage commands, else the modelled
+    controller."""
+    if forced is None:
+        return RECORDED_VOLTAGES if voltage_form(trace) is not None else MODELLED
+    if forced not in DRIVE_MODELS:
+        raise ValueError(f"unknown drive model {forced!r}; choose one of "
+                         + ", ".join(repr(d) for d in DRIVE_MODELS))
+    if forced == RECORDED_VOLTAGES and voltage_form(trace) is None:
+        raise TraceError("the drive model 'recorded voltages' needs the drive's voltage commands "
+                         "in the trace (v_a, v_b, v_c; or v_d, v_q; or d_a, d_b, d_c with v_dc); "
+                         "this trace has none: identify it with the modelled controller")
+    return forced
+
+
+@dataclass(frozen=True, eq=False)
+class DrivenModel:
+    """The monitoring model on the recorded-voltage path, for one trace: what
+    :class:`~emaphm.models.monitoring.MonitoringModel` is to the modelled controller (its
+    ``params``, ``fault_model``, ``nuisance``, ``pack``, ``simulate``,
+    ``simulate_population``), over the trace's own samples.
+
+    ``u (n, 3)`` the applied phase voltages, ``theta (n,)`` the measured angle, ``omega0``
+    the first measured speed, ``i_meas (n, 3)`` the measured currents (corrected for the
+    sensors), ``T_load (n,)`` the profile's load on the control grid ``t`` (from 0), with
+    the command ``theta_ref`` and the measured speed ``omega`` for the traces it returns.
+    """
+
+    params: ActuatorParams
+    fault_model: str
+    nuisance: tuple
+    t: np.ndarray
+    u: np.ndarray
+    theta: np.ndarray
+    omega: np.ndarray
+    theta_ref: np.ndarray
+    i_meas: np.ndarray
+    T_load: np.ndarray
+    n_sub: int = 1
+    kernel: str = "scalar"
+    _packer: Any = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        check_fault_model(self.fault_model)
+        object.__setattr__(self, "nuisance", tuple(self.nuisance))
+        object.__setattr__(self, "_packer", PopulationPacker(
+            self.params, float(self.theta[0]), self.fault_model, n_sub=1,
+            nuisance=self.nuisance))
+        m, inv = self.params.motor, self.params.inverter
+        l_1, l_2 = driven.observer_gains(inv.T_s)
+        scale = driven.mechanical_scale(m.J_m + self.params.load.J_l, self.params.controller.k_T)
+        object.__setattr__(self, "_observer", np.array([l_1, l_2, scale]))
+        I_max = self.params.controller.I_max or m.I_max
+        object.__setattr__(self, "_i_0", driven.dead_time_width(I_max))
+
+    @property
+    def theta0(self) -> float:
+        return float(self.theta[0])
+
+    @property
+    def scale(self) -> float:
+        """[A/rad] of the mechanical residual (:func:`emaphm.models.driven.mechanical_scale`)."""
+        return float(self._observer[2])
+
+    def pack(self, K) -> tuple[np.ndarray, np.ndarray]:
+        return self._packer(K)
+
+    def run(self, K, w_e: np.ndarray, w_m: np.ndarray, **outputs: bool):
+        """:func:`emaphm.models.driven.run` of the population ``K``."""
+        P, CP = self.pack(K)
+        return driven.run(P, CP, self._observer, self.u, self.theta, float(self.omega[0]),
+                          self.i_meas, self.T_load, w_e, w_m, self._i_0, **outputs)
+
+    def simulate_population(self, K) -> PopulationResult:
+        K = np.atleast_2d(np.asarray(K, dtype=float))
+        n = self.t.size
+        zero = np.zeros((n, 3))
+        _, status, out = self.run(K, zero, np.zeros(n), traces=True)
+        status = np.where(status != 0, STATUS_DIVERGED, 0)
+        omega = np.repeat(self.omega[None], K.shape[0], axis=0)
+        result = PopulationResult(self.t, self.theta_ref, out["theta_m"], omega, out["i_abc"],
+                                  out["torque"], status)
+        object.__setattr__(result, "f_abc", out["f_abc"])
+        return result
+
+    def simulate(self, k, nu=None) -> PopulationResult:
+        nu = np.zeros(len(self.nuisance)) if nu is None else np.asarray(nu, dtype=float)
+        return self.simulate_population(np.concatenate([as_k(k), nu])[None, :])
+
+
+@dataclass(frozen=True)
+class RecordedVoltageObjective:
+    """The recorded-voltage path's objective: two residuals of one pass of
+    :mod:`emaphm.models.driven`, each weighted and summed as Eq. 4 is.
+
+    ``weights (n, 3)``: Eq. 4's weights on the electrical residual (the model's currents
+    less the measured ones); ``mech_weights (n,)``: ``T_s`` on the mechanical residual (the
+    observer's innovation as a q current, :func:`emaphm.models.driven.mechanical_scale`).
+    The fitness is their sum; its noise floor the currents' white noise times the sum of
+    all weights (the mechanical residual, a torque read in amperes of q current, carries
+    the currents' noise). ``residuals`` stacks both, weighted, for least squares.
+    """
+
+    model: DrivenModel
+    target: np.ndarray
+    weights: np.ndarray
+    mech_weights: np.ndarray
+    noise_sigma: np.ndarray
+    mode: str = "phases"
+
+    @classmethod
+    def from_trace(cls, trace: Trace, params: ActuatorParams | None = None, *,
+                   fault_model: str | None = None,
+                   nuisance: tuple[str, ...] = ()) -> "RecordedVoltageObjective":
+        """The objective of ``trace``'s recorded voltage commands; ``nuisance`` always
+        includes :data:`DRIVE_NUISANCE`."""
+        fault_model = check_fault_model(fault_model if fault_model is not None
+                                        else trace_fault_model(trace))
+        params = params if params is not None else siemens_1fk7060()
+        validate(trace, min_rotation=0.0)
+        check_diagnosable(trace)
+        T_s = params.inverter.T_s
+        idx = control_samples(trace, T_s)
+        if idx.size < 16:
+            raise TraceError(f"trace lasts {trace.duration:.3g} s, fewer than 16 control periods "
+                             f"of {T_s:g} s; record at least one full diagnostic profile (0.5 s)")
+        u = applied_voltages(trace, idx, params.motor.p)
+        check_commands(trace, u, params.inverter.V_dc)
+        t_model = np.asarray(trace.t)[idx] - float(trace.t[0])
+        _, _, load = on_model_grid(trace, T_s)
+        load = np.resize(load, idx.size) if load.size != idx.size else load
+        check_load(load, params)
+        i = np.asarray(trace.i_abc)[idx]
+        if not params.sensors.ideal:
+            i = params.sensors.correct(i)
+        nuisance = tuple(nuisance) + tuple(n for n in DRIVE_NUISANCE if n not in nuisance)
+        model = DrivenModel(params, fault_model, nuisance, t_model, u,
+                            np.ascontiguousarray(np.asarray(trace.theta_m)[idx]),
+                            np.ascontiguousarray(np.asarray(trace.omega_m)[idx]),
+                            np.ascontiguousarray(np.asarray(trace.theta_ref)[idx]),
+                            np.ascontiguousarray(i), np.ascontiguousarray(load))
+        w_e = np.ascontiguousarray(eq4_weights(i, T_s))
+        w_m = np.full(idx.size, T_s)
+        return cls(model, np.ascontiguousarray(i), w_e, w_m, white_noise_sigma(i))
+
+    @property
+    def n_samples(self) -> int:
+        return self.target.shape[0]
+
+    def noise_floor(self) -> float:
+        """What a perfect model's fit would be: each phase's white noise times its weights,
+        and the largest of them times the mechanical residual's weights."""
+        sigma = np.asarray(self.noise_sigma)
+        return float(np.sum(self.weights * sigma ** 2)
+                     + np.sum(self.mech_weights) * float(np.max(sigma)) ** 2)
+
+    def parts(self, K: np.ndarray) -> np.ndarray:
+        """``(n_pop, 2)``: each candidate's electrical and mechanical weighted sums."""
+        K = np.atleast_2d(np.asarray(K, dtype=float))
+        sse, _, _ = self.model.run(K, self.weights, self.mech_weights)
+        return sse
+
+    def __call__(self, K: np.ndarray) -> np.ndarray:
+        return np.sum(self.parts(K), axis=1)
+
+    def residuals(self, K: np.ndarray) -> np.ndarray:
+        """The weighted residuals of each candidate, (n_pop, n * 4): the currents' (as
+        Eq. 4 weighs them) and the mechanical one's, so that a row's sum of squares is its
+        fitness; inf for a diverged candidate."""
+        K = np.atleast_2d(np.asarray(K, dtype=float))
+        _, status, out = self.model.run(K, self.weights, self.mech_weights, residuals=True)
+        w = np.concatenate([self.weights, self.mech_weights[:, None]], axis=1)
+        R = (np.sqrt(w)[None] * out["residuals"]).reshape(K.shape[0], -1)
+        R[status != 0] = np.inf
+        return R
+
