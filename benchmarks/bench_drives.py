@@ -60,6 +60,7 @@ ROOT = Path(__file__).resolve().parents[1]
 RESULTS = Path(__file__).parent / "results"
 ACTUATORS = {"preset": None, "ema-270v-750w": ROOT / "examples" / "actuators" / "ema-270v-750w.toml"}
 UNIT_SEED0 = 70_000
+TUNE_SEED0 = 80_000
 FIRMWARES = ("emaphm", "feed-forwards", "speed-filter", "position-pi", "observer-ip", "deadbeat")
 DESCRIBABLE = ("emaphm", "feed-forwards", "speed-filter", "position-pi")
 FAULTS = {"healthy": (), "short 10 % A": ("short_circuit:a:0.1:0.15",),
@@ -141,9 +142,11 @@ def run_unit(task: tuple[str, str, str, int]) -> dict:
         t1 = time.process_time()
         ex = examine(tr, params=cal.params, seed=0)
         d = ex.diagnosis
+        ratio = float(ex.identification.fitness / ex.identification.noise_floor)
         cases[case] = {"verdict": d.verdict, "named": _named(d),
-                       "drive_model": ex.identification.drive_model,
-                       "fit_ratio": float(ex.identification.fitness / ex.identification.noise_floor),
+                       "read": [[f.mode, f.phase] for f in (*d.faults, *d.suspected)],
+                       "drive_model": ex.identification.drive_model, "fit_ratio": ratio,
+                       "verdict_ratio": d.refit.fit_ratio if d.refit is not None else ratio,
                        "cpu_s": time.process_time() - t1}
     out["cases"] = cases
     out["cpu_s"] = time.process_time() - t0
@@ -253,6 +256,33 @@ def report(units: list[dict], undescribed: list[dict], args, wall: float) -> str
     return "\n".join(lines)
 
 
+def tune(args) -> None:
+    """Part A on tuning units: the lognormal of the fit ratios the verdicts read where they
+    named the unit's faults right (emaphm.fitness.MISFIT_RECORDED)."""
+    import numpy as np
+
+    tasks = [(a, f, "A", TUNE_SEED0 + u) for a in args.actuators.split(",")
+             for f in args.firmwares.split(",") for u in range(args.units)]
+    with ProcessPoolExecutor(args.workers) as pool:
+        units = list(pool.map(run_unit, tasks, chunksize=1))
+    RESULTS.mkdir(exist_ok=True)
+    (RESULTS / "drives_tuning.json").write_text(json.dumps({"units": units}, indent=1) + "\n")
+    # the fits that found the unit's faults (named, or suspected under a misfit): what the
+    # model reaches on an actuator it explains, whatever the constants now in use say
+    ratios = [c["verdict_ratio"] for u in units if u["calibrated"]
+              for case, c in u["cases"].items() if {tuple(x) for x in c["read"]} == EXPECTED[case]]
+    logs = np.log(np.asarray([r for r in ratios if r and r > 0]))
+    print(f"{len(logs)} fit ratios: log mean {logs.mean():.3f}, log std {logs.std(ddof=1):.3f}; "
+          f"median {np.exp(np.median(logs)):.2f}, 99th percentile {np.exp(np.percentile(logs, 99)):.2f}, "
+          f"max {np.exp(logs.max()):.2f}")
+    wrong = [(u["actuator"], u["firmware"], u["unit_seed"], case, c["verdict"], c["named"],
+              round(c["verdict_ratio"] or 0, 2)) for u in units if u["calibrated"]
+             for case, c in u["cases"].items() if not _right(case, c)]
+    print(f"{len(wrong)} not right:", wrong[:30])
+    print("calibration refused:", [(u["actuator"], u["firmware"], u["unit_seed"])
+                                   for u in units if not u["calibrated"]])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--units", type=int, default=20)
@@ -260,7 +290,12 @@ def main() -> None:
     ap.add_argument("--parts", default="ABC")
     ap.add_argument("--actuators", default=",".join(ACTUATORS))
     ap.add_argument("--firmwares", default=",".join(FIRMWARES))
+    ap.add_argument("--tune", action="store_true",
+                    help="units 80000+, part A: the recorded-voltage path's misfit constants "
+                         "(the lognormal of the verdicts' fit ratios where they were right)")
     args = ap.parse_args()
+    if args.tune:
+        return tune(args)
     names = args.actuators.split(",")
     fws = args.firmwares.split(",")
     tasks = [(a, f, part, UNIT_SEED0 + u) for part in "AB" if part in args.parts

@@ -86,11 +86,13 @@ _NAMES = tuple(PARAMETERS)
 
 #: Estimated beside them on traces with the drive's voltage commands (the recorded-voltage
 #: path, :mod:`emaphm.recorded`): the voltage the inverter's legs lose to dead time and
-#: device drops [V] and the encoder's offset [rad, electrical]. A diagnosis searches them
+#: device drops [V], the encoder's offset [rad, electrical] and the dry friction's Stribeck
+#: speed [rad/s]. A diagnosis searches them
 #: again every time (:data:`emaphm.recorded.DRIVE_NUISANCE`); the calibration estimates
 #: them so that the unit's own parameters do not absorb them.
 DRIVE_PARAMETERS: dict[str, tuple[float, float, str]] = {
-    "V_dt": (0.0, 30.0, "V"), "angle": (-0.2, 0.2, "rad (electrical)")}
+    "V_dt": (0.0, 30.0, "V"), "angle": (-0.2, 0.2, "rad (electrical)"),
+    "stribeck": (0.0, 5.0, "rad/s")}
 PARAMETERS.update(DRIVE_PARAMETERS)
 
 #: A typical deviation of each parameter (the width of the production tolerance,
@@ -98,7 +100,7 @@ PARAMETERS.update(DRIVE_PARAMETERS)
 TYPICAL: dict[str, float] = {"J": 0.2, "flux": 0.1, "R": 0.25, "L": 0.1, "friction": 0.4,
                              "viscous": 0.4, "gain_a": 0.06, "gain_b": 0.06, "gain_c": 0.06,
                              "offset_a": 0.04, "offset_b": 0.04, "offset_c": 0.04, "load": 0.2,
-                             "V_dt": 5.0, "angle": 0.05}
+                             "V_dt": 5.0, "angle": 0.05, "stribeck": 1.0}
 
 #: A parameter whose typical deviation moves the fit ratio (Eq. 4 over the noise floor)
 #: by less than this -- or less than the fit's own excess over the floor, which is what
@@ -242,10 +244,10 @@ class _DrivenTarget:
         s = params.sensors
         i = np.ascontiguousarray(s.correct(self.i_raw)) if not s.ideal else self.i_raw
         m = self.model
-        model = DrivenModel(replace(params, sensors=CurrentSensors()), "physical",
-                            ("V_dt", "angle"), m.t, m.u, m.theta, m.omega, m.theta_ref, i,
-                            m.T_load)
-        K = np.concatenate([K_NOMINAL, [dev.get("V_dt", 0.0), dev.get("angle", 0.0)]])[None]
+        names = tuple(DRIVE_PARAMETERS)
+        model = DrivenModel(replace(params, sensors=CurrentSensors()), "physical", names, m.t,
+                            m.u, m.theta, m.omega, m.theta_ref, i, m.T_load)
+        K = np.concatenate([K_NOMINAL, [dev.get(n, 0.0) for n in names]])[None]
         return model.run(K, self.w[:, :3], self.w[:, 3], **outputs)
 
     def residual(self, params: ActuatorParams, dev: dict[str, float]) -> np.ndarray | None:

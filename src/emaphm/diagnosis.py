@@ -30,7 +30,9 @@ from typing import Any, Mapping
 import numpy as np
 
 from .faults import as_k, check_fault_model
-from .fitness import MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit, misfit_p_value
+from .firmware import MODELLED
+from .fitness import (MISFIT, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit,
+                      misfit_p_value)
 from .modes import (DEFAULT_THRESHOLDS, FAULT_MODES, THRESHOLDS_BY_FAULT_MODEL, Fault, Reading,
                     Thresholds, thresholds_for)
 from .modes import read_faults as _read_modes
@@ -163,7 +165,8 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
              params: ActuatorParams | None = None, fault_model: str | None = None,
              fit_ratio: float | None = None, misfit_p: float = MISFIT_P,
              mismatch: MismatchFit | None = None, extra: Mapping[str, float] | None = None,
-             findings: Mapping[str, Any] | None = None) -> Diagnosis:
+             findings: Mapping[str, Any] | None = None,
+             drive_model: str = MODELLED) -> Diagnosis:
     """The verdict on an identified ``k``: its faults (:func:`emaphm.diagnosis.read_faults`)
     and the rules that make it ``healthy``, ``faulty`` or ``unexplained``.
 
@@ -183,7 +186,9 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
     verdict is ``unexplained`` (reason ``"mismatch"``): the unit's deviation from its
     data sheet explains the reading as well as a fault does. ``extra``: the values of the
     parameters searched beside k (a demagnetization reads the flux there); ``findings``:
-    what the checks made for the modes found (:func:`emaphm.modes.read_faults`).
+    what the checks made for the modes found (:func:`emaphm.modes.read_faults`);
+    ``drive_model``: the identification's drive path, whose own fit ratios the misfit test
+    compares with (:data:`emaphm.fitness.MISFIT`).
     """
     k = as_k(k)
     if fault_model is None:
@@ -200,12 +205,13 @@ def diagnose(k, *, thresholds: Thresholds | None = None,
     faults = read_faults(k, thresholds, p, fault_model, extra, findings)
     unexplained = None
     if fit_ratio is not None:
-        pv = misfit_p_value(float(fit_ratio))
+        pv = misfit_p_value(float(fit_ratio), drive_model)
         if pv < misfit_p:
             unexplained = Unexplained(
                 "misfit", float(fit_ratio), pv,
                 f"the best fit is {fit_ratio:.1f}x the trace's noise floor, where the model "
-                f"reaches {math.exp(MISFIT_LOG_MEAN):.1f}x on an actuator it describes: this unit "
+                f"reaches {math.exp(MISFIT[drive_model][0]):.1f}x on an actuator it describes"
+                + (f" (on its {drive_model})" if drive_model != MODELLED else "") + ": this unit "
                 "differs from its parameters, or has a fault the model lacks; calibrate it on "
                 "healthy traces (emaphm calibrate) and diagnose with --params, and check the "
                 "load the bench applies and the current sensor chain"

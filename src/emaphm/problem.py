@@ -251,8 +251,9 @@ class IdentificationProblem:
 
     # ------------------------------------------------------------------ readings
     def diagnose(self, k: Any, **kw: Any) -> Any:
-        """:func:`emaphm.diagnosis.diagnose` of ``k`` with this problem's parameters and
-        fault model (``fit_ratio``, ``thresholds``, ``mismatch`` passed on)."""
+        """:func:`emaphm.diagnosis.diagnose` of ``k`` with this problem's parameters, fault
+        model and drive path (``fit_ratio``, ``thresholds``, ``mismatch`` passed on)."""
+        kw.setdefault("drive_model", self.drive_model)
         return diagnose(k, params=self.params, fault_model=self.fault_model, **kw)
 
     def fitness_at(self, k: Any, nuisance: Any = None) -> float:

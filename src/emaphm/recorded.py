@@ -23,8 +23,9 @@ takes the recorded voltages, any other the modelled controller (:func:`drive_mod
 
 On the recorded-voltage path the drive's own proportional gain (k8, ``gain_drift``) is not
 observable: no position loop is modelled (:data:`NOT_OBSERVABLE`). The inverter's dead
-time and device drops (``"V_dt"``) and the encoder's offset (``"angle"``) are searched
-beside k there (:data:`DRIVE_NUISANCE`), as a real inverter and encoder add them.
+time and device drops (``"V_dt"``), the encoder's offset (``"angle"``) and the dry
+friction's Stribeck speed (``"stribeck"``) are searched beside k there
+(:data:`DRIVE_NUISANCE`), as a real inverter, encoder and gear train add them.
 """
 
 from __future__ import annotations
@@ -51,8 +52,10 @@ __all__ = ["DRIVE_MODELS", "MODELLED", "RECORDED_VOLTAGES", "DRIVE_NUISANCE", "N
 
 
 #: Searched beside k on the recorded-voltage path, always: the voltage the inverter's legs
-#: lose to dead time and device drops, and the encoder's offset from the magnet's axis.
-DRIVE_NUISANCE = ("V_dt", "angle")
+#: lose to dead time and device drops, the encoder's offset from the magnet's axis, and the
+#: dry friction's Stribeck speed (which the mechanical residual sees and data sheets do not
+#: state).
+DRIVE_NUISANCE = ("V_dt", "angle", "stribeck")
 
 #: The fault modes a path cannot see, by drive model: the drive's own position gain (k8)
 #: where no position loop is modelled.

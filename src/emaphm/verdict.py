@@ -37,6 +37,7 @@ from .diagnosis import Diagnosis, MismatchFit, Refit, Thresholds, diagnose, fit_
 from .modes import MODES, thresholds_for
 from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit,
                       misfit_p_value)
+from .firmware import MODELLED
 from .params import ActuatorParams
 from .problem import IdentificationProblem, apply_extra
 from .traces import Trace
@@ -124,8 +125,9 @@ def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis, see
         r = _refit(problem, tuple(names), ident.k, seed)
         ratio = fit_ratio_of(r)
         if base is not None and ratio is not None:
+            drive = getattr(ident, "drive_model", MODELLED)
             better = ratio < (1.0 - HYPOTHESIS_GAIN) * base or (
-                misfit_p_value(base) < MISFIT_P <= misfit_p_value(ratio))
+                misfit_p_value(base, drive) < MISFIT_P <= misfit_p_value(ratio, drive))
         else:
             better = r.fitness < (1.0 - HYPOTHESIS_GAIN) * ident.fitness
         if better and needs_mismatch_check(problem.params):
@@ -251,7 +253,8 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     seed = int(ident.seed or 0)
     findings = dict(findings or {})
     noiseless = 0.0 <= getattr(ident, "noise_sigma", np.inf) < MIN_NOISE
-    kw = dict(thresholds=thresholds, params=params, fault_model=ident.fault_model)
+    kw = dict(thresholds=thresholds, params=params, fault_model=ident.fault_model,
+              drive_model=getattr(ident, "drive_model", MODELLED))
     ratio = None if noiseless else fit_ratio_of(ident)
     extra = dict(getattr(ident, "nuisance", {}) or {})
     notes = (NOISELESS_NOTE,) if noiseless else ()

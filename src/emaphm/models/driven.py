@@ -18,7 +18,9 @@ the measured ones at the samples: they depend on the winding and the magnets
 (resistance, inductance, flux, shorts, eccentricity, sensors), not on the mechanics.
 
 **Mechanical.** The mechanics (:func:`emaphm.models.mechanics.transmission_step`: dry
-friction, backlash, inertias, load) are driven by the electromagnetic torque of the
+friction, backlash, inertias, load; with the candidate's Stribeck speed, the reference
+plant's :func:`~emaphm.models.plant_mechanics.plant_step`, whose dry friction falls from
+its static to its dynamic level with speed) are driven by the electromagnetic torque of the
 measured phase currents through the candidate's back-EMF coefficients (and its own
 fault-loop currents), so that what the winding model misses does not pass for a torque
 (the currents' noise through the observer's low-pass is a few mA of q current, below
@@ -45,9 +47,10 @@ import numpy as np
 from ._jit import jit
 from ._monitoring_common import I_DIVERGED
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_DELTA, C_ECC, C_ECC_PHASE, C_FDJ,
-                     C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_PHI, C_PHI_END, C_T0,
-                     C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S)
+                     C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_OMEGA_S, C_PHI,
+                     C_PHI_END, C_T0, C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S)
 from .mechanics import transmission_step
+from .plant_mechanics import plant_step
 from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
                    winding_step)
 from .step import row_reader
@@ -194,11 +197,18 @@ def _period(c, u, theta1, i_meas1, T_l, z, i, tq, lam, mech_state, p, T_s, i_0, 
     tq1 = torque_loops(i_meas1[0], i_meas1[1], i_meas1[2], z2, z3, z4, ca, cb, cc,
                        mu_a, mu_b, mu_c)
     h = T_s / MECH_SUBSTEPS
+    omega_s = c[C_OMEGA_S]
+    stribeck = omega_s > 0.0 and K_c > 0.0
     for ss in range(MECH_SUBSTEPS):
         T_m = tq + ((ss + 0.5) / MECH_SUBSTEPS) * (tq1 - tq)
-        thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
-                                             c[C_FSJ], c[C_FDJ], J_l, C_l, c[C_BACKLASH], K_c,
-                                             D_c, h)
+        if stribeck:            # the dry friction's drop from static to dynamic with speed
+            thm, wm, thl, wl = plant_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
+                                          c[C_FSJ], c[C_FDJ], omega_s, J_l, C_l, c[C_BACKLASH],
+                                          K_c, D_c, h)
+        else:
+            thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
+                                                 c[C_FSJ], c[C_FDJ], J_l, C_l, c[C_BACKLASH],
+                                                 K_c, D_c, h)
     return z0, z1, z2, z3, z4, ja, jb, jc, tq1, na, nb, nc, thm, wm, thl, wl
 
 

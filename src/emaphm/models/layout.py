@@ -68,12 +68,14 @@ C_GAMMA_END = C_GAMMA + N_Z * N_Z
 #: the reference plant takes its whole load from ``run_reference(extra_load=)``)
 C_T0 = C_GAMMA + N_Z * N_Z
 #: what only the recorded-voltage model reads (:mod:`emaphm.models.driven`): the voltage
-#: [V] a leg loses to the inverter's dead time and device drops, and the offset [rad,
-#: mechanical] of the encoder's zero from the magnet's axis (the ``"V_dt"`` and
-#: ``"angle"`` nuisance; zero as packed)
+#: [V] a leg loses to the inverter's dead time and device drops, the offset [rad,
+#: mechanical] of the encoder's zero from the magnet's axis, and the Stribeck speed [rad/s]
+#: of the dry friction (the ``"V_dt"``, ``"angle"`` and ``"stribeck"`` nuisance; zero as
+#: packed: no drop, no offset, Borello's two levels)
 C_V_DT = C_T0 + 1
 C_DELTA = C_T0 + 2
-N_CP = C_T0 + 3
+C_OMEGA_S = C_T0 + 3
+N_CP = C_T0 + 4
 
 
 #: Shorted fraction [-] below which a phase has no fault loop. Such a loop (inductance
@@ -222,6 +224,7 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     row[C_T0] = params.load.T_0
     row[C_V_DT] = 0.0
     row[C_DELTA] = 0.0
+    row[C_OMEGA_S] = 0.0
     return P, row[None, :]
 
 
@@ -267,7 +270,9 @@ class Nuisance:
 #: :mod:`emaphm.modes.short_circuit`). Read on the recorded-voltage path only
 #: (:mod:`emaphm.models.driven`): the voltage a leg loses to the inverter's dead time and its
 #: devices' drops (``"V_dt"``, V, the same on every leg, opposing its current) and the
-#: offset of the encoder's zero from the magnet's axis (``"angle"``, electrical radians).
+#: offset of the encoder's zero from the magnet's axis (``"angle"``, electrical radians),
+#: and the speed below which the dry friction rises from its dynamic to its static level
+#: (``"stribeck"``, rad/s: the Stribeck drop, which data sheets do not state).
 NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("R", -0.1, 0.3, "relative", "winding resistance"),
     Nuisance("flux", -0.06, 0.06, "relative", "magnet flux"),
@@ -278,6 +283,7 @@ NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("Rf_c", -1.5, 1.0, "decades", "fault resistance of phase C"),
     Nuisance("V_dt", 0.0, 30.0, "V", "inverter dead time and device drops"),
     Nuisance("angle", -0.2, 0.2, "rad (electrical)", "encoder offset"),
+    Nuisance("stribeck", 0.0, 5.0, "rad/s", "Stribeck speed of the dry friction"),
 )}
 #: Their names.
 NUISANCE = tuple(NUISANCE_PARAMETERS)
@@ -354,6 +360,9 @@ class PopulationPacker:
                 continue
             if name == "angle":
                 CP[:, C_DELTA] += NU[:, j] / self.nominal.motor.p
+                continue
+            if name == "stribeck":
+                CP[:, C_OMEGA_S] += NU[:, j]
                 continue
             if name.startswith("Rf_"):
                 if R_f is None:
