@@ -97,7 +97,7 @@ def _firmware(datasheet, firmware: str):
                                    I_max=datasheet.motor.I_max * 2 / 3,
                                    omega_max=0.6 * ctl.omega_max),
                "position-pi-integrator": dict(Ki=5.0 * ctl.Kp)}
-    plant = replace(datasheet, plant=replace(datasheet.plant, dead_time=1e-6, device_drop=1.0))
+    plant = replace(datasheet, inverter=replace(datasheet.inverter, dead_time=1e-6, device_drop=1.0))
     if firmware in options:
         return replace(plant, controller=replace(ctl, **options[firmware])), None
     return plant, firmware

@@ -61,8 +61,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .faults import K_NOMINAL
-from .fitness import (MIN_NOISE, aligned_currents, check_diagnosable, effective_samples,
-                      eq4_weights, noise_samples, on_model_grid, white_noise_sigma)
+from .fitness import (MIN_NOISE, TRANSIENT_MISFIT, aligned_currents, check_diagnosable,
+                      effective_samples, eq4_weights, noise_samples, on_model_grid,
+                      transient_excess, white_noise_sigma)
 from .params import (ActuatorParams, Calibration, CurrentSensors, calibration_digest,
                      siemens_1fk7060)
 from .profiles import Profile
@@ -70,6 +71,7 @@ from .traces import Trace, TraceError, fingerprint, validate
 
 __all__ = ["PARAMETERS", "CORRELATION_LIMIT", "MULTIPLE_CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT",
            "CalibrationError", "CalibrationResult", "calibrate", "select_identifiable",
+           "TOLERANCE_CHECKED", "DRIVE_PARAMETERS",
            "estimates", "apply_deviations", "trace_digest"]
 
 #: Calibrated parameters: name -> (lower bound, upper bound, unit) of the deviation.
@@ -138,9 +140,23 @@ CORRELATION_LIMIT = 0.95
 #: 0.981-0.994; once the flux is kept, no other estimate passes 0.965.
 MULTIPLE_CORRELATION_LIMIT = 0.975
 
+#: On the recorded-voltage path, an estimate the others predict (a correlation past the
+#: limits) is still kept where the fit without it is this many times worse.
+SEPARABLE_WORSE = 1.5
+
 #: A trace whose calibrated fit stays above this many times its noise floor (Eq. 4 of
 #: white noise) does not look like a healthy unit the model describes.
 HEALTHY_FIT_LIMIT = 4.0
+
+#: The estimates checked against the production tolerances (:class:`emaphm.units.Tolerances`
+#: field of each): one whose whole 95 % interval lies outside its tolerance is no unit of this
+#: design, but a model that does not describe it (a drive whose control differs from
+#: ``[controller]`` calibrates to sensor gains of +10 % and an inertia of -8 %). Not checked:
+#: the winding resistance (its temperature), the unreported load (the bench's), the sensor
+#: offsets (a sensor's own, which a calibration is there to measure), and the inductance and
+#: viscous friction, which the diagnostic profile hardly identifies.
+TOLERANCE_CHECKED = {"J": "J", "flux": "flux", "friction": "friction", "gain_a": "sensor_gain",
+                     "gain_b": "sensor_gain", "gain_c": "sensor_gain"}
 
 
 class CalibrationError(ValueError):
@@ -182,6 +198,7 @@ class _Target:
     w: np.ndarray               # (n, 3) Eq. 4 weights
     sqrt_w: np.ndarray          # (n, 3) sqrt of the Eq. 4 weights, over the noise sigma
     floor: float                # Eq. 4 value of white noise alone
+    floor_sigma: np.ndarray     # (3,) the white noise of each phase [A]
     #: the test profile per control period T_s [s] (the load parameter is packed per
     #: candidate, ``Load.T_0``, not in the profile)
     profiles: dict = field(default_factory=dict, compare=False, repr=False)
@@ -203,7 +220,7 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
                                "on recorded traces")
     w = eq4_weights(i, T_s)
     return _Target(source, np.ascontiguousarray(on.theta_ref), load, float(on.theta_m[0]), i,
-                   w, np.sqrt(w) / sigma, float(np.sum(w * sigma ** 2)))
+                   w, np.sqrt(w) / sigma, float(np.sum(w * sigma ** 2)), sigma)
 
 
 class _DrivenTarget:
@@ -445,7 +462,8 @@ class _Fitter:
 
 def select_identifiable(fitter: _Fitter, names: list[str], *,
                         correlation_limit: float = CORRELATION_LIMIT,
-                        multiple_limit: float = MULTIPLE_CORRELATION_LIMIT) -> dict[str, Any]:
+                        multiple_limit: float = MULTIPLE_CORRELATION_LIMIT,
+                        x0: np.ndarray | None = None) -> dict[str, Any]:
     """Fit ``names`` and keep at the data sheet, one at a time, each estimate the profile
     does not identify (:data:`MIN_EFFECT`) or cannot separate from the others
     (``correlation_limit``, ``multiple_limit``), refitting from where the last fit ended.
@@ -454,18 +472,24 @@ def select_identifiable(fitter: _Fitter, names: list[str], *,
     estimated names, those kept at the data sheet, the non-separable pairs (or the
     estimate and the others that predict it, with the multiple correlation), the weak
     ones (with the change of the fit ratio a typical deviation makes) and the covariance.
+    ``x0``: where the first fit starts (default the data sheet, every deviation zero).
     """
     names = list(names)
     fixed: list[str] = []
     pairs: list[tuple[str, str, float]] = []
     weak: list[tuple[str, float]] = []
-    x0 = np.zeros(len(names))
+    x0 = np.zeros(len(names)) if x0 is None else np.asarray(x0, dtype=float)
     floor_r = float(sum(np.sum(tg.w) for tg in fitter.targets))  # sum r^2 of white noise alone
+    least = math.inf
     while True:
         res = fitter.fit(names, x0)
         # practical identifiability: what a typical deviation of each parameter does to
-        # the fit ratio, against the misfit model error leaves
-        excess = max(float(res.fun @ res.fun) / floor_r - 1.0, MIN_EFFECT)
+        # the fit ratio, against the misfit model error leaves; on the recorded-voltage path
+        # the first fit's (every parameter free): a refit there can stop in another valley
+        # of the dead time's drop, whose misfit is not the model's error
+        ratio = float(res.fun @ res.fun) / floor_r
+        least = min(least, ratio) if fitter.driven else ratio
+        excess = max(least - 1.0, MIN_EFFECT)
         Jm = np.asarray(res.jac)
         effect = np.array([float(np.sum(Jm[:, c] ** 2)) * TYPICAL[n] ** 2 / floor_r
                            for c, n in enumerate(names)])
@@ -481,6 +505,13 @@ def select_identifiable(fitter: _Fitter, names: list[str], *,
         drop, pair = _inseparable(names, cov, corr, correlation_limit, multiple_limit)
         if drop is None:
             break
+        if fitter.driven:
+            # on the recorded-voltage path the currents' scale, the inertia and the frictions
+            # trade through the mechanics only in part: an estimate the others "predict" is
+            # kept where the fit without it is clearly worse (the linear correlation is local)
+            trial = fitter.fit(names[:drop] + names[drop + 1:], np.delete(res.x, drop))
+            if float(trial.fun @ trial.fun) / floor_r > SEPARABLE_WORSE * ratio + MIN_EFFECT:
+                break
         pairs.append(pair)
         fixed.append(names.pop(drop))
         x0 = np.delete(res.x, drop)          # the refit starts where the last fit ended
@@ -531,7 +562,8 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
               fit_limit: float = HEALTHY_FIT_LIMIT,
               correlation_limit: float = CORRELATION_LIMIT,
               multiple_limit: float = MULTIPLE_CORRELATION_LIMIT,
-              progress: Callable[[int], Any] | None = None) -> CalibrationResult:
+              progress: Callable[[int], Any] | None = None,
+              tolerances: Any = None) -> CalibrationResult:
     """Calibrate a healthy unit on ``traces`` around its data sheet ``params``.
 
     ``free``: the parameters to estimate (default all of :data:`PARAMETERS`);
@@ -540,7 +572,10 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     ``multiple_limit``: when estimates count as not separable (:data:`CORRELATION_LIMIT`,
     :data:`MULTIPLE_CORRELATION_LIMIT`). Raises :class:`CalibrationError`
     when a trace does not look healthy after calibration (its fit stays above
-    ``fit_limit`` times its noise floor) or cannot be used.
+    ``fit_limit`` times its noise floor) or cannot be used, and when an estimate lies outside
+    the production ``tolerances`` (default :data:`emaphm.units.DEFAULT_TOLERANCES`) by more
+    than its own 95 % interval (:data:`TOLERANCE_CHECKED`): the model does not describe the
+    unit (its drive's control, most often), and the parameters would absorb it.
     """
     base = params if params is not None else siemens_1fk7060()
     traces = list(traces)
@@ -570,10 +605,22 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
                else _target(tr, base, src) for tr, src in zip(traces, sources)]
     if any(isinstance(tg, _DrivenTarget) for tg in targets):
         free += [n for n in DRIVE_PARAMETERS if n not in free]
+        # the currents' common gain scales what the recorded voltages drive (R, L, the
+        # inertia, the frictions and the load scale with it, exactly): phase A's sensor
+        # sets the scale, the others are read against it
+        free = [n for n in free if n != "gain_a"]
     t0 = time.perf_counter()
     fitter = _Fitter(base, targets, progress)
+    x0 = None
+    if fitter.driven:
+        # the inverter's, the encoder's and the friction's own first: the dead time moves the
+        # currents by amperes where the unit's deviations move them by milliamperes, and a
+        # first fit of everything from zero lands in the dead time's valley
+        drive = [n for n in free if n in DRIVE_PARAMETERS]
+        first = fitter.fit(drive, np.zeros(len(drive)))
+        x0 = np.array([first.x[drive.index(n)] if n in drive else 0.0 for n in free])
     sel = select_identifiable(fitter, free, correlation_limit=correlation_limit,
-                              multiple_limit=multiple_limit)
+                              multiple_limit=multiple_limit, x0=x0)
     res, names = sel["res"], sel["names"]
     dev = dict(zip(names, (float(v) for v in res.x)))
     unit = apply_deviations(base, dev)
@@ -594,23 +641,87 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         raise CalibrationError(
             "the unit does not look healthy after calibration: "
             + ", ".join(f"{s} fits at {r:.1f}x its noise floor" for s, r in bad.items())
-            + f" (a healthy unit fits below {fit_limit:g}x); diagnose it (emaphm diagnose) "
-            "before using it as a reference, or check that the traces are of this unit and "
-            "its parameters (--params)")
+            + f" (a healthy unit fits below {fit_limit:g}x); "
+            + (_DRIVE_DIFFERS if _in_transients(targets, fits, base) else
+               "diagnose it (emaphm diagnose) before using it as a reference, or check that the "
+               "traces are of this unit and its parameters (--params)"))
     est = estimates(names, res.x, sel["cov"])
+    _check_tolerances(est, tolerances, relative="gain_a" not in free and "gain_b" in free)
+    unit = _provenance(unit, traces, sources, est, sel["fixed"])
+    return CalibrationResult(params=unit, estimates=est,
+                             fixed=tuple(sel["fixed"]), correlated=tuple(sel["pairs"]),
+                             weak=tuple(sel["weak"]), fit_ratio=ratios,
+                             evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits))
+
+
+def _provenance(unit: ActuatorParams, traces: Sequence[Trace], sources: Sequence[str],
+                est: dict[str, dict[str, Any]], fixed: Sequence[str]) -> ActuatorParams:
+    """The calibrated unit with its ``[calibration]`` block: date, sources, estimates, the
+    parameters kept, the emaphm version, the sources' digests and the block's own."""
     from . import __version__
 
     calib = Calibration(date=_dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
                         sources=tuple(sources),
                         estimates=tuple((n, e["value"], e["se"]) for n, e in est.items()),
-                        fixed=tuple(sel["fixed"]), emaphm_version=__version__,
+                        fixed=tuple(fixed), emaphm_version=__version__,
                         trace_sha256=tuple(trace_digest(tr) for tr in traces))
     unit = replace(unit, calibration=calib)
-    unit = replace(unit, calibration=replace(calib, digest=calibration_digest(unit)))
-    return CalibrationResult(params=unit, estimates=est,
-                             fixed=tuple(sel["fixed"]), correlated=tuple(sel["pairs"]),
-                             weak=tuple(sel["weak"]), fit_ratio=ratios,
-                             evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits))
+    return replace(unit, calibration=replace(calib, digest=calibration_digest(unit)))
+
+
+#: What calibrate's refusal says where the misfit sits in the command's transients.
+_DRIVE_DIFFERS = ("the misfit sits in the command's transients (steps, reversals), not on its "
+                  "ramps: the drive's control likely differs from [controller] (a filter on the "
+                  "speed feedback, a computation delay, feed-forwards, other limits); record "
+                  "the drive's voltage commands with the currents (calibrated without modelling "
+                  "the controller, docs/drives.md), or describe the drive in [controller]")
+
+
+def _in_transients(targets: list, fits: list, base: ActuatorParams) -> bool:
+    """Whether the calibrated fits misfit mostly in the command's transients
+    (:func:`emaphm.fitness.transient_excess`), on the traces of the modelled controller."""
+    for tg, (_, measured, model) in zip(targets, fits):
+        if isinstance(tg, _DrivenTarget):
+            continue
+        share = transient_excess(tg.theta_ref, base.inverter.T_s, tg.w * (model - measured) ** 2,
+                                 tg.w, tg.floor_sigma)
+        if share is not None and share >= TRANSIENT_MISFIT:
+            return True
+    return False
+
+
+def _check_tolerances(est: dict[str, dict[str, Any]], tolerances: Any,
+                      relative: bool = False) -> None:
+    """Refuse estimates whose whole 95 % interval lies outside their production tolerance
+    (:data:`TOLERANCE_CHECKED`), naming them. ``relative``: the sensor gains were read
+    against phase A's (the recorded-voltage path), so each may be off by both tolerances."""
+    from .units import DEFAULT_TOLERANCES
+
+    tol = DEFAULT_TOLERANCES if tolerances is None else tolerances
+    out = []
+    for name, e in est.items():
+        field_ = TOLERANCE_CHECKED.get(name)
+        if field_ is None:
+            continue
+        lo, hi = getattr(tol, field_)
+        if relative and field_ == "sensor_gain":
+            lo, hi = 2.0 * lo, 2.0 * hi
+        if e["lo95"] > hi or e["hi95"] < lo:
+            unit = " A" if e["unit"] == "A" else ""
+            scale = 1.0 if unit else 100.0
+            pct = "" if unit else " %"
+            out.append(f"{name} {scale * e['value']:+.3g}{unit}{pct} (95 % interval "
+                       f"{scale * e['lo95']:+.3g} to {scale * e['hi95']:+.3g}{unit}{pct}; tolerance "
+                       f"{scale * lo:+.3g} to {scale * hi:+.3g}{unit}{pct})")
+    if out:
+        raise CalibrationError(
+            "the calibration puts " + "; ".join(out) + " outside what a unit of this design "
+            "spreads over: the model does not describe this actuator, and its parameters would "
+            "absorb the difference. Most often the drive's control differs from [controller] (a "
+            "speed filter, a delay, feed-forwards, other limits): record the drive's voltage "
+            "commands with the currents (calibrated without modelling the controller, "
+            "docs/drives.md) or describe the drive in [controller]; else check the data sheet "
+            "(--params) and the current sensors")
 
 
 def _multiple_correlation(corr: np.ndarray) -> np.ndarray:

@@ -131,6 +131,20 @@ def backlash_scale(k2):
     return 1.0 + 99.0 * k2
 
 
+#: The backlash width [rad] that k2 = 1 reaches on a transmission whose data sheet states
+#: none (``backlash = 0``: a harmonic or a direct drive), where a multiple of nothing would
+#: say nothing: the preset's nominal 0.2 mrad x 100, so k2 keeps its scale there.
+BACKLASH_FROM_ZERO = 0.02
+
+
+def backlash_width(nominal, k2):
+    """The backlash width [rad] of ``k2`` on a transmission of ``nominal`` width [rad]:
+    ``nominal x backlash_scale(k2)``, or ``BACKLASH_FROM_ZERO k2`` where the nominal
+    width is zero."""
+    nominal = np.asarray(nominal, dtype=float)
+    return np.where(nominal > 0.0, nominal * backlash_scale(k2), BACKLASH_FROM_ZERO * np.asarray(k2))
+
+
 def shorted_fraction(k_sc):
     """Fraction of a phase's turns shorted, capped at MAX_SHORTED_FRACTION."""
     return np.minimum(k_sc, MAX_SHORTED_FRACTION)
@@ -199,7 +213,7 @@ def apply_faults(params: ActuatorParams, k: Sequence[float] | np.ndarray,
     motor = replace(motor, ecc=float(kk[5]), ecc_phase=float(eccentricity_phase(kk[6])))
     fs = float(friction_scale(kk[0]))
     trans = replace(tr, FSJ=tr.FSJ * fs, FDJ=tr.FDJ * fs,
-                    backlash=tr.backlash * float(backlash_scale(kk[1])))
+                    backlash=float(backlash_width(tr.backlash, kk[1])))
     # the drive's data-sheet settings stay the healthy motor's
     ctrl = replace(ctl.kept_for(m, params.load, motor, params.load),
                    Kp=ctl.Kp * float(gain_scale(kk[7])))

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -34,6 +34,7 @@ from .traces import Trace, TraceError, resample, validate
 __all__ = ["eq4_weights", "equivalent_current", "white_noise_sigma", "Eq4Objective",
            "FITNESS_MODES", "trace_fault_model", "on_model_grid", "aligned_currents", "effective_samples", "check_diagnosable",
            "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT", "MISFIT_RECORDED", "MISFIT_P",
+           "TRANSIENT_MISFIT", "TRANSIENT_WINDOW", "transient_excess",
            "misfit_p_value", "misfit_limit"]
 
 FITNESS_MODES = ("phases", "equivalent")
@@ -165,6 +166,43 @@ def misfit_limit(p: float = MISFIT_P, drive_model: str = MODELLED) -> float:
 
     mean, std = MISFIT[drive_model]
     return math.exp(mean - std * float(ndtri(p)))
+
+
+#: A misfit this many times denser in the command's transients than elsewhere
+#: (:func:`transient_excess`) points at the drive's control, not at the plant.
+TRANSIENT_MISFIT = 3.0
+#: How long after a change of the command's slope [s] counts as its transient.
+TRANSIENT_WINDOW = 0.02
+
+
+def transient_excess(theta_ref: np.ndarray, T_s: float, sq_residual: np.ndarray,
+                     weights: np.ndarray, sigma: Any) -> float | None:
+    """How much denser a fit's misfit is in the command's transients than elsewhere: the
+    excess of the weighted squared residual ``sq_residual`` (n, c; already weighted) over
+    the white noise ``sigma`` (c,) per unit of weight, in the :data:`TRANSIENT_WINDOW` after
+    each change of the command's slope (steps, the ends of ramps, reversals), over the
+    same in the rest. A drive whose control differs from its description misfits there
+    (its loops act on the transients); a model error of the plant misfits on the ramps too.
+    None where it cannot be told (no transient, no excess in them)."""
+    ref = np.asarray(theta_ref, dtype=float)
+    slope = np.gradient(ref) / T_s
+    marks = np.flatnonzero(np.abs(np.diff(slope, prepend=slope[0])) > 1.0)
+    window = int(round(TRANSIENT_WINDOW / T_s))
+    transient = np.zeros(ref.size, dtype=bool)
+    for m in marks:
+        transient[m:m + window] = True
+    if not transient.any() or transient.all():
+        return None
+    s2 = 0.0 if sigma is None else np.asarray(sigma, dtype=float) ** 2
+    w = np.asarray(weights, dtype=float)
+    excess = np.sum(np.asarray(sq_residual, dtype=float) - w * s2, axis=1)
+    w = np.sum(w, axis=1)
+    inside = max(float(np.sum(excess[transient])) / max(float(np.sum(w[transient])), 1e-300), 0.0)
+    outside = max(float(np.sum(excess[~transient])) / max(float(np.sum(w[~transient])), 1e-300),
+                  0.0)
+    if inside <= 0.0:
+        return None
+    return inside / outside if outside > 0.0 else float("inf")
 
 
 def check_diagnosable(trace: Trace) -> None:

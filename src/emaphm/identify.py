@@ -149,7 +149,8 @@ class Identification:
     the trace's white-noise level [A rms], the largest of the phases'; ``drive_model``:
     what stood in for the drive's controller (:data:`emaphm.recorded.DRIVE_MODELS`), and
     ``not_observable`` the fault modes that path cannot see (their components of k are
-    reported healthy, not measured).
+    reported healthy, not measured); ``at_bounds``: the parameters searched beside k whose
+    fit ended at an end of their range (the unit is further off than the range allows).
     """
 
     algorithm: str
@@ -183,6 +184,7 @@ class Identification:
     noise_sigma: float = float("nan")
     drive_model: str = "modelled controller"
     not_observable: tuple[str, ...] = ()
+    at_bounds: tuple[str, ...] = ()
 
     @property
     def evals_per_s(self) -> float:
@@ -219,6 +221,7 @@ class Identification:
             "fitness_raw": self.fitness_raw,
             "drive_model": self.drive_model,
             "not_observable": list(self.not_observable),
+            "at_bounds": list(self.at_bounds),
         }
         if self.k_true is not None:
             d["k_true"] = [float(x) for x in self.k_true]
@@ -488,7 +491,25 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         suspect=bool(res.fun > (ratio * floor if floor > 0 else np.inf)),
         run_evaluations=int(res.run_evaluations), noise_sigma=problem.noise_sigma,
         config=_config_of(problem, solver, budget, options, polish),
-        drive_model=problem.drive_model, not_observable=problem.not_observable)
+        drive_model=problem.drive_model, not_observable=problem.not_observable,
+        at_bounds=_at_bounds(problem.nuisance, nu))
+
+
+#: A parameter searched beside k within this share of its range from an end sits at it.
+AT_BOUND = 1e-3
+
+
+def _at_bounds(names: tuple[str, ...], values: Any) -> tuple[str, ...]:
+    """The parameters searched beside k whose values sit at an end of their range
+    (:data:`emaphm.search.NUISANCE_RANGE`), a range that is not a physical one (the
+    encoder's offset, a zero dead time or Stribeck speed is a value, not a bound)."""
+    out = []
+    for name, v in zip(names, np.asarray(values, dtype=float).reshape(-1)):
+        lo, hi = NUISANCE_RANGE[name]
+        tol = AT_BOUND * (hi - lo)
+        if (v <= lo + tol and lo != 0.0) or v >= hi - tol:
+            out.append(name)
+    return tuple(out)
 
 
 def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, options: dict,

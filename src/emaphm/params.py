@@ -26,6 +26,8 @@ field                      unit                meaning
 ``Inverter.Kp_i``          V/A                 dq current controller, proportional
 ``Inverter.Ki_i``          V/(A s)             dq current controller, integral
 ``Inverter.I_trip``        A                   overcurrent trip level (peak phase current)
+``Inverter.dead_time``     s                   dead time between a leg's switches
+``Inverter.device_drop``   V                   its devices' on-state voltage drop
 ``Controller.Kp``          1/s                 position loop proportional gain
 ``Controller.Ki``          1/s^2               position loop integral gain
 ``Controller.Kd``          --                  position loop derivative gain
@@ -44,8 +46,6 @@ field                      unit                meaning
 ``Load.J_l``               kg m^2              load inertia behind the backlash
 ``Load.C_l``               N m s/rad           load viscous damping
 ``Plant.omega_s``          rad/s               Stribeck velocity of the dry friction
-``Plant.dead_time``        s                   the inverter's dead time (plant only)
-``Plant.device_drop``      V                   its devices' on-state drop (plant only)
 ``CurrentSensors.gain``    --                  per-phase current sensor gain (calibrated)
 ``CurrentSensors.offset``  A                   per-phase current sensor offset (calibrated)
 ``CurrentSensors.aa_*``    --, Hz              declared anti-alias filter order, cut-off
@@ -310,6 +310,11 @@ class Inverter:
     controller stops. Healthy operation peaks near 8 A on the diagnostic
     profile; a current loop that a heavy short circuit has made unstable
     trips instead of ringing at hundreds of amperes.
+
+    ``dead_time`` [s] between a leg's two switches and the devices' on-state
+    ``device_drop`` [V] take :attr:`V_lost` off each leg's voltage, against its current
+    (default none): the plant resolves it with its PWM ripple, the monitoring model
+    averages it over a current band (:func:`emaphm.models.inverter.dead_time_drop`).
     """
 
     V_dc: float = 600.0
@@ -317,12 +322,24 @@ class Inverter:
     Kp_i: float = 41.8
     Ki_i: float = 6000.0
     I_trip: float = 25.0
+    dead_time: float = 0.0
+    device_drop: float = 0.0
 
     def __post_init__(self) -> None:
         o = "Inverter"
         for name in ("V_dc", "f_pwm", "Kp_i", "I_trip"):
             object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0))
         object.__setattr__(self, "Ki_i", _check(o, "Ki_i", self.Ki_i, lo=0.0, strict_lo=False))
+        object.__setattr__(self, "dead_time", _check(o, "dead_time", self.dead_time, lo=0.0,
+                                                     strict_lo=False, hi=0.1 / self.f_pwm))
+        object.__setattr__(self, "device_drop", _check(o, "device_drop", self.device_drop,
+                                                       lo=0.0, strict_lo=False, hi=20.0))
+
+    @property
+    def V_lost(self) -> float:
+        """What a leg loses to the dead time and the devices' drops [V], against its
+        current: ``V_dc dead_time / T_s + device_drop``."""
+        return self.V_dc * self.dead_time * self.f_pwm + self.device_drop
 
     @property
     def T_s(self) -> float:
@@ -665,23 +682,14 @@ class Plant:
 
     Dry friction falls from ``FSJ`` to ``FDJ`` with speed (Stribeck):
     ``T_f = FDJ + (FSJ - FDJ) exp(-(omega/omega_s)^2)`` while moving; default
-    ``omega_s = 1 rad/s``. The inverter's legs lose ``V_dc dead_time / T_s +
-    device_drop`` [V] to the dead time between their switches and to the devices' on-state
-    drops, against the phase current's sign (the PWM ripple smooths it near zero current,
-    which the plant resolves); default none. (Files written before 0.3 also held the
+    ``omega_s = 1 rad/s``. (Files written before 0.3 also held the
     backlash contact's ``K_c`` and ``D_c`` here; they are read into ``[transmission]``.)
     """
 
     omega_s: float = 1.0
-    dead_time: float = 0.0
-    device_drop: float = 0.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "omega_s", _check("Plant", "omega_s", self.omega_s, lo=0.0))
-        object.__setattr__(self, "dead_time", _check("Plant", "dead_time", self.dead_time,
-                                                     lo=0.0, strict_lo=False, hi=2e-5))
-        object.__setattr__(self, "device_drop", _check("Plant", "device_drop", self.device_drop,
-                                                       lo=0.0, strict_lo=False, hi=20.0))
 
 
 _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
@@ -692,7 +700,7 @@ _SECTIONS = {"motor": Motor, "inverter": Inverter, "controller": Controller,
 #: the defaults (a healthy winding, the default plant physics, ideal sensors, no calibration).
 _OPTIONAL_SECTIONS = {"plant", "sensors", "calibration"}
 _OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
-                    "plant": {"dead_time", "device_drop"},
+                    "inverter": {"dead_time", "device_drop"},
                     "controller": {"velocity_feedforward", "torque_feedforward",
                                    "torque_feedforward_inertia", "speed_filter_s",
                                    "speed_reference_weight", "current_reference_filter_s",

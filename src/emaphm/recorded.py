@@ -40,6 +40,7 @@ from .firmware import DRIVE_MODELS, MODELLED, RECORDED_VOLTAGES
 from .fitness import (check_diagnosable, check_load, eq4_weights, on_model_grid,
                       trace_fault_model, white_noise_sigma)
 from .models import driven
+from .models.inverter import dead_time_width
 from .models.layout import PopulationPacker
 from .models.monitoring import STATUS_DIVERGED, PopulationResult
 from .params import ActuatorParams, siemens_1fk7060
@@ -116,7 +117,7 @@ class DrivenModel:
         scale = driven.mechanical_scale(m.J_m + self.params.load.J_l, self.params.controller.k_T)
         object.__setattr__(self, "_observer", np.array([l_1, l_2, scale]))
         I_max = self.params.controller.I_max or m.I_max
-        object.__setattr__(self, "_i_0", driven.dead_time_width(I_max))
+        object.__setattr__(self, "_i_0", dead_time_width(I_max))
 
     @property
     def theta0(self) -> float:

@@ -33,18 +33,20 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .diagnosis import Diagnosis, MismatchFit, Refit, Thresholds, diagnose, fit_ratio_of
+from .diagnosis import (Diagnosis, MismatchFit, Refit, Thresholds, Unexplained, diagnose,
+                        fit_ratio_of)
 from .modes import MODES, thresholds_for
-from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, misfit_limit,
-                      misfit_p_value)
+from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, TRANSIENT_MISFIT,
+                      misfit_limit, misfit_p_value, transient_excess)
 from .firmware import MODELLED
 from .params import ActuatorParams
 from .problem import IdentificationProblem, apply_extra
+from .recorded import DRIVE_NUISANCE
 from .traces import Trace
 
 __all__ = ["diagnose", "diagnose_identification", "examine", "Examination", "screen_sensors",
-           "mismatch_fit",
-           "needs_mismatch_check",
+           "mismatch_fit", "drive_check", "transient_share", "DRIVE_DEVIATIONS", "DRIVE_HINT",
+           "TRANSIENT_MISFIT", "needs_mismatch_check",
            "MISMATCH_NUISANCE", "NOISELESS_NOTE", "MISFIT_LOG_MEAN", "MISFIT_LOG_STD", "MISFIT_P",
            "misfit_p_value", "misfit_limit", "fit_ratio_of"]
 
@@ -81,6 +83,85 @@ def mismatch_fit(problem: IdentificationProblem, k: Any, *, seed: int,
     refit = replace(problem, nuisance=tuple(nuisance), start=k, search=None, objective=None)
     ident = minimize(refit, "lsq", seed=seed)
     return MismatchFit(k=ident.k, nuisance=dict(ident.nuisance), fit_ratio=fit_ratio_of(ident))
+
+
+#: The deviations of a drive from its ``[controller]`` most likely in firmware the data sheet
+#: does not describe: on a data sheet, a fault the modelled controller reads is kept only if
+#: the refit with each of these drives that fits as well names it too
+#: (:func:`drive_check`): a small lag on the speed feedback fits as backlash at 1.2x the
+#: noise floor, with no misfit to see.
+DRIVE_DEVIATIONS: dict[str, dict[str, Any]] = {
+    "a 0.25 ms speed-feedback filter": dict(speed_filter_s=2.5e-4),
+    "a 1 ms speed-feedback filter": dict(speed_filter_s=1e-3),
+    "a period of computation delay": dict(delay_periods=1),
+    "velocity and torque feed-forward": dict(velocity_feedforward=1.0, torque_feedforward=1.0),
+}
+
+
+def drive_check(problem: IdentificationProblem, k: Any, ratio: float | None, faults: Any, *,
+                seed: int, read: Callable[[np.ndarray, dict, float | None], Diagnosis]
+                ) -> tuple[tuple, str | None]:
+    """``(faults kept, the deviation that explains the others)``: refit ``problem`` from
+    ``k`` with the drive's likeliest deviations from its ``[controller]``
+    (:data:`DRIVE_DEVIATIONS`, one at a time, on the modelled controller); a refit that fits
+    at least about as well (within :data:`HYPOTHESIS_GAIN` of ``ratio``) and does not name a
+    fault takes that fault from the verdict. ``read(k, extra, ratio)`` is the verdict on a
+    refit."""
+    from .identify import minimize     # local: the search stack is heavy to import
+
+    kept, why = list(faults), None
+    if not kept or problem.drive_model != MODELLED:
+        return tuple(kept), None
+    ctl = problem.params.controller
+    for name, options in DRIVE_DEVIATIONS.items():
+        if all(getattr(ctl, key) == value for key, value in options.items()):
+            continue                   # the description already has it
+        trial = replace(problem, params=replace(problem.params, controller=replace(ctl, **options)),
+                        start=k, search=None, objective=None)
+        try:
+            r = minimize(trial, "lsq", seed=seed)
+        except ValueError:             # a drive that does not follow the command at all
+            continue
+        r_ratio = fit_ratio_of(r)
+        if ratio is not None and r_ratio is not None and r_ratio > (1.0 + HYPOTHESIS_GAIN) * ratio:
+            continue
+        named = {(f.mode, f.phase) for f in read(r.k, dict(r.nuisance), r_ratio).faults}
+        gone = [f for f in kept if (f.mode, f.phase) not in named]
+        if gone:
+            kept = [f for f in kept if (f.mode, f.phase) in named]
+            why = why or name
+        if not kept:
+            break
+    return tuple(kept), why
+
+
+def transient_share(problem: IdentificationProblem, k: Any, nu: Any = None) -> float | None:
+    """How much more of the fit's misfit lies in the command's transients than their share
+    of the trace: the excess of the weighted squared residual over the noise, per unit of
+    weight, in the 20 ms after each change of the command's slope (steps, the ends of
+    ramps, reversals), over the same in the rest. A drive whose control differs from
+    ``[controller]`` misfits there (its loops act on the transients); a model error of the
+    plant misfits on the ramps too. None where it cannot be told (a recorded-voltage path,
+    no transient, no excess)."""
+    if problem.drive_model != MODELLED:
+        return None
+    obj = problem.objective
+    row = np.concatenate([np.asarray(k, dtype=float),
+                          np.zeros(len(problem.nuisance)) if nu is None else np.asarray(nu)])
+    R = obj.residuals(row[None, :])[0].reshape(obj.weights.shape)
+    if not np.all(np.isfinite(R)):
+        return None
+    return transient_excess(obj.model.profile.theta_ref(obj.model.t),
+                            problem.params.inverter.T_s, R * R, obj.weights, obj.noise_sigma)
+
+
+#: What to do when the drive's control likely differs from its description.
+DRIVE_HINT = ("the misfit sits in the command's transients (steps, reversals), not on its "
+              "ramps: the drive's control likely differs from [controller] (a filter on the "
+              "speed feedback, a computation delay, feed-forwards, other limits); record the "
+              "drive's voltage commands with the currents (v_a, v_b, v_c or v_d, v_q: "
+              "identified without modelling the controller, docs/drives.md), or describe the "
+              "drive in [controller]")
 
 
 #: A mode's hypothesis refit is kept when it lowers the fit ratio by this share at least
@@ -222,6 +303,16 @@ def _with_bridge(params: ActuatorParams, j: int, decades: float) -> ActuatorPara
     return replace(params, motor=replace(m, R_f=tuple(R_f)))
 
 
+def _bound_note(name: str, value: float) -> str:
+    """The note of a parameter searched beside k that ended at an end of its range."""
+    from .search import NUISANCE_RANGE, nuisance_text
+
+    lo, hi = NUISANCE_RANGE[name]
+    return (f"the fit put the {nuisance_text(name, value)} at the end of its range ({lo:g} to "
+            f"{hi:g}): the unit is further off than the range allows, and the other readings may "
+            "carry the rest; calibrate the unit again (emaphm calibrate) if it has changed")
+
+
 def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
                             params: ActuatorParams | None = None,
                             thresholds: Thresholds | None = None, k: Any = None,
@@ -258,6 +349,7 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     ratio = None if noiseless else fit_ratio_of(ident)
     extra = dict(getattr(ident, "nuisance", {}) or {})
     notes = (NOISELESS_NOTE,) if noiseless else ()
+    notes += tuple(_bound_note(n, extra[n]) for n in getattr(ident, "at_bounds", ()) if n in extra)
     diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
     if not check:
         return replace(diag, notes=notes)
@@ -275,10 +367,37 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     if diag.verdict == "faulty" and needs_mismatch_check(params):
         names = tuple(("demag" if n == "flux" and "demag" in extra else n)
                       for n in MISMATCH_NUISANCE)
-        names += tuple(n for n in extra if n.startswith("Rf_"))
+        names += tuple(n for n in extra if n.startswith("Rf_") or n in DRIVE_NUISANCE)
         m = mismatch_fit(problem, k, seed=seed, nuisance=names)
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, mismatch=m, **kw)
+    if diag.verdict == "faulty" and needs_mismatch_check(params):
+        diag = _drive_deviations(problem, diag, k, extra, ratio, seed, findings, noiseless, kw)
+    if diag.unexplained is not None and diag.unexplained.reason == "misfit":
+        share = transient_share(problem, k, [extra.get(n, 0.0) for n in problem.nuisance])
+        if share is not None and share >= TRANSIENT_MISFIT:
+            diag = replace(diag, unexplained=replace(diag.unexplained, hint=DRIVE_HINT))
     return replace(diag, notes=notes, refit=refit)
+
+
+def _drive_deviations(problem, diag, k, extra, ratio, seed, findings, noiseless, kw) -> Diagnosis:
+    """The verdict after :func:`drive_check`: the faults a likely drive deviation explains as
+    well dropped; where none is left, ``unexplained`` (reason ``"drive"``)."""
+    kept, why = drive_check(
+        problem, k, ratio, diag.faults, seed=seed,
+        read=lambda k_, extra_, ratio_: diagnose(k_, fit_ratio=None if noiseless else ratio_,
+                                                 extra=extra_, findings=findings, **kw))
+    if why is None:
+        return diag
+    if kept:
+        return replace(diag, faults=kept)
+    gone = ", ".join(f.mode.replace("_", " ") + (f" (phase {f.phase})" if f.phase else "")
+                     for f in diag.faults)
+    return replace(diag, faults=(), suspected=diag.faults, unexplained=Unexplained(
+        "drive", 0.0 if ratio is None else float(ratio), None,
+        f"{gone}, or {why} the drive's description lacks: a drive with it fits this trace as "
+        "well and names no such fault; record the drive's voltage commands with the currents "
+        "(identified without modelling the controller, docs/drives.md), or describe the drive "
+        "in [controller]"))
 
 
 @dataclass(frozen=True)

@@ -296,3 +296,27 @@ def test_a_balanced_change_on_all_three_phases_is_a_calibration_mismatch():
     k[2:5] = [0.2, 0.03, 0.03]
     d = diagnose(k, fault_model="physical")
     assert d.verdict == "faulty" and {f.phase for f in d.faults} == {"A", "B", "C"}
+
+
+def test_backlash_reads_from_zero_on_a_transmission_without_any():
+    """A data sheet with no backlash (a harmonic drive): k2 is an absolute width from zero,
+    not a multiple of nothing (it read 'backlash 99.9x nominal (0.00 mrad)')."""
+    from dataclasses import replace as _replace
+
+    from emaphm.faults import BACKLASH_FROM_ZERO, apply_faults
+    from emaphm.params import siemens_1fk7060
+
+    p = siemens_1fk7060()
+    zero = _replace(p, transmission=_replace(p.transmission, backlash=0.0))
+    k = [0, 0.5, 0, 0, 0, 0, 0.5, 0.5]
+    assert apply_faults(zero, k, "physical").transmission.backlash == pytest.approx(
+        0.5 * BACKLASH_FROM_ZERO)
+    assert apply_faults(p, k, "physical").transmission.backlash == pytest.approx(
+        p.transmission.backlash * 50.5)
+    reading = diagnose(k, params=zero, fault_model="physical").faults[0].reading
+    assert "10.00 mrad where the data sheet states none" in reading
+    assert "x nominal" in diagnose(k, params=p, fault_model="physical").faults[0].reading
+    from emaphm.models.layout import C_BACKLASH, pack_population
+
+    _, CP = pack_population(zero, np.array([k]), fault_model="physical")
+    assert CP[0, C_BACKLASH] == pytest.approx(0.5 * BACKLASH_FROM_ZERO)

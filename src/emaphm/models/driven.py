@@ -8,7 +8,9 @@ filters and limits differ from drive to drive. Two residuals come out of one pas
 **Electrical.** Each candidate's winding circuit (:mod:`emaphm.models.windings`, the
 exact step ``z' = Phi z + Gamma w`` of :mod:`emaphm.models.pmsm`) is driven over control
 period ``k`` by the applied phase voltages ``u_k`` (less the inverter's dead time and
-device drops, ``V_dt sat(i / i_0)`` per phase, :func:`dead_time_drop`) and by the
+device drops, ``V_dt sat(i / i_0)`` per phase,
+:func:`~emaphm.models.inverter.dead_time_drop`: the data sheet's ``[inverter]`` dead time
+and device drop, and the ``"V_dt"`` searched beside k on top) and by the
 back-EMF averaged over the period from the measured angle: the change of the magnets'
 flux linkage ``(lambda(theta_{k+1}) - lambda(theta_k)) / T_s`` (:func:`flux_linkage`, the
 antiderivative of Eq. 2's back-EMF coefficients), exact however the speed varies within
@@ -49,6 +51,7 @@ from ._monitoring_common import I_DIVERGED
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_DELTA, C_ECC, C_ECC_PHASE, C_FDJ,
                      C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_OMEGA_S, C_PHI,
                      C_PHI_END, C_T0, C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S)
+from .inverter import dead_time_drop
 from .mechanics import transmission_step
 from .plant_mechanics import plant_step
 from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
@@ -57,7 +60,7 @@ from .step import row_reader
 from .windings import Q
 
 __all__ = ["OBSERVER_HZ", "MECH_SUBSTEPS", "observer_gains", "mechanical_scale", "flux_linkage",
-           "dead_time_drop", "dead_time_width", "DEAD_TIME_SHARE", "run", "N_RES"]
+           "run", "N_RES"]
 
 #: Bandwidth [Hz] of the observer the mechanics run as: slow beside the current loop and
 #: the backlash's contact, fast beside the test's motion (so a torque error of friction's
@@ -91,27 +94,6 @@ def mechanical_scale(J: float, k_T: float, hz: float = OBSERVER_HZ) -> float:
     """[A/rad]: the q current whose torque leaves an innovation of one radian in steady
     state, ``J (2 pi hz)^2 / k_T``."""
     return J * (2.0 * math.pi * hz) ** 2 / k_T
-
-
-#: The current [A] below which the dead time's voltage error fades, as a share of the
-#: drive's current limit: the legs' own PWM ripple carries a phase current across zero
-#: within a period near its zero crossings, which smooths the sign of the error. Measured
-#: on the reference plant (1 us of dead time, 600 V, 8 kHz): the winding fits its currents
-#: best with 0.2-0.6 % of I_max (20-85 mA on the preset), 3x worse at 1 %.
-DEAD_TIME_SHARE = 0.003
-
-
-def dead_time_width(I_max: float) -> float:
-    """``i_0`` [A]: the current below which the dead time's voltage error fades linearly,
-    :data:`DEAD_TIME_SHARE` of the drive's current limit ``I_max`` [A]."""
-    return DEAD_TIME_SHARE * I_max
-
-
-@jit
-def dead_time_drop(i, V_dt, i_0):
-    """The voltage [V] a leg loses to dead time and device drops at the phase current
-    ``i`` [A]: ``V_dt`` opposing the current, fading linearly below ``i_0``."""
-    return V_dt * min(max(i / i_0, -1.0), 1.0)
 
 
 @jit
@@ -177,16 +159,16 @@ def _period(c, u, theta1, i_meas1, T_l, z, i, tq, lam, mech_state, p, T_s, i_0, 
     c0_a, c0_b, c0_c = c[C_C0_A], c[C_C0_B], c[C_C0_C]
     ecc, ecc_ph = c[C_ECC], c[C_ECC_PHASE]
     mu_a, mu_b, mu_c = c[C_MU_A], c[C_MU_B], c[C_MU_C]
-    V_dt, delta = c[C_V_DT], c[C_DELTA]
+    V_dt, delta = max(c[C_V_DT], 0.0), c[C_DELTA]
     z0, z1, z2, z3, z4 = z
     ia, ib, ic = i
     la, lb, lc = lam
     thm, wm, thl, wl = mech_state
     J_m, C_m, J_l, C_l, K_c, D_c = mech
     na, nb, nc, s, co = flux_linkage(theta1 + delta, p, c0_a, c0_b, c0_c, ecc, ecc_ph)
-    u_a = u[0] - dead_time_drop(ia, V_dt, i_0)
-    u_b = u[1] - dead_time_drop(ib, V_dt, i_0)
-    u_c = u[2] - dead_time_drop(ic, V_dt, i_0)
+    u_a = u[0] - dead_time_drop(ia, V_dt, 1.0 / i_0)
+    u_b = u[1] - dead_time_drop(ib, V_dt, 1.0 / i_0)
+    u_c = u[2] - dead_time_drop(ic, V_dt, 1.0 / i_0)
     w0, w1, w2, w3, w4 = winding_input(u_a, u_b, u_c, (na - la) / T_s, (nb - lb) / T_s,
                                        (nc - lc) / T_s, mu_a, mu_b, mu_c)
     z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4,
@@ -223,7 +205,8 @@ def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
     the phase voltages [V] applied over each period (the last unused); ``theta (n,)``
     the measured motor angle [rad], ``omega0`` the speed at the first sample [rad/s];
     ``i_meas (n, 3)`` the measured currents [A]; ``T_load (n,)`` [N m]; ``w_e (n, 3)`` and
-    ``w_m (n,)`` the weights of the two residuals; ``i_0`` [A] (:func:`dead_time_width`).
+    ``w_m (n,)`` the weights of the two residuals; ``i_0`` [A]
+    (:func:`emaphm.models.inverter.dead_time_width`).
     Writes ``sse (n_pop, 2)`` (the weighted sums of the electrical and the mechanical
     residual; inf for a candidate whose currents left the physical range), and, where
     they are not zero-sized, ``residuals (n_pop, n, 4)`` (model less measured: currents

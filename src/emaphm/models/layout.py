@@ -34,9 +34,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..faults import (as_k, backlash_scale, check_fault_model, eccentricity_phase,
+from ..faults import (as_k, backlash_width, check_fault_model, eccentricity_phase,
                       friction_scale, gain_scale, shorted_fraction, N_K)
 from ..params import ActuatorParams
+from .inverter import dead_time_width
 from .controller import (CTL_A_I, CTL_A_W, CTL_B_W, CTL_DECOUPLING, CTL_DELAY, CTL_EMF_FF,
                          CTL_I_MAX, CTL_J_TFF, CTL_K_T, CTL_K_VFF, CTL_KD, CTL_KI, CTL_KI_I,
                          CTL_KI_W, CTL_KP_I, CTL_KP_W, CTL_L_D, CTL_OMEGA_MAX, CTL_P, CTL_T_MAX,
@@ -52,8 +53,9 @@ P_CTL = 0
            P_CTL + CTL_KI_W, P_CTL + CTL_T_MAX, P_CTL + CTL_K_T, P_CTL + CTL_I_MAX,
            P_CTL + CTL_KP_I, P_CTL + CTL_KI_I, P_CTL + CTL_V_DC, P_CTL + CTL_T_S)
 P_POLES = P_CTL + CTL_P
-(P_J_M, P_C_M, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT, P_K_C, P_D_C) = range(N_CTL, N_CTL + 9)
-N_P = N_CTL + 9
+(P_J_M, P_C_M, P_J_L, P_C_L, P_THETA0, P_I_TRIP, P_DT, P_K_C, P_D_C,
+ P_INV_I0) = range(N_CTL, N_CTL + 10)
+N_P = N_CTL + 10
 
 # per-candidate parameters CP[:, ...]
 (C_KP, C_FSJ, C_FDJ, C_BACKLASH, C_R_A, C_R_B, C_R_C, C_L_A, C_L_B, C_L_C,
@@ -67,11 +69,12 @@ C_GAMMA_END = C_GAMMA + N_Z * N_Z
 #: load ``Load.T_0``, plus the ``"load"`` nuisance (read by the monitoring model's kernels;
 #: the reference plant takes its whole load from ``run_reference(extra_load=)``)
 C_T0 = C_GAMMA + N_Z * N_Z
-#: what only the recorded-voltage model reads (:mod:`emaphm.models.driven`): the voltage
-#: [V] a leg loses to the inverter's dead time and device drops, the offset [rad,
-#: mechanical] of the encoder's zero from the magnet's axis, and the Stribeck speed [rad/s]
-#: of the dry friction (the ``"V_dt"``, ``"angle"`` and ``"stribeck"`` nuisance; zero as
-#: packed: no drop, no offset, Borello's two levels)
+#: the voltage [V] a leg loses to the inverter's dead time and device drops (the data
+#: sheet's ``Inverter.V_lost`` as packed, plus the ``"V_dt"`` nuisance); what only the
+#: recorded-voltage model reads (:mod:`emaphm.models.driven`): the offset [rad, mechanical]
+#: of the encoder's zero from the magnet's axis and the Stribeck speed [rad/s] of the dry
+#: friction (the ``"angle"`` and ``"stribeck"`` nuisance; zero as packed: no offset,
+#: Borello's two levels)
 C_V_DT = C_T0 + 1
 C_DELTA = C_T0 + 2
 C_OMEGA_S = C_T0 + 3
@@ -124,7 +127,9 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> 
     (and load) angle, at rest (a recorded trace need not start at zero);
     ``P[P_DT] = T_s / n_sub`` the sub-step the electrics are packed for;
     ``P[P_K_C], P[P_D_C]`` the backlash contact the kernels step, ``K_c = 0`` (rigid)
-    where ``dt`` does not resolve it (:func:`contact_resolved`)."""
+    where ``dt`` does not resolve it (:func:`contact_resolved`); ``P[P_INV_I0]`` one over
+    the current below which the dead time's voltage error fades
+    (:func:`emaphm.models.inverter.dead_time_width`)."""
     m, inv, load = params.motor, params.inverter, params.load
     tr = params.transmission
     P = np.empty(N_P)
@@ -139,6 +144,7 @@ def pack_shared(params: ActuatorParams, theta0: float = 0.0, n_sub: int = 1) -> 
     resolved = contact_resolved(params, P[P_DT])
     P[P_K_C] = tr.K_c if resolved else 0.0
     P[P_D_C] = tr.D_c if resolved else 0.0
+    P[P_INV_I0] = 1.0 / dead_time_width(params.controller.I_max or m.I_max)
     return P
 
 
@@ -222,7 +228,7 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     row[C_PHI:C_GAMMA], row[C_GAMMA:C_T0] = _one_winding(
         tuple(m.R), tuple(m.L), float(sigma), tuple(m.mu), tuple(m.R_f), float(P[P_DT]))
     row[C_T0] = params.load.T_0
-    row[C_V_DT] = 0.0
+    row[C_V_DT] = params.inverter.V_lost
     row[C_DELTA] = 0.0
     row[C_OMEGA_S] = 0.0
     return P, row[None, :]
@@ -375,7 +381,7 @@ class PopulationPacker:
         fs = friction_scale(K[:, 0])
         CP[:, C_FSJ] *= fs
         CP[:, C_FDJ] *= fs
-        CP[:, C_BACKLASH] *= backlash_scale(K[:, 1])
+        CP[:, C_BACKLASH] = backlash_width(CP[:, C_BACKLASH], K[:, 1])
         s = shorted_fraction(K[:, 2:5])
         if self.fault_model == "paper":
             CP[:, C_R_A:C_R_C + 1] *= 1.0 - s

@@ -53,9 +53,11 @@ from . import step
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
                                  STATUS_TRIPPED, _check_step)
 from .controller import N_CTL, feedforward
-from .layout import (C_ECC, C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_J_L, P_J_M,
+from .layout import (C_ECC, C_ECC_PHASE, C_V_DT, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0,
+                     P_J_L, P_J_M,
                      P_K_C, P_POLES, P_I_TRIP, P_T_S, P_THETA0, pack, PopulationPacker)
-from .step import (N_Q, N_X, control_inline, control_plain_inline, healthy_inline, plain_inline, initial_q, initial_x,
+from .step import (N_Q, N_X, control_inline, control_plain_inline, healthy_inline, plain_inline,
+                   substep_ideal_inline, initial_q, initial_x,
                    initial_x_inline, row_reader, row_writer, sincos_inline, substep_inline,
                    vector_reader)
 
@@ -132,6 +134,9 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     ctl = _read_ctl(P, P_CTL)
     I_trip = P[P_I_TRIP]
     no_options = plain_inline(ctl)
+    ideal = True                       # no candidate's inverter loses a volt to dead time
+    for j in range(n_pop):
+        ideal &= CP[j, C_V_DT] == 0.0
     # state: the plant's x (:data:`~emaphm.models.step.X_FIELDS`) and the drive's q
     X = np.zeros((n_pop, N_X))
     Q = np.zeros((n_pop, N_Q))
@@ -147,7 +152,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
         ref, w_ff, T_ff = feedforward(theta_ref[k], theta_ref[max(k - 1, 0)],
                                       theta_ref[max(k - 2, 0)], ctl)
         period = (ta, tb, tc, wa, wb, wc, ref, w_ff, T_ff)
-        mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt)
+        mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt, P[P_INV_I0])
         for j in range(n_pop):
             if status[j] == STATUS_DIVERGED:
                 continue
@@ -170,7 +175,10 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                     out_i[j, k, 2] = x[11]
                     out_theta[j, k] = x[0]
                     out_omega[j, k] = x[1]
-                x, tq = substep_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
+                if ideal:
+                    x, tq = substep_ideal_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
+                else:
+                    x, tq = substep_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
                 if s == 0 and store:
                     out_torque[j, k] = tq
             if not healthy_inline(x[9], x[10], x[11], x[1], x[0]):
@@ -217,7 +225,7 @@ def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int =
         out["i_abc"][n] = x[9:12]
         out["f_abc"][n] = x[6:9]
         mech = (T_load[n], m.J_m, m.C_m, faulty.load.J_l, faulty.load.C_l, P[P_K_C], P[P_D_C],
-                T_s / n_sub)
+                T_s / n_sub, P[P_INV_I0])
         period = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0) + step.feedforward(
             ref[n], ref[max(n - 1, 0)], ref[max(n - 2, 0)], ctl)
         q, u_a, u_b, u_c = step.control(x, q, c, ctl, P[P_I_TRIP], period,

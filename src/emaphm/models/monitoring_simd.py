@@ -61,9 +61,11 @@ import numpy as np
 
 from ._jit import cached_njit
 from .controller import N_CTL, feedforward
-from .layout import C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_I_TRIP, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S, P_THETA0
+from .layout import (C_ECC_PHASE, C_V_DT, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0, P_I_TRIP,
+                     P_J_L, P_J_M, P_K_C, P_POLES, P_T_S, P_THETA0)
 from ._monitoring_common import STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, _check_step
 from .step import (N_Q, N_X, TRIG_LIMIT, control_inline, control_plain_inline, healthy_inline,
+                   substep_ideal_inline,
                    initial_x_inline, inline, inlined, lane_reader, plain_inline, lane_writer, llvm_select as select,
                    sincos_inline as sincos, substep_inline, vector_reader)
 
@@ -151,7 +153,6 @@ def _trig_stage(B, p):
                     B[b, R_CG, l] = math.cos(g)
 
 
-@inline
 def _plant_stage(B, first, mech):
     """One sub-step of every lane (vector); the first also keeps the torque for the traces."""
     for b in range(B.shape[0]):
@@ -162,6 +163,11 @@ def _plant_stage(B, first, mech):
             _put_x(B, W_X, b, l, x)
             if first:
                 B[b, R_TQ, l] = tq
+
+
+#: the sub-step of an inverter with dead time, and of one without (the same numbers)
+_plant_stage_ideal = inlined(_plant_stage, substep_inline=substep_ideal_inline)
+_plant_stage = inlined(_plant_stage, substep_inline=substep_inline)
 
 
 def _control_stage(B, ctl, I_trip, period):
@@ -236,6 +242,9 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     ctl = _read_ctl(P, P_CTL)
     I_trip = P[P_I_TRIP]
     no_options = plain_inline(ctl)
+    ideal = True                       # no candidate's inverter loses a volt to dead time
+    for j in range(n_pop):
+        ideal &= CP[j, C_V_DT] == 0.0
     n_blk = (n_pop + LANES - 1) // LANES
     B = np.zeros((n_blk, N_ROWS, LANES))
     x0 = initial_x_inline(P[P_THETA0])
@@ -261,11 +270,17 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             _control_stage_plain(B, ctl, I_trip, period)
         else:
             _control_stage(B, ctl, I_trip, period)
-        mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt)
-        _plant_stage(B, True, mech)
+        mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt, P[P_INV_I0])
+        if ideal:
+            _plant_stage_ideal(B, True, mech)
+        else:
+            _plant_stage(B, True, mech)
         for s in range(1, n_sub):
             _trig_stage(B, p)
-            _plant_stage(B, False, mech)
+            if ideal:
+                _plant_stage_ideal(B, False, mech)
+            else:
+                _plant_stage(B, False, mech)
         if store:
             for j in range(n_pop):
                 b = j // LANES

@@ -347,8 +347,7 @@ def _run(params: ActuatorParams, k, profile: Profile, *, fault_model: str, n_sub
     el = electrical_step(faulty.motor, T_s / n_sub, fault_model)
     pl = faulty.plant
     tr = faulty.transmission
-    plant = np.array([pl.omega_s, tr.K_c, tr.D_c, pl.dead_time * params.inverter.V_dc / T_s
-                      + pl.device_drop])
+    plant = np.array([pl.omega_s, tr.K_c, tr.D_c, faulty.inverter.V_lost])
     t = profile.grid(T_s)
     ref = np.ascontiguousarray(profile.theta_ref(t))
     load = np.ascontiguousarray(profile.load_torque(t) + float(extra_load))
@@ -384,7 +383,7 @@ def run_reference(params: ActuatorParams, k, profile: Profile, *, fault_model: s
     the control instants ``k*T_s``, ``drive (n, 6)`` (what the drive logs each period:
     the phase voltage references it applies, star-referenced [V], ``i_d_ref`` [A, 0],
     ``i_q_ref`` [A] and ``omega_ref`` [rad/s]), and ``trip_time`` [s] when the drive
-    tripped on overcurrent (None if never). ``params.plant.dead_time`` and
+    tripped on overcurrent (None if never). ``params.inverter.dead_time`` and
     ``device_drop`` take their voltage off each leg against its current's sign.
     ``drive``: the firmware the plant's drive runs, emaphm's own (None, ``"emaphm"``: the
     cascade ``params.controller`` describes) or a foreign one of

@@ -40,6 +40,7 @@ from . import pmsm as _pmsm
 from ._monitoring_common import I_DIVERGED, OMEGA_DIVERGED
 from .controller import N_STATE as N_CTL_STATE
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_FDJ, C_FSJ, C_GAMMA, C_KP,
+                     C_V_DT,
                      C_MU_A, C_MU_B, C_MU_C, C_PHI, C_PHI_END, C_GAMMA_END, C_T0)
 from .pmsm import COS_2PI_3, SIN_2PI_3
 
@@ -47,7 +48,7 @@ __all__ = ["select", "llvm_select", "sincos", "TRIG_LIMIT", "back_emf", "overcur
            "healthy", "inline", "inlined", "control_inline", "substep_inline", "sincos_inline",
            "healthy_inline", "X_FIELDS", "N_X", "Q_FIELDS", "N_Q", "PERIOD_FIELDS", "initial_x",
            "initial_q", "initial_x_inline", "row_reader", "row_writer", "vector_reader", "lane_reader",
-           "lane_writer", "keep", "control_plain_inline", "plain_inline"]
+           "lane_writer", "keep", "control_plain_inline", "plain_inline", "substep_ideal_inline"]
 
 #: Compile a function into its caller at Numba IR level. LLVM's inliner leaves the larger
 #: physics functions as calls, and every call returns Numba's status code, whose check is
@@ -130,6 +131,7 @@ winding_step = _pmsm.winding_step
 phase_currents = _pmsm.phase_currents
 torque_loops = _pmsm.torque_loops
 transmission_step = _mechanics.transmission_step
+dead_time_drop = _inverter.dead_time_drop
 
 # ---- sine and cosine (fdlibm, branch-free) ----------------------------------------------
 
@@ -348,18 +350,22 @@ def substep(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c):
 
     ``x`` its plant state (:data:`X_FIELDS`), ``c`` its constants (its CP row: back-EMF
     coefficients, shorted fractions, eccentricity, the winding step's ``Phi`` and
-    ``Gamma``, friction, backlash and its own load torque ``T_0`` [N m]) beside the
-    profile's ``T_l`` in ``mech = (T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt)``; the sines and
-    cosines of the electrical angle and of ``theta_m + ecc_phase``; the leg voltages [V].
+    ``Gamma``, friction, backlash, its own load torque ``T_0`` [N m] and what its legs lose
+    to dead time) beside the profile's ``T_l`` in ``mech = (T_l, J_m, C_m, J_l, C_l, K_c,
+    D_c, dt, 1/i_0)``; the sines and cosines of the electrical angle and of ``theta_m +
+    ecc_phase``; the leg voltages [V].
     Returns ``(x, torque at the start of the step)``.
     """
-    T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt = mech
+    T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt, inv_i0 = mech
     thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic = x
     mu_a, mu_b, mu_c = c[C_MU_A], c[C_MU_B], c[C_MU_C]
     ca, cb, cc = back_emf(s_e, c_e, s_g, c_g, c[C_C0_A], c[C_C0_B], c[C_C0_C], c[C_ECC])
     tq = torque_loops(ia, ib, ic, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c)
-    w0, w1, w2, w3, w4 = winding_input(u_a, u_b, u_c, ca * wm, cb * wm, cc * wm,
-                                       mu_a, mu_b, mu_c)
+    V = c[C_V_DT]
+    w0, w1, w2, w3, w4 = winding_input(u_a - dead_time_drop(ia, V, inv_i0),
+                                       u_b - dead_time_drop(ib, V, inv_i0),
+                                       u_c - dead_time_drop(ic, V, inv_i0), ca * wm, cb * wm,
+                                       cc * wm, mu_a, mu_b, mu_c)
     z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4,
                                       c[C_PHI:C_PHI_END], c[C_GAMMA:C_GAMMA_END])
     ja, jb, jc = phase_currents(z0, z1)
@@ -394,7 +400,18 @@ control_inline = inlined(control, overcurrent=overcurrent_inline, keep=keep_inli
 control_plain_inline = inlined(control, overcurrent=overcurrent_inline, keep=keep_inline,
                                control_step=control_step_plain_inline, modulate=modulate_inline)
 plain_inline = inlined(_controller.plain)
-substep_inline = inlined(substep, back_emf=back_emf_inline, torque_loops=torque_loops_inline,
-                         winding_input=winding_input_inline, winding_step=winding_step_inline,
-                         phase_currents=phase_currents_inline,
-                         transmission_step=transmission_step_inline)
+_substep_parts = dict(back_emf=back_emf_inline, torque_loops=torque_loops_inline,
+                      winding_input=winding_input_inline, winding_step=winding_step_inline,
+                      phase_currents=phase_currents_inline,
+                      transmission_step=transmission_step_inline)
+substep_inline = inlined(substep, dead_time_drop=inlined(_inverter.dead_time_drop),
+                         **_substep_parts)
+
+
+def _no_drop(i, V_lost, inv_i_0):
+    return 0.0
+
+
+#: :func:`substep` of an inverter without dead time (the kernels run it where no
+#: candidate loses a volt): the same numbers, none of the work
+substep_ideal_inline = inlined(substep, dead_time_drop=inline(_no_drop), **_substep_parts)

@@ -1,8 +1,9 @@
-"""Backlash (k2 of the paper's vector): the width x (1 + 99 k2)."""
+"""Backlash (k2 of the paper's vector): the width x (1 + 99 k2); on a transmission whose
+data sheet states none, ``BACKLASH_FROM_ZERO k2`` (:func:`emaphm.faults.backlash_width`)."""
 
 from __future__ import annotations
 
-from ..faults import backlash_scale
+from ..faults import BACKLASH_FROM_ZERO, backlash_scale, backlash_width
 from .base import Fault, FaultMode, Injection, Reading
 
 
@@ -10,10 +11,14 @@ def read(r: Reading) -> list[Fault]:
     k2 = float(r.k[1])
     if not k2 > r.thresholds.backlash:
         return []
-    bs = float(backlash_scale(k2))
-    return [Fault("backlash", "k2", k2, k2,
-                  f"backlash {bs:.1f}x nominal ({r.params.transmission.backlash * bs * 1e3:.2f} "
-                  "mrad)")]
+    nominal = r.params.transmission.backlash
+    width = float(backlash_width(nominal, k2))
+    if nominal > 0.0:
+        text = f"backlash {float(backlash_scale(k2)):.1f}x nominal ({width * 1e3:.2f} mrad)"
+    else:
+        text = (f"backlash {width * 1e3:.2f} mrad where the data sheet states none (k2 = 1 is "
+                f"{BACKLASH_FROM_ZERO * 1e3:g} mrad)")
+    return [Fault("backlash", "k2", k2, k2, text)]
 
 
 def inject(severity: float, phase: str | None = None) -> Injection:
