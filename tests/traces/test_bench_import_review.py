@@ -354,3 +354,30 @@ def test_rows_of_integers_say_nothing_of_the_decimal(tmp_path):
                                                 'i_a = { name = "a", unit = "A" }\n'
                                                 'i_b = { name = "b", unit = "A" }\n'))
     assert "no channel 'x'" in str(err.value) and "decimal" not in str(err.value)
+
+
+# ----------------------------------------------------------------------------- issue 37
+def test_a_channel_named_group_slash_channel_is_read_as_in_group_or_in_its_name(tmp_path):
+    """The documented "GROUP/CHANNEL" form, as --inspect lists a channel, and the name
+    with its group: both read the same channels (it was refused with "no channel 'EMA/Time'
+    ...; the file has 'EMA/Time'")."""
+    pytest.importorskip("nptdms")
+    from nptdms import ChannelObject, TdmsWriter
+
+    t, ref, pos, ia, ib = _signals()
+    with TdmsWriter(tmp_path / "rig.tdms") as w:
+        w.write_segment([ChannelObject("EMA", name, x, properties={"unit_string": unit})
+                         for name, x, unit in (("Time", t, "s"), ("Soll", ref, "rad"),
+                                               ("Ist", pos, "rad"), ("IU", ia, "A"),
+                                               ("IV", ib, "A"))])
+        w.write_segment([ChannelObject("Other", "Time", t[::-1], properties={"unit_string": "s"})])
+    slash = _map('[channels]\nt = "EMA/Time"\ntheta_ref = "EMA/Soll"\ntheta_m = "EMA/Ist"\n'
+                 'i_a = "EMA/IU"\ni_b = { name = "EMA/IV", group = "EMA" }\n')
+    grouped = _map('[source]\ngroup = "EMA"\n[channels]\nt = "Time"\ntheta_ref = "Soll"\n'
+                   'theta_m = "Ist"\ni_a = "IU"\ni_b = "IV"\n')
+    for cmap in (slash, grouped):
+        _check(import_trace(tmp_path / "rig.tdms", cmap))
+    with pytest.raises(TraceError, match=r"no channel 'EMA/IV' in group 'Other' in rig.tdms"):
+        import_trace(tmp_path / "rig.tdms", _map(
+            '[channels]\nt = "EMA/Time"\ntheta_ref = "EMA/Soll"\ntheta_m = "EMA/Ist"\n'
+            'i_a = "EMA/IU"\ni_b = { name = "EMA/IV", group = "Other" }\n'))

@@ -84,6 +84,8 @@ class SourceInfo:
         alias = None if group is None else group.replace("/", ".")
         hits = [c for c in self.channels
                 if c.name == name and (group is None or c.group in (group, alias))]
+        if not hits and "/" in name:
+            hits = self._by_label(name, group)
         if len(hits) == 1:
             return hits[0]
         if len(hits) > 1:
@@ -108,6 +110,16 @@ class SourceInfo:
         raise TraceError(f"{where}: no channel {name!r}{in_group} in {self.path.name}{hint}; "
                          f"{has}{skipped} (`emaphm import {self.path.name} --inspect` "
                          "lists them)")
+
+    def _by_label(self, label: str, group: str | None) -> list[ChannelInfo]:
+        """The channels a ``"GROUP/CHANNEL"`` name means (as ``--inspect`` lists them; a
+        MATLAB struct in a struct as ``Run.Messung/x`` or ``Run/Messung/x``), in ``group``
+        where one is given."""
+        head, _, leaf = label.rpartition("/")
+        folded = head.replace("/", ".")
+        return [c for c in self.channels if c.name == leaf and c.group is not None
+                and c.group in (head, folded)
+                and (group is None or c.group in (group, group.replace("/", ".")))]
 
 
 @dataclass(frozen=True)
