@@ -689,6 +689,110 @@ def _(d, b):
     return ["diagnose", str(d / "deg.csv")]
 
 
+# issue 37 items 1-4: damaged binary exports, read in the sandbox ---------------------------
+def _bench(b: Base, d: Path, fmt: str) -> tuple[Path, Path]:
+    """A bench export of the base trace in ``fmt`` (tests/benchfiles.py) and its map."""
+    from benchfiles import WRITERS
+
+    write, name = WRITERS[fmt]
+    path, text = write(b.trace, d / name)
+    _toml(d / "map.toml", text)
+    return path, d / "map.toml"
+
+
+def _import_bench(d: Path, path: Path, inspect: bool) -> list[str]:
+    if inspect:
+        return ["import", str(path), "--inspect"]
+    return ["import", str(path), "--map", str(d / "map.toml"), "--out", str(d / "out.parquet")]
+
+
+def _small_mat(path: Path, compressed: bool = False) -> Path:
+    from scipy.io import savemat
+
+    savemat(path, {"a": np.arange(10.0), "b": np.ones(5)}, do_compression=compressed)
+    return path
+
+
+def _changed(path: Path, at: int, new: bytes) -> Path:
+    data = bytearray(path.read_bytes())
+    data[at:at + len(new)] = new
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _cut(path: Path, n: int) -> Path:
+    path.write_bytes(path.read_bytes()[:n])
+    return path
+
+
+for _inspect in (False, True):
+    _how = "inspect" if _inspect else "import"
+
+    @case(f"{_how}-mat-shorter-than-its-header", "m.mat: the file is 100 bytes, shorter than the "
+          "128-byte header of a MATLAB file: it is truncated or not a MATLAB file")
+    def _(d, b, inspect=_inspect):
+        _toml(d / "map.toml", _MAP)
+        return _import_bench(d, _cut(_small_mat(d / "m.mat"), 100), inspect)
+
+    @case(f"{_how}-mat73-header-cut-short", "bench_v73.mat: the file is truncated",
+          "its HDF5 header says it ends at byte")
+    def _(d, b, inspect=_inspect):
+        path, _ = _bench(b, d, "mat73")
+        return _import_bench(d, _cut(path, 600), inspect)
+
+    @case(f"{_how}-mat-one-byte-changed-in-a-variable-header",    # SIGSEGV in scipy before
+          "m.mat: not a readable MATLAB file: variable 1 (at byte 128): its data is of data "
+          "type 246, which MATLAB does not write there; the file is damaged")
+    def _(d, b, inspect=_inspect):
+        _toml(d / "map.toml", _MAP)
+        return _import_bench(d, _changed(_small_mat(d / "m.mat"), 176, b"\xf6"), inspect)
+
+    @case(f"{_how}-mat-compressed-4-bytes-zeroed", "m.mat: not a readable MATLAB file: variable "
+          "1 (at byte 128): its compressed data are damaged (zlib: Error -3")
+    def _(d, b, inspect=_inspect):
+        _toml(d / "map.toml", _MAP)
+        return _import_bench(d, _changed(_small_mat(d / "m.mat", True), 150, bytes(4)), inspect)
+
+    @case(f"{_how}-mat73-damaged-hdf5-heap", "bench_v73.mat: cannot be read as a MATLAB file, it "
+          "is damaged or is not one (RuntimeError: Object visitation failed (bad local heap "
+          "signature)")
+    def _(d, b, inspect=_inspect):
+        path, _ = _bench(b, d, "mat73")
+        return _import_bench(d, _changed(path, path.read_bytes().find(b"HEAP"), b"JEAP"), inspect)
+
+    @case(f"{_how}-mdf-data-groups-linked-in-a-loop",           # asammdf went round forever
+          "bench.mf4: not a readable MDF file: the chain of its data groups links back to the "
+          "one at byte")
+    def _(d, b, inspect=_inspect):
+        path, _ = _bench(b, d, "mdf4")
+        data = path.read_bytes()
+        first = data.find(b"##DG")
+        second = data.find(b"##DG", first + 1)
+        return _import_bench(d, _changed(path, second + 24, first.to_bytes(8, "little")), inspect)
+
+
+@case("import-tdms-damaged-properties", "bench.tdms: cannot be read as a TDMS file, it is "
+      "damaged or is not one (NotImplementedError: Unsupported data type to read")
+def _(d, b):
+    path, _ = _bench(b, d, "tdms")
+    name = b"/'Motor'/'IW'"
+    return _import_bench(d, _changed(path, path.read_bytes().find(name) + len(name) + 19,
+                                     b"\xff" * 4), False)
+
+
+@case("import-mat-truncated", "bench_v5.mat: the file is truncated", "variable 5 (at byte",
+      "the 4 variable(s) before it are whole", "--inspect` lists what of it can be read")
+def _(d, b):
+    path, _ = _bench(b, d, "mat5")
+    return _import_bench(d, _cut(path, int(path.stat().st_size * 0.6)), False)
+
+
+@case("import-tdms-truncated", "bench.tdms: the file is truncated", "segment 1 (at byte 0) needs")
+def _(d, b):
+    path, _ = _bench(b, d, "tdms")
+    return _import_bench(d, _cut(path, path.stat().st_size - 100), False)
+
+
 # issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
 #: the message of a FIFO, of a link to a device and of a link loop
 FIFO = "is a FIFO (named pipe), not a regular file"

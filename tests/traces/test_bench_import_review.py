@@ -381,3 +381,25 @@ def test_a_channel_named_group_slash_channel_is_read_as_in_group_or_in_its_name(
         import_trace(tmp_path / "rig.tdms", _map(
             '[channels]\nt = "EMA/Time"\ntheta_ref = "EMA/Soll"\ntheta_m = "EMA/Ist"\n'
             'i_a = "EMA/IU"\ni_b = { name = "EMA/IV", group = "Other" }\n'))
+
+
+def test_inspect_of_a_truncated_file_lists_what_it_can_and_says_it_is_truncated(tmp_path, capsys):
+    """A MATLAB 5 file cut in its fifth variable: --inspect lists the four before it with
+    one warning line, and says so in the map it prints; an import refuses it (the
+    bad-input corpus)."""
+    from scipy.io import savemat
+
+    t, ref, pos, ia, ib = _signals()
+    savemat(tmp_path / "run.mat", {"fs": 1e4, "ref": ref, "pos": pos, "ia": ia, "ib": ib})
+    data = (tmp_path / "run.mat").read_bytes()
+    (tmp_path / "cut.mat").write_bytes(data[:len(data) - 1000])
+    assert main(["import", str(tmp_path / "cut.mat"), "--inspect"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1
+    assert captured.err.startswith(f"emaphm import: warning: {tmp_path / 'cut.mat'}: the file "
+                                   "is truncated (or a length in it is damaged): variable 5 (at "
+                                   "byte ")
+    assert "the 4 variable(s) before it are whole" in captured.err
+    assert "listed below: what of it can be read" in captured.err
+    assert "# damaged: the file is truncated" in captured.out
+    assert [c.name for c in inspect_source(tmp_path / "cut.mat").channels] == ["ref", "pos", "ia"]

@@ -259,6 +259,9 @@ def import_trace(path: str | Path, cmap: ChannelMap, *, window: Window = Window(
     map_name = map_name or cmap.origin
     with open_source(path, cmap.source) as source:
         info = source.info
+        if info.damage:
+            raise TraceError(f"{path}: {info.damage} (`emaphm import {path.name} --inspect` lists "
+                             "what of it can be read)")
         chans = {spec.target: info.find(spec.name, spec.group, f"{map_name}: [channels] "
                                         f"{spec.target}") for spec in cmap.channels}
         for target, c in chans.items():

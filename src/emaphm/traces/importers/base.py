@@ -17,7 +17,7 @@ import numpy as np
 from ..container import TraceError
 
 __all__ = ["ChannelInfo", "SourceInfo", "Block", "Source", "MissingReaderError", "need",
-           "BLOCK_ROWS"]
+           "BLOCK_ROWS", "cause"]
 
 #: Rows per block a reader yields where it chooses (binary formats).
 BLOCK_ROWS = 1 << 20
@@ -65,8 +65,10 @@ class ChannelInfo:
 class SourceInfo:
     """What :meth:`Source.info` found in a file: its ``format`` (``csv``, ``mat``...), its
     channels, and ``notes`` on how it is written (delimiter, decimal comma, a preamble);
-    ``skipped``, what the file holds that is not read as channels (a MATLAB matrix), and
-    ``hint``, advice a refusal adds (a map's delimiter that the file seems not to use)."""
+    ``skipped``, what the file holds that is not read as channels (a MATLAB matrix),
+    ``hint``, advice a refusal adds (a map's delimiter that the file seems not to use), and
+    ``damage``, what is wrong with a file whose whole part is listed (a truncated one):
+    ``--inspect`` warns of it, an import refuses the file."""
 
     path: Path
     format: str
@@ -76,6 +78,7 @@ class SourceInfo:
     own_time: bool = False
     skipped: tuple[str, ...] = ()
     hint: str = ""
+    damage: str = ""
 
     def find(self, name: str, group: str | None, where: str) -> ChannelInfo:
         """The channel called ``name`` (in ``group``, where given), or a TraceError naming
@@ -149,6 +152,14 @@ class Source(Protocol):
 
     def close(self) -> None:
         ...
+
+
+def cause(exc: BaseException, limit: int = 200) -> str:
+    """What a library's exception says, for a refusal: its class and message on one line of
+    printable characters (a damaged file's bytes can be in it), cut at ``limit``."""
+    text = " ".join(str(exc).split())
+    text = "".join(ch if ch.isprintable() else "?" for ch in text)
+    return f"{type(exc).__name__}: {text[:limit]}"
 
 
 def and_list(items) -> str:

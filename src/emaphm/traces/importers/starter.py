@@ -75,6 +75,8 @@ def describe(info: SourceInfo) -> str:
     if not info.channels:
         lines.append("(no numeric channels found)")
     lines += list(info.skipped)
+    if info.damage:
+        lines.append(f"damaged: {info.damage}; listed: what of it can be read")
     return "\n".join(lines)
 
 
