@@ -793,6 +793,53 @@ def _(d, b):
     return _import_bench(d, _cut(path, path.stat().st_size - 100), False)
 
 
+# issue 37 items 5-6: absurd motors, and no trace written with a non-finite sample --------
+_PLATE = ('[datasheet]\nname = "m"\npoles = 8\nke = "135 V/krpm"\nr_ll = "6.3 ohm"\n'
+          'l_ll = "44 mH"\nj_rotor = "7.7 kg cm^2"\nt_max = "18 N m"\ni_max = "10 A"\n')
+
+
+def _plate(d: Path, **fields: str) -> list[str]:
+    text = _PLATE
+    for key, value in fields.items():
+        text = "\n".join(x for x in text.splitlines() if not x.startswith(f"{key} ")) + \
+            f"\n{key} = {value}\n"
+    _toml(d / "np.toml", text)
+    return ["params", "--datasheet", str(d / "np.toml"), "--out", str(d / "p.toml")]
+
+
+@case("datasheet-gear-ratio-1e200", "np.toml: [datasheet] gear_ratio: 1e+200 is beyond the gear "
+                                    "ratios of actuators (0.001 to 100000")
+def _(d, b):
+    return _plate(d, gear_ratio="1e200", j_load='"1 kg m^2"')
+
+
+@case("datasheet-poles-1e12", "[datasheet] poles: expected the number of poles, an even integer "
+                              "from 2 to 200")
+def _(d, b):
+    return _plate(d, poles="1000000000000")
+
+
+@case("datasheet-ke-1e308", "motor.c0 [V s/rad] = 7.79697e+305 is beyond what any servo actuator "
+                            "has", "(from [datasheet] ke)")
+def _(d, b):
+    return _plate(d, ke='"1e308 V/krpm"')
+
+
+@case("simulate-rotor-of-1e-30-kg-m2", "p.toml: motor.J_m [kg m^2] = 1e-30 is beyond what any "
+                                       "servo actuator has (1e-09 to 100): give kg m^2")
+def _(d, b):
+    _toml(d / "p.toml", "[motor]\nJ_m = 1e-30\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("simulate-rotor-the-gains-do-not-fit", "speed loop gain of 750 per period (Kp_w T_s / J_m)")
+def _(d, b):
+    _toml(d / "p.toml", "[motor]\nJ_m = 1e-7\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
 # issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
 #: the message of a FIFO, of a link to a device and of a link loop
 FIFO = "is a FIFO (named pipe), not a regular file"
@@ -1246,3 +1293,42 @@ def test_the_corpus_covers_every_class_of_issue_10():
                "budget-negative-seconds", "budget-huge", "simulate-noise-1e6", "f-pwm-10",
                "actuator-id-100-kB-add", "dask-inproc-address"]
     assert not set(classes) - set(CASES)
+
+
+def test_a_simulation_that_diverges_is_not_written(base, tmp_path, capsys, monkeypatch):
+    """A trace with NaN samples (a model that diverged on parameters the bounds let through)
+    is refused in one line, and no file is written (issue 37: J_m = 1e-30 wrote a trace of
+    NaN with exit 0)."""
+    import emaphm.simulate
+
+    t = base.trace
+    diverged = _with(t, omega_m=np.where(t.t > 0.25, np.nan, t.omega_m))
+    monkeypatch.setattr(emaphm.simulate, "simulate", lambda *a, **kw: diverged)
+    rc = main(["simulate", "--scenario", "nominal", "--model", "monitoring",
+               "--out", str(tmp_path / "x.csv")])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "the simulation diverged: omega_m is NaN or infinite in 1,999 of 4,000 samples from " \
+           "t = 0.250125 s" in err and "x.csv was not written" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_write_trace_refuses_a_non_finite_trace_where_asked(base, tmp_path):
+    from emaphm.traces import TraceError
+
+    bad = _with(base.trace, theta_m=np.where(base.trace.t > 0.1, np.inf, base.trace.theta_m))
+    with pytest.raises(TraceError, match=r"x.parquet: not written: column theta_m holds 3,199 "
+                                         r"samples that are NaN or infinite, the first at row 801"):
+        write_trace(bad, tmp_path / "x.parquet", finite=True)
+    assert list(tmp_path.iterdir()) == []
+    write_trace(bad, tmp_path / "x.parquet")               # the library writes what it is given
+
+
+def test_a_parameter_near_its_edge_is_one_warning_line(base, tmp_path, capsys):
+    (tmp_path / "p.toml").write_text("[controller]\nomega_max = 20000.0\n")
+    err = _warned(["simulate", "--scenario", "nominal", "--model", "monitoring", "--params",
+                   str(tmp_path / "p.toml"), "--out", str(tmp_path / "x.csv")], capsys)
+    warning = [x for x in err.splitlines() if ": warning: " in x]
+    assert warning == [f"emaphm simulate: warning: {tmp_path / 'p.toml'}: controller.omega_max "
+                       "[rad/s] = 20000 is unlike a servo actuator's (usually 1 to 10000): check "
+                       "it is in rad/s: 3000 rpm = 314.16"]

@@ -45,7 +45,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     window = Window.parse(args.window)
     t0 = time.perf_counter()
     trace = import_trace(source, cmap, window=window, map_name=str(args.map))
-    write_trace(trace, out)
+    write_trace(trace, out, finite=True)
     if not args.quiet:
         derived = trace.meta.get("derived", {})
         extra = "".join(f"; {k} {v}" for k, v in derived.items())
