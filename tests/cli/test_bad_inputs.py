@@ -840,6 +840,11 @@ def _(d, b):
             "--out", str(d / "x.csv")]
 
 
+@case("assess-grids-empty", "--grids '' names no fault grid", "leave --grids out for all")
+def _(d, b):
+    return ["assess", "--out", str(d / "a"), "--grids", "", "--workers", "0"]
+
+
 # issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
 #: the message of a FIFO, of a link to a device and of a link loop
 FIFO = "is a FIFO (named pipe), not a regular file"
