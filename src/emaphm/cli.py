@@ -19,13 +19,12 @@ import argparse
 import contextlib
 import importlib
 import json
+import math
 import os
 import sys
 import time
 import warnings
 from typing import Any, Sequence
-
-import numpy as np
 
 from . import __version__
 from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_option,
@@ -133,6 +132,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     print(f"wrote {out} ({trace.n} samples, {trace.duration:.3f} s, {args.model} model, "
           f"simulated in {elapsed:.2f} s)", file=sys.stderr)
     if plot:
+        import numpy as np
+
         overlay = None
         if (faults or not np.allclose(k, scenario("nominal"))) and not args.no_overlay:
             overlay = simulate(scenario("nominal"), model=args.model, params=params,
@@ -186,7 +187,7 @@ def _profile_option(text: str | None):
         raise UsageError(f"--profile: {exc}") from None
 
 
-_min_rotation = arg_type(float, lambda x: np.isfinite(x) and x >= 0,
+_min_rotation = arg_type(float, lambda x: math.isfinite(x) and x >= 0,
                          "expected a rotation in rad >= 0 (6.283 is one "
                          "revolution, 0 skips the check)")
 

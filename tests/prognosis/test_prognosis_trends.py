@@ -602,3 +602,16 @@ def test_a_history_of_ten_thousand_inspections_is_prognosed_whole():
     assert set(friction.excluded) >= set(np.flatnonzero(wrong[:-2]))
     assert indicator_state(friction, t[-1])[0] == "predicted"
     assert 85_000 < friction.lo < friction.median < friction.hi < 160_000   # 0.5 at 400,000 h
+
+
+def test_the_parsers_names_and_defaults_are_the_modules():
+    """The command line's parser reads them from the light emaphm.prognosis.choices (no
+    NumPy for `emaphm --help`): they are the ones the modules use."""
+    from emaphm.prognosis import choices, inspection, simulator, thresholds
+
+    assert choices.DEGRADATION_SCENARIO_NAMES == tuple(simulator.DEGRADATION_SCENARIOS)
+    assert choices.INDICATORS is thresholds.INDICATORS
+    assert choices.DEFAULT_RISK == inspection.DEFAULT_RISK == 0.01
+    d = inspection.INTERVAL_DEFAULTS["h"]
+    assert (d.default, d.min, d.max) == tuple(choices.FLIGHT_HOUR_INTERVALS[k] for k in
+                                              ("default", "min", "max"))
