@@ -845,6 +845,80 @@ def _(d, b):
     return ["assess", "--out", str(d / "a"), "--grids", "", "--workers", "0"]
 
 
+# issue 37 partial items: values and maps that no recording has ------------------------------
+_MAP_RATE = _MAP.split("\n", 2)[0] + "\n" + _MAP.split("\n", 2)[2]   # [channels] without t
+
+
+@case("import-rate-of-1e-300-hz", "[time] rate = 1e-300 Hz is outside 1 Hz to 10 MHz")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"), '[time]\nrate = "1e-300 Hz"\n' + _MAP_RATE)
+
+
+@case("import-start-1e308", "[time] start = 1e+308 s is beyond 1e+10 s")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   "[time]\nrate = 8000\nstart = 1e308\n" + _MAP_RATE)
+
+
+@case("import-offset-1e308", "[channels] i_a.offset = 1e+308 is beyond +-1e+06")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   _MAP.replace('i_a = {name = "a", unit = "A"}',
+                                'i_a = {name = "a", unit = "A", offset = 1e308}'))
+
+
+@case("import-currents-of-1e298", "channel 'a' (i_a) reaches 1e+298 A at row 0, beyond the "
+                                  "100000 A of any actuator's recording")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    lines[1:] = [",".join(c[:3] + [repr(float(c[3]) * 0 + 1e298)] + c[4:])
+                 for c in (x.split(",") for x in lines[1:])]
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src)
+
+
+@case("import-theta-ref-of-1e300", "channel 'ref' (theta_ref) reaches 1e+300 rad")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[1] = "1e300"
+    lines[5] = ",".join(cells)
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src)
+
+
+@case("import-scale-that-overflows", "channel 'a' (i_a) reaches inf A at row")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    cells = lines[3].split(",")
+    cells[3] = "1e305"
+    lines[3] = ",".join(cells)
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src, _MAP.replace('i_a = {name = "a", unit = "A"}',
+                                        'i_a = {name = "a", unit = "A", scale = 1e9}'))
+
+
+@case("import-theta-ref-and-theta-m-on-one-channel", "[channels] theta_ref and theta_m both "
+                                                     "name channel 'pos'")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"), _MAP.replace('"ref"', '"pos"'))
+
+
+@case("import-theta-m-on-the-time-channel", "[channels] t and theta_m both name channel 't'")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   _MAP.replace('theta_m = {name = "pos"', 'theta_m = {name = "t"'))
+
+
+@case("import-truncated-mdf", "bench.mf4: the file is truncated")
+def _(d, b):                         # asammdf printed "Exception ignored in MDF4.__del__"
+    path, _ = _bench(b, d, "mdf4")
+    return _import_bench(d, _cut(path, path.stat().st_size // 2), False)
+
+
 # issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
 #: the message of a FIFO, of a link to a device and of a link loop
 FIFO = "is a FIFO (named pipe), not a regular file"

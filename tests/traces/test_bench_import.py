@@ -107,7 +107,7 @@ def test_starter_map_marks_what_it_could_not_find(tmp_path):
     with pytest.raises(MapError, match=r"\[channels\] theta_ref: unknown unit '\?'; known units "
                                        r"of angle: rad, mrad, deg, rev"):
         _map(text)
-    with pytest.raises(MapError, match=r"\[time\] rate = 0 Hz is outside 0 to 10 MHz"):
+    with pytest.raises(MapError, match=r"\[time\] rate = 0 Hz is outside 1 Hz to 10 MHz"):
         _map("[time]\nrate = 0\n" + _FULL.replace('t = {name = "t", unit = "s"}\n', ""))
 
 

@@ -403,3 +403,19 @@ def test_inspect_of_a_truncated_file_lists_what_it_can_and_says_it_is_truncated(
     assert "listed below: what of it can be read" in captured.err
     assert "# damaged: the file is truncated" in captured.out
     assert [c.name for c in inspect_source(tmp_path / "cut.mat").channels] == ["ref", "pos", "ia"]
+
+
+def test_inspect_of_a_file_with_a_line_break_in_its_names_prints_valid_toml(tmp_path, capsys):
+    """A line break in the file's name broke the TOML --inspect prints; the command line
+    it suggests is quoted for the shell."""
+    t, ref, pos, ia, ib = _signals()
+    rows = "\n".join(",".join(repr(float(x)) for x in r) for r in zip(t, ref, pos, ia, ib))
+    odd = tmp_path / "run 1\nb.csv"
+    odd.write_text("t,ref,pos,ia,ib\n" + rows + "\n")
+    spaced = tmp_path / "run 2 (bench).csv"
+    spaced.write_text("t,ref,pos,ia,ib\n" + rows + "\n")
+    for path in (odd, spaced):
+        assert main(["import", str(path), "--inspect"]) == 0
+        out = capsys.readouterr().out
+        tomllib.loads(out)                              # the whole output is TOML
+    assert "#   emaphm import 'run 2 (bench).csv' --map THIS.toml" in out

@@ -43,9 +43,12 @@ class _Walk:
         self.visited += 1
         if self.visited > _MAX_BLOCKS:
             raise _Bad(f"it has more than {_MAX_BLOCKS:,} blocks")
-        if addr < 64 or addr + 24 > self.size:
-            raise _Bad(f"the link to its {what} points at byte {addr:,}, outside the file "
-                       f"({self.size:,} bytes)")
+        if addr < 64:
+            raise _Bad(f"the link to its {what} points at byte {addr:,}, inside the file's "
+                       "identification block")
+        if addr + 24 > self.size:
+            raise _Truncated(f"the link to its {what} points at byte {addr:,}, past the end of "
+                             f"the file ({self.size:,} bytes)")
         self.fh.seek(addr)
         head = self.fh.read(24)
         kind = head[2:4].decode("latin-1")
