@@ -919,6 +919,13 @@ def _(d, b):                         # asammdf printed "Exception ignored in MDF
     return _import_bench(d, _cut(path, path.stat().st_size // 2), False)
 
 
+@case("history-list-of-a-campaign-store", "store.sqlite is an emaphm campaign store (emaphm "
+                                          "campaign, emaphm report read it), not a health "
+                                          "history; it was not changed")
+def _(d, b):                         # it said "schema version 3, newer than this emaphm ..."
+    return ["history", "list", "--db", str(_copy(b.store, d / "store.sqlite"))]
+
+
 # issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
 #: the message of a FIFO, of a link to a device and of a link loop
 FIFO = "is a FIFO (named pipe), not a regular file"
