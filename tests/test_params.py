@@ -392,3 +392,68 @@ def test_a_diagnosis_and_a_calibration_keep_the_actuators_thresholds():
     assert calibrated.calibration.date and calibrated.thresholds == sheet.thresholds
     assert [f.mode for f in diagnose(k, params=calibrated, fault_model="physical").faults] == \
         ["friction"]
+
+
+# --------------------------------------------------------------------------- issue 37: bounds
+def _from_preset(changes: dict) -> ActuatorParams:
+    data = siemens_1fk7060().to_dict()
+    for (sec, name), value in changes.items():
+        data[sec][name] = value
+    return ActuatorParams.from_dict(data, source="p.toml")
+
+
+def test_the_preset_and_the_examples_are_well_inside_every_bound():
+    import warnings
+    from pathlib import Path
+
+    from emaphm.params import PlausibilityWarning, check_plausible
+
+    examples = Path(__file__).resolve().parents[1] / "examples" / "actuators"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        check_plausible(siemens_1fk7060())
+        check_plausible(load_params(examples / "ema-270v-750w.toml"))
+
+
+def test_every_parameter_beyond_its_bound_is_refused_by_name():
+    """Each bound of emaphm.params.PLAUSIBLE, ten times beyond it: refused, the field named
+    (by its bound or by an earlier check of the same field, e.g. L above 1 H)."""
+    from emaphm.params import PLAUSIBLE
+
+    checked = 0
+    for (sec, name), (lo, _, _, hi, _) in PLAUSIBLE.items():
+        for bad in ([hi * 10] if hi is not None else []) + ([lo / 10 if lo > 0 else lo * 10]
+                                                          if lo is not None else []):
+            value = int(bad) if name == "p" else bad
+            with pytest.raises(ParameterError, match=rf"(?i){sec}\.{name}\b"):
+                _from_preset({(sec, name): value})
+            checked += 1
+    assert checked == 41
+
+
+@pytest.mark.parametrize("changes, words", [
+    ({("motor", "J_m"): 1e-30}, r"motor.J_m \[kg m\^2\] = 1e-30 is beyond what any servo actuator "
+                                r"has \(1e-09 to 100\): give kg m\^2"),
+    ({("motor", "p"): 10 ** 12}, r"motor.p \[pole pairs, integer\] = 1e\+12 is beyond"),
+    ({("motor", "c0"): 7.8e305}, r"motor.c0 \[V s/rad\] = 7.8e\+305 is beyond"),
+    ({("motor", "J_m"): 1e-7}, r"controller.Kp_w = 0.6 N m s/rad on motor.J_m = 1e-07 kg m\^2 is a "
+                               r"speed loop gain of 750 per period"),
+    ({("motor", "L"): 1e-3}, r"current loop gain of 5.22 per period \(Kp_i T_s / L\), above the 2 "
+                             r"where a sampled loop diverges"),
+])
+def test_absurd_motors_are_refused(changes, words):
+    with pytest.raises(ParameterError, match=words):
+        _from_preset(changes)
+
+
+def test_a_value_near_the_edge_is_used_with_one_warning():
+    from emaphm.params import PlausibilityWarning
+
+    with pytest.warns(PlausibilityWarning, match=r"p.toml: controller.omega_max \[rad/s\] = 20000 "
+                                                 r"is unlike a servo actuator's \(usually 1 to "
+                                                 r"10000\)"):
+        p = _from_preset({("controller", "omega_max"): 2e4})
+    assert p.controller.omega_max == 2e4
+    with pytest.warns(PlausibilityWarning, match=r"speed loop gain of 3.75 per period, above the "
+                                                 r"2 of a stable loop"):
+        _from_preset({("motor", "J_m"): 2e-5})

@@ -19,13 +19,12 @@ import argparse
 import contextlib
 import importlib
 import json
+import math
 import os
 import sys
 import time
 import warnings
 from typing import Any, Sequence
-
-import numpy as np
 
 from . import __version__
 from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_option,
@@ -71,6 +70,22 @@ def cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 # ----------------------------------------------------------------------------- simulate
+def _refuse_diverged(trace, out: Path, params_file: str | None) -> None:
+    """A simulated trace with NaN or infinite samples is no recording: refuse to write it,
+    saying where the model diverged."""
+    from .traces.files import first_nonfinite
+
+    bad = first_nonfinite(trace)
+    if bad is None:
+        return
+    name, row, count = bad
+    given = f"the parameters of {params_file}" if params_file else "the parameters"
+    raise UsageError(f"the simulation diverged: {name} is NaN or infinite in {count:,} of "
+                     f"{trace.n:,} samples from t = {trace.t[row]:.6g} s; {given} make the model "
+                     f"unstable (check the units of motor.J_m, motor.L and the gains); {out} was "
+                     "not written")
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     from .faults import as_k, scenario
     from .acquisition import Sensors
@@ -117,10 +132,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     if args.scenario:
         trace = trace.with_meta(scenario=args.scenario)
     elapsed = time.perf_counter() - t0
-    write_trace(trace, out)
+    _refuse_diverged(trace, out, args.params)
+    write_trace(trace, out, finite=True)
     print(f"wrote {out} ({trace.n} samples, {trace.duration:.3f} s, {args.model} model, "
           f"simulated in {elapsed:.2f} s)", file=sys.stderr)
     if plot:
+        import numpy as np
+
         overlay = None
         if (faults or not np.allclose(k, scenario("nominal"))) and not args.no_overlay:
             overlay = simulate(scenario("nominal"), model=args.model, params=params,
@@ -174,7 +192,7 @@ def _profile_option(text: str | None):
         raise UsageError(f"--profile: {exc}") from None
 
 
-_min_rotation = arg_type(float, lambda x: np.isfinite(x) and x >= 0,
+_min_rotation = arg_type(float, lambda x: math.isfinite(x) and x >= 0,
                          "expected a rotation in rad >= 0 (6.283 is one "
                          "revolution, 0 skips the check)")
 
@@ -577,18 +595,21 @@ def build_parser() -> argparse.ArgumentParser:
 @contextlib.contextmanager
 def trace_warnings_as_lines(cmd: str):
     """Inside: a :class:`~emaphm.traces.TraceWarning` (a trace read, but not quite as
-    written) or a :class:`~emaphm.params.CalibrationWarning` (a parameter file's
-    calibration not as ``emaphm calibrate`` wrote it) is printed as one line on stderr,
-    ``CMD: warning: ...``; other warnings as Python prints them."""
-    from .params import CalibrationWarning
+    written), a :class:`~emaphm.params.CalibrationWarning` (a parameter file's
+    calibration not as ``emaphm calibrate`` wrote it) or a
+    :class:`~emaphm.params.PlausibilityWarning` (a parameter near the edge of what servo
+    actuators have) is printed as one line on stderr, ``CMD: warning: ...``; other
+    warnings as Python prints them."""
+    from .params import CalibrationWarning, PlausibilityWarning
     from .traces import TraceWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("always", TraceWarning)
+        warnings.simplefilter("always", PlausibilityWarning)
         original = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if issubclass(category, (TraceWarning, CalibrationWarning)):
+            if issubclass(category, (TraceWarning, CalibrationWarning, PlausibilityWarning)):
                 print(f"{cmd}: warning: {one_line(str(message))}", file=sys.stderr)
             else:
                 original(message, category, filename, lineno, file, line)

@@ -117,6 +117,10 @@ class Nameplate:
                 kw[key] = _poles(value, where)
             elif key == "gear_ratio":
                 kw[key] = _positive(value, where)
+                if not GEAR_RATIOS[0] <= kw[key] <= GEAR_RATIOS[1]:
+                    raise ParameterError(f"{where}: {kw[key]:g} is beyond the gear ratios of "
+                                         f"actuators ({GEAR_RATIOS[0]:g} to {GEAR_RATIOS[1]:g} "
+                                         "motor turns per load turn)")
             else:
                 kind, default = _FIELDS[key]
                 try:
@@ -132,10 +136,23 @@ class Nameplate:
         return cls(**kw)
 
 
+#: The most poles of a servo motor (torque motors reach about 100; emaphm's
+#: :data:`~emaphm.params.PLAUSIBLE` takes up to 100 pole pairs) and the span of gear
+#: ratios (motor turns per load turn) an actuator has.
+MAX_POLES = 200
+GEAR_RATIOS = (1e-3, 1e5)
+#: The nameplate field each converted parameter comes from, named in a refusal.
+_FROM = {"motor.p": "poles", "motor.c0": "ke", "motor.R": "r_ll (or r_ph)",
+         "motor.L": "l_ll (or l_ph)", "motor.J_m": "j_rotor", "motor.T_max": "t_max",
+         "motor.I_max": "i_max", "inverter.V_dc": "v_dc", "inverter.f_pwm": "f_pwm",
+         "load.J_l": "j_load and gear_ratio", "controller.omega_max": "n_max",
+         "controller.k_T": "ke"}
+
+
 def _poles(value, where: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 2:
-        raise ParameterError(f"{where}: expected the number of poles, an even integer >= 2, got "
-                             f"{value!r:.40}")
+    if isinstance(value, bool) or not isinstance(value, int) or not 2 <= value <= MAX_POLES:
+        raise ParameterError(f"{where}: expected the number of poles, an even integer from 2 to "
+                             f"{MAX_POLES} (the most a servo motor has), got {value!r:.40}")
     if value % 2:
         raise ParameterError(f"{where}: {value} poles is odd; poles counts the magnet poles "
                              f"(twice the pole pairs): {value} pole pairs is poles = {2 * value}")
@@ -210,7 +227,11 @@ def convert(plate: Nameplate, template: ActuatorParams | None = None) -> Datashe
     load = Load(J_l=J_l, C_l=t.load.C_l * torque_ratio, T_0=t.load.T_0)
     params = replace(t, name=plate.name, motor=motor, inverter=inverter, controller=controller,
                      transmission=transmission, load=load)
-    check_plausible(params, source=plate.name)
+    try:
+        check_plausible(params, source=plate.name)
+    except ParameterError as exc:
+        given = [f"[datasheet] {v}" for k, v in _FROM.items() if f" {k} [" in str(exc)]
+        raise ParameterError(str(exc) + (f" (from {given[0]})" if given else "")) from None
     return Datasheet(params=params, derived=_derived(plate, params),
                      from_template=_from_template(plate), warnings=_warnings(plate, params))
 

@@ -105,6 +105,8 @@ __all__ = [
     "load_params",
     "save_params",
     "check_plausible",
+    "PlausibilityWarning",
+    "PLAUSIBLE",
 ]
 
 
@@ -852,8 +854,116 @@ def _moved_contact(data: dict[str, Any]) -> dict[str, Any]:
     return data
 
 
+class PlausibilityWarning(UserWarning):
+    """A parameter near the edge of what servo actuators have (:data:`PLAUSIBLE`): used,
+    but worth a look at its unit; the command line prints it as one line."""
+
+
+#: The healthy values servo actuators have, per field: ``(refused below, warned below,
+#: warned above, refused above)`` in the field's SI unit (None: no bound), and the unit
+#: to give where a value is beyond. A value beyond is refused (it makes no actuator, or
+#: makes the models' numbers meaningless: a rotor of 1e-30 kg m^2 gives a trace of NaN),
+#: a value near is used with a :class:`PlausibilityWarning`. The preset and the examples
+#: sit well inside; the edges span servo motors from about 50 W to 100 kW.
+PLAUSIBLE: dict[tuple[str, str], tuple[float | None, float | None, float | None, float | None,
+                                       str]] = {
+    ("motor", "p"): (None, None, 30, 100, "pole pairs, half the poles"),
+    ("motor", "R"): (1e-4, 1e-3, 100.0, 1e3, "ohm per phase: 3.15 ohm, not 3150 milliohm"),
+    ("motor", "L"): (1e-7, 1e-5, 0.3, 1.0, "henries per phase: 22 mH = 0.022"),
+    ("motor", "c0"): (1e-4, 1e-3, 10.0, 100.0, "V s/rad peak per phase: ke = 135 V/krpm is "
+                      "c0 = 1.05; convert a catalogue's ke with emaphm params --datasheet"),
+    ("motor", "J_m"): (1e-9, 1e-7, 10.0, 100.0, "kg m^2: 7.7 kg cm^2 = 7.7e-4"),
+    ("motor", "C_m"): (None, None, 1.0, 10.0, "N m s/rad"),
+    ("motor", "T_max"): (1e-3, 0.05, 5e3, 1e5, "N m"),
+    ("motor", "I_max"): (1e-2, 0.3, 1e3, 1e4, "A peak"),
+    ("motor", "ecc_phase"): (-1e3, None, None, 1e3, "rad"),
+    ("motor", "R_f"): (None, None, None, 1e6, "ohm"),
+    ("inverter", "V_dc"): (1.0, 12.0, 1500.0, 1e4, "volts"),
+    ("inverter", "Kp_i"): (None, None, 1e4, 1e5, "V/A"),
+    ("inverter", "Ki_i"): (None, None, 1e8, 1e9, "V/(A s)"),
+    ("inverter", "I_trip"): (None, None, 5e3, 1e5, "A peak"),
+    ("controller", "Kp"): (None, None, 1e4, 1e5, "1/s"),
+    ("controller", "Ki"): (None, None, 1e8, 1e9, "1/s^2"),
+    ("controller", "Kd"): (None, None, 100.0, 1e3, "-"),
+    ("controller", "omega_max"): (None, 1.0, 1e4, 1e5, "rad/s: 3000 rpm = 314.16"),
+    ("controller", "Kp_w"): (None, None, 1e4, 1e5, "N m s/rad"),
+    ("controller", "Ki_w"): (None, None, 1e7, 1e8, "N m/rad"),
+    ("controller", "k_T"): (1e-4, 1e-3, 20.0, 150.0, "N m per A peak"),
+    ("transmission", "FSJ"): (None, None, 1e3, 1e5, "N m"),
+    ("transmission", "FDJ"): (None, None, 1e3, 1e5, "N m"),
+    ("transmission", "backlash"): (None, None, 0.1, 1.0, "radians at the motor: 1 deg = "
+                                   "0.01745"),
+    ("transmission", "K_c"): (1e-3, 1.0, 1e8, 1e10, "N m/rad"),
+    ("transmission", "D_c"): (None, None, 1e4, 1e6, "N m s/rad"),
+    ("load", "J_l"): (1e-9, 1e-7, 100.0, 1e4, "kg m^2 at the motor shaft"),
+    ("load", "C_l"): (None, None, 100.0, 1e3, "N m s/rad"),
+    ("plant", "omega_s"): (1e-3, 1e-2, 1e3, 1e4, "rad/s"),
+}
+#: The sampled loops' gain per control period above which they are unstable (a P loop
+#: ``x += g (r - x)`` diverges for ``g > 2``): the current loop on the winding
+#: (``Kp_i T_s / L``) and the speed loop on the rotor alone, as when the backlash is open
+#: (``Kp_w T_s / J_m``; the plant stays finite up to about 100, diverges at 750: refused
+#: from 20, warned from 2). The preset's are 0.24 and 0.10.
+LOOP_GAIN_LIMIT = 2.0
+SPEED_LOOP_REFUSED = 20.0
+
+
+def _ranges(params: ActuatorParams, where: str) -> list[str]:
+    """Refuse a field beyond :data:`PLAUSIBLE`; the warnings of those near its edges."""
+    import warnings
+
+    near = []
+    for (sec, name), (lo, warn_lo, warn_hi, hi, unit) in PLAUSIBLE.items():
+        value = getattr(getattr(params, sec), name)
+        values = value if isinstance(value, tuple) else (value,)
+        field_ = f"{sec}.{name} [{_UNITS[name]}]"
+        for v in (min(values), max(values)):
+            if (lo is not None and v < lo) or (hi is not None and v > hi):
+                span = (f"{lo:g} to {hi:g}" if lo is not None and hi is not None
+                        else f"below {hi:g}" if hi is not None else f"above {lo:g}")
+                raise ParameterError(f"{where} {field_} = {v:g} is beyond what any servo actuator "
+                                     f"has ({span}): give {unit}")
+            if (warn_lo is not None and v < warn_lo) or (warn_hi is not None and v > warn_hi):
+                near.append(f"{field_} = {v:g} is unlike a servo actuator's (usually "
+                            f"{warn_lo if warn_lo is not None else lo or 0:g} to "
+                            f"{warn_hi if warn_hi is not None else hi:g}): check it is in {unit}")
+                break
+    for text in near:
+        warnings.warn(f"{where} {text}", PlausibilityWarning, stacklevel=4)
+    return near
+
+
+def _loops(params: ActuatorParams, where: str) -> None:
+    """Refuse gains that make the sampled current or speed loop diverge on this motor; warn
+    of a speed loop gain above the limit of the rotor alone."""
+    import warnings
+
+    m, inv, c = params.motor, params.inverter, params.controller
+    g_i = inv.Kp_i * inv.T_s / min(m.L)
+    if g_i > LOOP_GAIN_LIMIT:
+        raise ParameterError(
+            f"{where} inverter.Kp_i = {inv.Kp_i:g} V/A on motor.L = {min(m.L):g} H at {inv.f_pwm:g} "
+            f"Hz is a current loop gain of {g_i:.3g} per period (Kp_i T_s / L), above the "
+            f"{LOOP_GAIN_LIMIT:g} where a sampled loop diverges: check motor.L (henries) or derive "
+            "the gains for this motor (emaphm params --datasheet)")
+    g_w = c.Kp_w * inv.T_s / m.J_m
+    if g_w > SPEED_LOOP_REFUSED:
+        raise ParameterError(
+            f"{where} controller.Kp_w = {c.Kp_w:g} N m s/rad on motor.J_m = {m.J_m:g} kg m^2 is a "
+            f"speed loop gain of {g_w:.3g} per period (Kp_w T_s / J_m), far above the "
+            f"{LOOP_GAIN_LIMIT:g} where the loop on the rotor alone (the backlash open) diverges: "
+            "give J_m in kg m^2 (7.7 kg cm^2 = 7.7e-4) or derive the gains for this motor "
+            "(emaphm params --datasheet)")
+    if g_w > LOOP_GAIN_LIMIT:
+        warnings.warn(f"{where} controller.Kp_w = {c.Kp_w:g} N m s/rad on motor.J_m = {m.J_m:g} "
+                      f"kg m^2 is a speed loop gain of {g_w:.3g} per period, above the "
+                      f"{LOOP_GAIN_LIMIT:g} of a stable loop on the rotor alone: check J_m, or "
+                      "derive the gains for this motor", PlausibilityWarning, stacklevel=4)
+
+
 def check_plausible(params: ActuatorParams, *, source: str = "parameters") -> None:
-    """Refuse healthy parameters no servo actuator has, with the likely unit slip named.
+    """Refuse healthy parameters no servo actuator has, with the likely unit slip named;
+    warn (:class:`PlausibilityWarning`) of those near the edge (:data:`PLAUSIBLE`).
 
     Each field is checked on its own at construction; this checks them together, on
     parameters a user gives (files, specs), not on faulty ones (a 99 % short is allowed
@@ -882,6 +992,8 @@ def check_plausible(params: ActuatorParams, *, source: str = "parameters") -> No
                 f"{where} the electrical time constant L/R of phase {ph} = {L / R * 1e6:.3g} us is "
                 f"under two PWM periods ({2e6 * inv.T_s:.3g} us): no current loop at "
                 f"{inv.f_pwm:g} Hz controls it; check the units of motor.L [H] and motor.R [ohm]")
+    _ranges(params, where)
+    _loops(params, where)
 
 
 def siemens_1fk7060() -> ActuatorParams:

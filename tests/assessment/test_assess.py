@@ -273,3 +273,85 @@ def test_a_lost_unit_is_retried_and_nothing_is_written_until_every_unit_is_in(tm
     again = assess(spec, out)
     assert again.ran == 1 and again.resumed == 1 and not again.summary["failures"]
     assert sorted({r["unit"] for r in again.summary["runs"]}) == [0, 1]
+
+
+# ----------------------------------------------------------------------------- issue 37
+TINY = ["--units", "2", "--no-tune", "--grids", "friction", "--severities", "friction=2",
+        "--healthy", "1", "--healthy-datasheet", "0", "--workers", "0", "--quiet"]
+
+
+def test_a_full_disk_is_one_line_the_units_done_are_kept_and_the_rerun_completes(
+        tmp_path, capsys, monkeypatch):
+    """SQLite's "database or disk is full" on the second unit's commit (it was a
+    traceback): one line that says so, the first unit kept, nothing in --out; the same
+    command, with room again, resumes from the unit kept and writes the assessment."""
+    import sqlite3
+
+    import emaphm.assessment.store as store_module
+
+    real_connect = sqlite3.connect
+    commits = []
+
+    class FullDisk:
+        def __init__(self, conn):
+            self.conn = conn
+
+        def execute(self, sql, *args):
+            if sql.startswith("INSERT OR REPLACE INTO units"):
+                commits.append(sql)
+                if len(commits) == 2:
+                    raise sqlite3.OperationalError("database or disk is full")
+            return self.conn.execute(sql, *args)
+
+        def __getattr__(self, name):
+            return getattr(self.conn, name)
+
+    monkeypatch.setattr(store_module.sqlite3, "connect",
+                        lambda *a, **kw: FullDisk(real_connect(*a, **kw)))
+    out = tmp_path / "a"
+    assert main(["assess", "--out", str(out), *TINY]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert "units.sqlite: cannot write the assessment's store: the disk is full (SQLite: " \
+           "database or disk is full); the units done are kept in" in err
+    assert "run the same command again to resume" in err
+    assert not out.exists()
+    monkeypatch.undo()
+    kept = real_connect(tmp_path / ".a.assessing" / "units.sqlite")
+    assert kept.execute("SELECT count(*) FROM units").fetchone()[0] == 1
+    kept.close()
+    assert main(["assess", "--out", str(out), *TINY[:-1]]) == 0
+    assert "2 units" in capsys.readouterr().err
+    runs = json.loads((out / "assessment.json").read_text())["runs"]
+    assert sorted({r["unit"] for r in runs}) == [0, 1]
+    assert not (tmp_path / ".a.assessing").exists()
+
+
+def test_a_second_assessment_into_the_same_folder_is_refused_at_once(tmp_path, capsys):
+    """Two runs into one --out: the second is refused before its work (it failed at the
+    end of it, when the first had written --out)."""
+    import fcntl
+
+    work = tmp_path / ".a.assessing"
+    work.mkdir()
+    with open(work / "lock", "a+b") as held:
+        fcntl.flock(held, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        _fails(["assess", "--out", str(tmp_path / "a"), *TINY], capsys,
+               f"--out {tmp_path / 'a'}: another emaphm assess is running into it")
+    assert sorted(p.name for p in work.iterdir()) == ["lock"]
+
+
+def test_an_actuator_whose_simulation_diverges_is_not_said_to_have_a_nan_error(monkeypatch):
+    import numpy as np
+
+    import emaphm.simulate
+    from emaphm.assessment import AssessmentError
+    from emaphm.assessment.runner import check_tracking
+
+    good = emaphm.simulate.simulate(model="monitoring")
+    nan = dataclasses.replace(good, theta_m=np.full(good.n, np.nan))
+    monkeypatch.setattr(emaphm.simulate, "simulate", lambda **kw: nan)
+    with pytest.raises(AssessmentError, match=r"the simulation of the healthy actuator diverged "
+                                              r"\(its position is not a finite number\)") as info:
+        check_tracking(siemens_1fk7060())
+    assert "nan" not in str(info.value)

@@ -689,6 +689,243 @@ def _(d, b):
     return ["diagnose", str(d / "deg.csv")]
 
 
+# issue 37 items 1-4: damaged binary exports, read in the sandbox ---------------------------
+def _bench(b: Base, d: Path, fmt: str) -> tuple[Path, Path]:
+    """A bench export of the base trace in ``fmt`` (tests/benchfiles.py) and its map."""
+    from benchfiles import WRITERS
+
+    write, name = WRITERS[fmt]
+    path, text = write(b.trace, d / name)
+    _toml(d / "map.toml", text)
+    return path, d / "map.toml"
+
+
+def _import_bench(d: Path, path: Path, inspect: bool) -> list[str]:
+    if inspect:
+        return ["import", str(path), "--inspect"]
+    return ["import", str(path), "--map", str(d / "map.toml"), "--out", str(d / "out.parquet")]
+
+
+def _small_mat(path: Path, compressed: bool = False) -> Path:
+    from scipy.io import savemat
+
+    savemat(path, {"a": np.arange(10.0), "b": np.ones(5)}, do_compression=compressed)
+    return path
+
+
+def _changed(path: Path, at: int, new: bytes) -> Path:
+    data = bytearray(path.read_bytes())
+    data[at:at + len(new)] = new
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _cut(path: Path, n: int) -> Path:
+    path.write_bytes(path.read_bytes()[:n])
+    return path
+
+
+for _inspect in (False, True):
+    _how = "inspect" if _inspect else "import"
+
+    @case(f"{_how}-mat-shorter-than-its-header", "m.mat: the file is 100 bytes, shorter than the "
+          "128-byte header of a MATLAB file: it is truncated or not a MATLAB file")
+    def _(d, b, inspect=_inspect):
+        _toml(d / "map.toml", _MAP)
+        return _import_bench(d, _cut(_small_mat(d / "m.mat"), 100), inspect)
+
+    @case(f"{_how}-mat73-header-cut-short", "bench_v73.mat: the file is truncated",
+          "its HDF5 header says it ends at byte")
+    def _(d, b, inspect=_inspect):
+        path, _ = _bench(b, d, "mat73")
+        return _import_bench(d, _cut(path, 600), inspect)
+
+    @case(f"{_how}-mat-one-byte-changed-in-a-variable-header",    # SIGSEGV in scipy before
+          "m.mat: not a readable MATLAB file: variable 1 (at byte 128): its data is of data "
+          "type 246, which MATLAB does not write there; the file is damaged")
+    def _(d, b, inspect=_inspect):
+        _toml(d / "map.toml", _MAP)
+        return _import_bench(d, _changed(_small_mat(d / "m.mat"), 176, b"\xf6"), inspect)
+
+    @case(f"{_how}-mat-compressed-4-bytes-zeroed", "m.mat: not a readable MATLAB file: variable "
+          "1 (at byte 128): its compressed data are damaged (zlib: Error -3")
+    def _(d, b, inspect=_inspect):
+        _toml(d / "map.toml", _MAP)
+        return _import_bench(d, _changed(_small_mat(d / "m.mat", True), 150, bytes(4)), inspect)
+
+    @case(f"{_how}-mat73-damaged-hdf5-heap", "bench_v73.mat: cannot be read as a MATLAB file, it "
+          "is damaged or is not one (RuntimeError: Object visitation failed (bad local heap "
+          "signature)")
+    def _(d, b, inspect=_inspect):
+        path, _ = _bench(b, d, "mat73")
+        return _import_bench(d, _changed(path, path.read_bytes().find(b"HEAP"), b"JEAP"), inspect)
+
+    @case(f"{_how}-mdf-data-groups-linked-in-a-loop",           # asammdf went round forever
+          "bench.mf4: not a readable MDF file: the chain of its data groups links back to the "
+          "one at byte")
+    def _(d, b, inspect=_inspect):
+        path, _ = _bench(b, d, "mdf4")
+        data = path.read_bytes()
+        first = data.find(b"##DG")
+        second = data.find(b"##DG", first + 1)
+        return _import_bench(d, _changed(path, second + 24, first.to_bytes(8, "little")), inspect)
+
+
+@case("import-tdms-damaged-properties", "bench.tdms: cannot be read as a TDMS file, it is "
+      "damaged or is not one (NotImplementedError: Unsupported data type to read")
+def _(d, b):
+    path, _ = _bench(b, d, "tdms")
+    name = b"/'Motor'/'IW'"
+    return _import_bench(d, _changed(path, path.read_bytes().find(name) + len(name) + 19,
+                                     b"\xff" * 4), False)
+
+
+@case("import-mat-truncated", "bench_v5.mat: the file is truncated", "variable 5 (at byte",
+      "the 4 variable(s) before it are whole", "--inspect` lists what of it can be read")
+def _(d, b):
+    path, _ = _bench(b, d, "mat5")
+    return _import_bench(d, _cut(path, int(path.stat().st_size * 0.6)), False)
+
+
+@case("import-tdms-truncated", "bench.tdms: the file is truncated", "segment 1 (at byte 0) needs")
+def _(d, b):
+    path, _ = _bench(b, d, "tdms")
+    return _import_bench(d, _cut(path, path.stat().st_size - 100), False)
+
+
+# issue 37 items 5-6: absurd motors, and no trace written with a non-finite sample --------
+_PLATE = ('[datasheet]\nname = "m"\npoles = 8\nke = "135 V/krpm"\nr_ll = "6.3 ohm"\n'
+          'l_ll = "44 mH"\nj_rotor = "7.7 kg cm^2"\nt_max = "18 N m"\ni_max = "10 A"\n')
+
+
+def _plate(d: Path, **fields: str) -> list[str]:
+    text = _PLATE
+    for key, value in fields.items():
+        text = "\n".join(x for x in text.splitlines() if not x.startswith(f"{key} ")) + \
+            f"\n{key} = {value}\n"
+    _toml(d / "np.toml", text)
+    return ["params", "--datasheet", str(d / "np.toml"), "--out", str(d / "p.toml")]
+
+
+@case("datasheet-gear-ratio-1e200", "np.toml: [datasheet] gear_ratio: 1e+200 is beyond the gear "
+                                    "ratios of actuators (0.001 to 100000")
+def _(d, b):
+    return _plate(d, gear_ratio="1e200", j_load='"1 kg m^2"')
+
+
+@case("datasheet-poles-1e12", "[datasheet] poles: expected the number of poles, an even integer "
+                              "from 2 to 200")
+def _(d, b):
+    return _plate(d, poles="1000000000000")
+
+
+@case("datasheet-ke-1e308", "motor.c0 [V s/rad] = 7.79697e+305 is beyond what any servo actuator "
+                            "has", "(from [datasheet] ke)")
+def _(d, b):
+    return _plate(d, ke='"1e308 V/krpm"')
+
+
+@case("simulate-rotor-of-1e-30-kg-m2", "p.toml: motor.J_m [kg m^2] = 1e-30 is beyond what any "
+                                       "servo actuator has (1e-09 to 100): give kg m^2")
+def _(d, b):
+    _toml(d / "p.toml", "[motor]\nJ_m = 1e-30\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("simulate-rotor-the-gains-do-not-fit", "speed loop gain of 750 per period (Kp_w T_s / J_m)")
+def _(d, b):
+    _toml(d / "p.toml", "[motor]\nJ_m = 1e-7\n")
+    return ["simulate", "--scenario", "nominal", "--params", str(d / "p.toml"),
+            "--out", str(d / "x.csv")]
+
+
+@case("assess-grids-empty", "--grids '' names no fault grid", "leave --grids out for all")
+def _(d, b):
+    return ["assess", "--out", str(d / "a"), "--grids", "", "--workers", "0"]
+
+
+# issue 37 partial items: values and maps that no recording has ------------------------------
+_MAP_RATE = _MAP.split("\n", 2)[0] + "\n" + _MAP.split("\n", 2)[2]   # [channels] without t
+
+
+@case("import-rate-of-1e-300-hz", "[time] rate = 1e-300 Hz is outside 1 Hz to 10 MHz")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"), '[time]\nrate = "1e-300 Hz"\n' + _MAP_RATE)
+
+
+@case("import-start-1e308", "[time] start = 1e+308 s is beyond 1e+10 s")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   "[time]\nrate = 8000\nstart = 1e308\n" + _MAP_RATE)
+
+
+@case("import-offset-1e308", "[channels] i_a.offset = 1e+308 is beyond +-1e+06")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   _MAP.replace('i_a = {name = "a", unit = "A"}',
+                                'i_a = {name = "a", unit = "A", offset = 1e308}'))
+
+
+@case("import-currents-of-1e298", "channel 'a' (i_a) reaches 1e+298 A at row 0, beyond the "
+                                  "100000 A of any actuator's recording")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    lines[1:] = [",".join(c[:3] + [repr(float(c[3]) * 0 + 1e298)] + c[4:])
+                 for c in (x.split(",") for x in lines[1:])]
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src)
+
+
+@case("import-theta-ref-of-1e300", "channel 'ref' (theta_ref) reaches 1e+300 rad")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    cells = lines[5].split(",")
+    cells[1] = "1e300"
+    lines[5] = ",".join(cells)
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src)
+
+
+@case("import-scale-that-overflows", "channel 'a' (i_a) reaches inf A at row")
+def _(d, b):
+    src = _bench_csv(b, d / "bench.csv")
+    lines = src.read_text().splitlines()
+    cells = lines[3].split(",")
+    cells[3] = "1e305"
+    lines[3] = ",".join(cells)
+    src.write_text("\n".join(lines) + "\n")
+    return _import(d, src, _MAP.replace('i_a = {name = "a", unit = "A"}',
+                                        'i_a = {name = "a", unit = "A", scale = 1e9}'))
+
+
+@case("import-theta-ref-and-theta-m-on-one-channel", "[channels] theta_ref and theta_m both "
+                                                     "name channel 'pos'")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"), _MAP.replace('"ref"', '"pos"'))
+
+
+@case("import-theta-m-on-the-time-channel", "[channels] t and theta_m both name channel 't'")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv"),
+                   _MAP.replace('theta_m = {name = "pos"', 'theta_m = {name = "t"'))
+
+
+@case("import-truncated-mdf", "bench.mf4: the file is truncated")
+def _(d, b):                         # asammdf printed "Exception ignored in MDF4.__del__"
+    path, _ = _bench(b, d, "mdf4")
+    return _import_bench(d, _cut(path, path.stat().st_size // 2), False)
+
+
+@case("history-list-of-a-campaign-store", "store.sqlite is an emaphm campaign store (emaphm "
+                                          "campaign, emaphm report read it), not a health "
+                                          "history; it was not changed")
+def _(d, b):                         # it said "schema version 3, newer than this emaphm ..."
+    return ["history", "list", "--db", str(_copy(b.store, d / "store.sqlite"))]
+
+
 # issue 25 item 2 and 7: regular files only, whatever the argument -------------------------
 #: the message of a FIFO, of a link to a device and of a link loop
 FIFO = "is a FIFO (named pipe), not a regular file"
@@ -1142,3 +1379,42 @@ def test_the_corpus_covers_every_class_of_issue_10():
                "budget-negative-seconds", "budget-huge", "simulate-noise-1e6", "f-pwm-10",
                "actuator-id-100-kB-add", "dask-inproc-address"]
     assert not set(classes) - set(CASES)
+
+
+def test_a_simulation_that_diverges_is_not_written(base, tmp_path, capsys, monkeypatch):
+    """A trace with NaN samples (a model that diverged on parameters the bounds let through)
+    is refused in one line, and no file is written (issue 37: J_m = 1e-30 wrote a trace of
+    NaN with exit 0)."""
+    import emaphm.simulate
+
+    t = base.trace
+    diverged = _with(t, omega_m=np.where(t.t > 0.25, np.nan, t.omega_m))
+    monkeypatch.setattr(emaphm.simulate, "simulate", lambda *a, **kw: diverged)
+    rc = main(["simulate", "--scenario", "nominal", "--model", "monitoring",
+               "--out", str(tmp_path / "x.csv")])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1, err
+    assert "the simulation diverged: omega_m is NaN or infinite in 1,999 of 4,000 samples from " \
+           "t = 0.250125 s" in err and "x.csv was not written" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_write_trace_refuses_a_non_finite_trace_where_asked(base, tmp_path):
+    from emaphm.traces import TraceError
+
+    bad = _with(base.trace, theta_m=np.where(base.trace.t > 0.1, np.inf, base.trace.theta_m))
+    with pytest.raises(TraceError, match=r"x.parquet: not written: column theta_m holds 3,199 "
+                                         r"samples that are NaN or infinite, the first at row 801"):
+        write_trace(bad, tmp_path / "x.parquet", finite=True)
+    assert list(tmp_path.iterdir()) == []
+    write_trace(bad, tmp_path / "x.parquet")               # the library writes what it is given
+
+
+def test_a_parameter_near_its_edge_is_one_warning_line(base, tmp_path, capsys):
+    (tmp_path / "p.toml").write_text("[controller]\nomega_max = 20000.0\n")
+    err = _warned(["simulate", "--scenario", "nominal", "--model", "monitoring", "--params",
+                   str(tmp_path / "p.toml"), "--out", str(tmp_path / "x.csv")], capsys)
+    warning = [x for x in err.splitlines() if ": warning: " in x]
+    assert warning == [f"emaphm simulate: warning: {tmp_path / 'p.toml'}: controller.omega_max "
+                       "[rad/s] = 20000 is unlike a servo actuator's (usually 1 to 10000): check "
+                       "it is in rad/s: 3000 rpm = 314.16"]

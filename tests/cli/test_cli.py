@@ -410,6 +410,23 @@ def test_the_cli_starts_without_the_heavy_modules():
     assert {"emaphm.prognosis.cli", "emaphm.campaign.cli", "emaphm.fleet.cli"} <= mods
 
 
+def test_emaphm_help_imports_no_numpy():
+    """`emaphm --help` (issue 37: it imported NumPy again, 0.3 s of CPU) and the parser of
+    every subcommand load no NumPy, SciPy or pandas: what each command needs is imported
+    when it runs."""
+    import subprocess
+    import sys
+
+    code = ("import sys, emaphm.cli as c\n"
+            "try:\n    c.main(['--help'])\nexcept SystemExit:\n    pass\n"
+            "c.build_parser()\n"
+            "print('\\n'.join(sorted(sys.modules)))")
+    mods = set(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                              check=True).stdout.split())
+    assert not {"numpy", "scipy", "pandas", "pyarrow"} & mods, sorted(
+        {"numpy", "scipy", "pandas", "pyarrow"} & mods)
+
+
 def test_the_error_boundary_names_the_path_of_an_os_error_and_exits_2(monkeypatch, capsys):
     # what no check foresaw (a disk that fills, a permission lost mid-run) still reaches
     # the user as one line naming the path (the corpus of malformed inputs is in

@@ -22,8 +22,8 @@ from emaphm.prognosis.simulator import (DEGRADATION_SCENARIOS, DegradationLaw, D
                                         degradation_scenario, inspection_times, synthetic_k_history)
 from emaphm.prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds,
                                          indicator_values, parse_threshold)
-from emaphm.prognosis.trends import (fit_trend, fit_trends, indicator_series, predict_rul,
-                                     prognose, rul_track, select)
+from emaphm.prognosis.trends import (fit_trend, fit_trends, indicator_series, indicator_state,
+                                     predict_rul, prognose, rul_track, select)
 
 T = np.linspace(0.0, 500.0, 8)
 
@@ -486,10 +486,12 @@ def test_draws_whose_threshold_the_discrepancy_moves_past_k_1_are_extrapolated()
     wide = predict_rul(T, y, 0.98, seed=2, bounds=(0.0, 1.0), n_samples=20000, discrepancy=0.05)
     head, _, share = wide.extrapolated.partition(": ")
     assert head == "extrapolated beyond 1"                # a free indicator: its bound
-    assert share.startswith("34% of the draws")
+    # 33.8 % expected, 0.33 % the binomial error of 20,000 draws; the mix of models of a
+    # noise-free line rests on residuals of rounding size, so the draws are not pinned
+    assert abs(int(share.split("%")[0]) - 33.8) <= 1.5 and "% of the draws" in share
     k = predict_rul(T, y, 0.98, seed=2, bounds=(0.0, 1.0), n_samples=20000, discrepancy=0.05,
                     indicator="friction")
-    assert k.extrapolated.startswith("extrapolated beyond k = 1: 34% of the draws")
+    assert k.extrapolated.startswith(f"extrapolated beyond k = 1: {share.split('%')[0]}% of")
 
 
 def test_beyond_names_the_bound_where_the_whole_cone_leaves_it():
@@ -525,3 +527,91 @@ def test_the_rul_figure_says_when_its_trend_leaves_k_1():
     # drawn far enough, the median trend itself passes k = 1
     assert "extrapolated beyond k = 1" in notes(plot_prognosis(prognose(T, K, seed=0),
                                                               indicators=["friction"], horizon=1200))
+
+
+# ----------------------------------------------------------------------------- issue 37: long
+def _with_outliers(rng, n):
+    t = np.cumsum(rng.uniform(1.0, 50.0, n))
+    y = 0.05 + rng.uniform(0.0, 0.2) * t / t[-1] + rng.normal(0.0, 0.004, n)
+    if rng.random() < 0.5:
+        y += rng.uniform(0.0, 0.05) * (t / t[-1]) ** 2
+    idx = rng.choice(n - 2, size=min(int(rng.integers(0, 4)), n - 2), replace=False)
+    y[idx] += rng.choice([-1.0, 1.0], size=idx.size) * rng.uniform(0.02, 0.2, idx.size)
+    return t, y
+
+
+def test_the_leave_one_out_screen_leaves_out_what_a_refit_per_inspection_does():
+    """The screen's closed form (residual over one minus leverage) against its reference,
+    a fit without each inspection, on 300 seeded histories of 6 to 80 inspections with up
+    to three wrong identifications each."""
+    from emaphm.prognosis.trends import _inliers, _inliers_refit
+
+    rng = np.random.default_rng(37)
+    left_out = 0
+    for _ in range(300):
+        t, y = _with_outliers(rng, int(rng.integers(6, 80)))
+        fits = fit_trends(t, y, sigma_floor=0.003)
+        fast = _inliers(t, y, fits, 0.003)
+        assert np.array_equal(fast, _inliers_refit(t, y, fits, 0.003))
+        left_out += int((~fast).sum())
+    assert left_out > 100
+
+
+def test_the_onset_profile_is_the_least_squares_of_its_regressor_matrix():
+    """The closed form from cumulative sums against the regressor matrix max(tau, c) of
+    every onset, (m, n), as it was computed (1.6 GB at 10,000 inspections)."""
+    from emaphm.prognosis.trends import _onset_profile
+
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        n = int(rng.integers(3, 300))
+        tau = np.cumsum(rng.uniform(0.1, 1e3, n))
+        tau -= tau[-1]
+        y = 0.01 * rng.normal(size=n) + 1e-4 * np.maximum(tau, tau[n // 2])
+        c = np.r_[tau[:max(n - 2, 1)], rng.uniform(tau[0], tau[max(n - 3, 0)], 20)]
+        X = np.maximum(tau[None, :], c[:, None])
+        dx, dy = X - X.mean(axis=1)[:, None], y - y.mean()
+        sxx, sxy = np.einsum("ij,ij->i", dx, dx), dx @ dy
+        b = sxy / sxx
+        a, rss = y.mean() - b * X.mean(axis=1), np.maximum(dy @ dy - b * sxy, 0.0)
+        got = _onset_profile(tau, y, c)
+        np.testing.assert_allclose(got[2], rss, rtol=1e-7, atol=1e-12 * float(dy @ dy))
+        np.testing.assert_allclose(got[1] * np.ptp(tau), b * np.ptp(tau), rtol=1e-7,
+                                   atol=1e-12)
+        np.testing.assert_allclose(got[0], a, rtol=1e-7, atol=1e-12)
+
+
+def test_a_history_of_ten_thousand_inspections_is_prognosed_whole():
+    """A year of daily checks, and more: 10,000 inspections, 1 in 200 a wrong basin. Every
+    indicator is predicted, the wrong basins are left out, and friction is found growing
+    towards its threshold (it took 3 GB and minutes, quadratic in the inspections;
+    the time and memory are in BENCHMARKS.md, bench_long_history.py)."""
+    rng = np.random.default_rng(10_000)
+    n = 10_000
+    t = 24.0 * np.arange(n)
+    K = np.zeros((n, 8))
+    K[:, 6:] = 0.5
+    K[:, 0] = 0.05 + 0.3 * np.arange(n) / n
+    K += rng.normal(0.0, 0.007, (n, 8)) * np.r_[1, 1, 1, 1, 1, 1, 0, 1]
+    wrong = rng.random(n) < 0.005
+    K[wrong, 0] += 0.2
+    K = np.clip(K, 0.0, 1.0)
+    p = prognose(t, K, seed=0)
+    assert set(p.predictions) == set(INDICATORS)
+    friction = p.predictions["friction"]
+    assert set(friction.excluded) >= set(np.flatnonzero(wrong[:-2]))
+    assert indicator_state(friction, t[-1])[0] == "predicted"
+    assert 85_000 < friction.lo < friction.median < friction.hi < 160_000   # 0.5 at 400,000 h
+
+
+def test_the_parsers_names_and_defaults_are_the_modules():
+    """The command line's parser reads them from the light emaphm.prognosis.choices (no
+    NumPy for `emaphm --help`): they are the ones the modules use."""
+    from emaphm.prognosis import choices, inspection, simulator, thresholds
+
+    assert choices.DEGRADATION_SCENARIO_NAMES == tuple(simulator.DEGRADATION_SCENARIOS)
+    assert choices.INDICATORS is thresholds.INDICATORS
+    assert choices.DEFAULT_RISK == inspection.DEFAULT_RISK == 0.01
+    d = inspection.INTERVAL_DEFAULTS["h"]
+    assert (d.default, d.min, d.max) == tuple(choices.FLIGHT_HOUR_INTERVALS[k] for k in
+                                              ("default", "min", "max"))

@@ -107,7 +107,7 @@ def test_starter_map_marks_what_it_could_not_find(tmp_path):
     with pytest.raises(MapError, match=r"\[channels\] theta_ref: unknown unit '\?'; known units "
                                        r"of angle: rad, mrad, deg, rev"):
         _map(text)
-    with pytest.raises(MapError, match=r"\[time\] rate = 0 Hz is outside 0 to 10 MHz"):
+    with pytest.raises(MapError, match=r"\[time\] rate = 0 Hz is outside 1 Hz to 10 MHz"):
         _map("[time]\nrate = 0\n" + _FULL.replace('t = {name = "t", unit = "s"}\n', ""))
 
 
@@ -224,18 +224,21 @@ def test_channels_of_different_length_without_a_time_base(tmp_path):
 
 
 def test_a_missing_reader_names_the_extra(tmp_path, monkeypatch, capsys):
-    import importlib
+    # the reader runs in the sandbox, a child process: there an nptdms that cannot be
+    # imported stands in for one not installed
+    from emaphm.traces.importers.sandbox import reader_process
 
-    real = importlib.import_module
-
-    def no_nptdms(name, *args, **kwargs):
-        if name == "nptdms":
-            raise ImportError("No module named 'nptdms'")
-        return real(name, *args, **kwargs)
-
-    monkeypatch.setattr(importlib, "import_module", no_nptdms)
-    (tmp_path / "x.tdms").write_bytes(b"TDSm")
-    assert main(["import", str(tmp_path / "x.tdms"), "--inspect"]) == 2
+    shadow = tmp_path / "shadow" / "nptdms"
+    shadow.mkdir(parents=True)
+    (shadow / "__init__.py").write_text("raise ImportError(\"No module named 'nptdms'\")\n")
+    monkeypatch.setenv("PYTHONPATH", str(shadow.parent))
+    reader_process().stop()
+    try:
+        (tmp_path / "x.tdms").write_bytes(b"TDSm")
+        assert main(["import", str(tmp_path / "x.tdms"), "--inspect"]) == 2
+    finally:
+        monkeypatch.undo()
+        reader_process().stop()                 # the next file gets a child with nptdms
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "needs the Python package 'nptdms'" in err
     assert "pip install 'emaphm[bench]'" in err
@@ -328,10 +331,11 @@ def _two_clocks(path, motion_t):
 
 def _resampled(path, first, stop):
     """``(t, columns, reads)``: rows ``first:stop`` of the currents and of the motion
-    resampled onto their clock, and the record ranges read from the motion group."""
-    from emaphm.traces.importers import open_source
+    resampled onto their clock, and the record ranges read from the motion group (the
+    reader in this process, not in the sandbox, so that its reads can be watched)."""
+    from emaphm.traces.importers.registry import open_here
 
-    with open_source(path) as source:
+    with open_here(path) as source:
         chans = [source.info.find(n, g, "test") for n, g in
                  (("IU", "currents"), ("pos", "motion"), ("speed", "motion"))]
         reads, read = [], source._read

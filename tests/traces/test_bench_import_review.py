@@ -354,3 +354,68 @@ def test_rows_of_integers_say_nothing_of_the_decimal(tmp_path):
                                                 'i_a = { name = "a", unit = "A" }\n'
                                                 'i_b = { name = "b", unit = "A" }\n'))
     assert "no channel 'x'" in str(err.value) and "decimal" not in str(err.value)
+
+
+# ----------------------------------------------------------------------------- issue 37
+def test_a_channel_named_group_slash_channel_is_read_as_in_group_or_in_its_name(tmp_path):
+    """The documented "GROUP/CHANNEL" form, as --inspect lists a channel, and the name
+    with its group: both read the same channels (it was refused with "no channel 'EMA/Time'
+    ...; the file has 'EMA/Time'")."""
+    pytest.importorskip("nptdms")
+    from nptdms import ChannelObject, TdmsWriter
+
+    t, ref, pos, ia, ib = _signals()
+    with TdmsWriter(tmp_path / "rig.tdms") as w:
+        w.write_segment([ChannelObject("EMA", name, x, properties={"unit_string": unit})
+                         for name, x, unit in (("Time", t, "s"), ("Soll", ref, "rad"),
+                                               ("Ist", pos, "rad"), ("IU", ia, "A"),
+                                               ("IV", ib, "A"))])
+        w.write_segment([ChannelObject("Other", "Time", t[::-1], properties={"unit_string": "s"})])
+    slash = _map('[channels]\nt = "EMA/Time"\ntheta_ref = "EMA/Soll"\ntheta_m = "EMA/Ist"\n'
+                 'i_a = "EMA/IU"\ni_b = { name = "EMA/IV", group = "EMA" }\n')
+    grouped = _map('[source]\ngroup = "EMA"\n[channels]\nt = "Time"\ntheta_ref = "Soll"\n'
+                   'theta_m = "Ist"\ni_a = "IU"\ni_b = "IV"\n')
+    for cmap in (slash, grouped):
+        _check(import_trace(tmp_path / "rig.tdms", cmap))
+    with pytest.raises(TraceError, match=r"no channel 'EMA/IV' in group 'Other' in rig.tdms"):
+        import_trace(tmp_path / "rig.tdms", _map(
+            '[channels]\nt = "EMA/Time"\ntheta_ref = "EMA/Soll"\ntheta_m = "EMA/Ist"\n'
+            'i_a = "EMA/IU"\ni_b = { name = "EMA/IV", group = "Other" }\n'))
+
+
+def test_inspect_of_a_truncated_file_lists_what_it_can_and_says_it_is_truncated(tmp_path, capsys):
+    """A MATLAB 5 file cut in its fifth variable: --inspect lists the four before it with
+    one warning line, and says so in the map it prints; an import refuses it (the
+    bad-input corpus)."""
+    from scipy.io import savemat
+
+    t, ref, pos, ia, ib = _signals()
+    savemat(tmp_path / "run.mat", {"fs": 1e4, "ref": ref, "pos": pos, "ia": ia, "ib": ib})
+    data = (tmp_path / "run.mat").read_bytes()
+    (tmp_path / "cut.mat").write_bytes(data[:len(data) - 1000])
+    assert main(["import", str(tmp_path / "cut.mat"), "--inspect"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.count("\n") == 1
+    assert captured.err.startswith(f"emaphm import: warning: {tmp_path / 'cut.mat'}: the file "
+                                   "is truncated (or a length in it is damaged): variable 5 (at "
+                                   "byte ")
+    assert "the 4 variable(s) before it are whole" in captured.err
+    assert "listed below: what of it can be read" in captured.err
+    assert "# damaged: the file is truncated" in captured.out
+    assert [c.name for c in inspect_source(tmp_path / "cut.mat").channels] == ["ref", "pos", "ia"]
+
+
+def test_inspect_of_a_file_with_a_line_break_in_its_names_prints_valid_toml(tmp_path, capsys):
+    """A line break in the file's name broke the TOML --inspect prints; the command line
+    it suggests is quoted for the shell."""
+    t, ref, pos, ia, ib = _signals()
+    rows = "\n".join(",".join(repr(float(x)) for x in r) for r in zip(t, ref, pos, ia, ib))
+    odd = tmp_path / "run 1\nb.csv"
+    odd.write_text("t,ref,pos,ia,ib\n" + rows + "\n")
+    spaced = tmp_path / "run 2 (bench).csv"
+    spaced.write_text("t,ref,pos,ia,ib\n" + rows + "\n")
+    for path in (odd, spaced):
+        assert main(["import", str(path), "--inspect"]) == 0
+        out = capsys.readouterr().out
+        tomllib.loads(out)                              # the whole output is TOML
+    assert "#   emaphm import 'run 2 (bench).csv' --map THIS.toml" in out

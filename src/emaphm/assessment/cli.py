@@ -52,7 +52,11 @@ def build_spec(args: argparse.Namespace) -> Any:
 
     params = load_params(args.params) if args.params else siemens_1fk7060()
     tolerances = load_tolerances(args.tolerances).to_dict() if args.tolerances else {}
-    grids = tuple(g.strip() for g in args.grids.split(",") if g.strip()) if args.grids else None
+    grids = (tuple(g.strip() for g in args.grids.split(",") if g.strip())
+             if args.grids is not None else None)
+    if grids == ():
+        raise UsageError(f"--grids {args.grids!r} names no fault grid; give grids separated by "
+                         "commas (e.g. friction,short_circuit), or leave --grids out for all")
     return AssessmentSpec(
         params.to_dict(), tolerances, units=args.units,
         tune_units=0 if args.no_tune else args.tune_units, healthy=args.healthy,

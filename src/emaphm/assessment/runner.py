@@ -47,7 +47,13 @@ def check_tracking(params: Any) -> dict[str, float]:
     travel = float(np.ptp(tr.theta_ref))
     rms = float(np.sqrt(np.mean(err * err)))
     ratio = rms / travel if travel > 0 else float("inf")
-    if not np.isfinite(rms) or ratio > TRACKING_LIMIT:
+    if not np.isfinite(rms):
+        raise AssessmentError(
+            "the actuator of --params does not track the diagnostic profile: the simulation of "
+            "the healthy actuator diverged (its position is not a finite number); check its "
+            "inertia, torque limit, bus voltage and controller gains ([motor] J_m and T_max, "
+            "[inverter] V_dc, [controller]), e.g. from emaphm params --datasheet")
+    if ratio > TRACKING_LIMIT:
         raise AssessmentError(
             f"the actuator of --params does not track the diagnostic profile: its RMS position "
             f"error is {rms:.3g} rad, {100 * ratio:.0f} % of the profile's {travel:.3g} rad "
@@ -55,6 +61,23 @@ def check_tracking(params: Any) -> dict[str, float]:
             "its torque limit, bus voltage and controller gains ([motor] T_max, [inverter] "
             "V_dc, [controller]), e.g. from emaphm params --datasheet")
     return {"rms_error_rad": rms, "travel_rad": travel, "ratio": ratio}
+
+
+def _lock(work: Path, out: Path):
+    """An exclusive lock on the work folder ``work`` for this process (released when it
+    ends, however): a second assessment into the same ``out`` is refused at once, not
+    after all its work when the first has written ``out``."""
+    import fcntl
+
+    fh = open(work / "lock", "a+b")
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        fh.close()
+        raise AssessmentError(f"--out {out}: another emaphm assess is running into it (its units "
+                              f"are in {work}); wait for it to finish, or give another "
+                              "folder") from None
+    return fh
 
 
 def work_folder(out: Path) -> Path:
@@ -147,9 +170,15 @@ def assess(spec: AssessmentSpec, out: str | os.PathLike[str], *, executor: Any =
     t0 = time.perf_counter()
     tracking = check_tracking(spec.actuator())
     work = work_folder(out)
-    work.mkdir(exist_ok=True)
+    try:
+        work.mkdir(exist_ok=True)
+    except OSError as exc:
+        raise AssessmentError(f"--out {out}: cannot make its work folder {work} "
+                              f"({exc.strerror or exc}); free some space or fix the folder's "
+                              "permissions") from None
+    lock = _lock(work, out)
     ran = resumed = 0
-    with AssessmentStore.open(work / "units.sqlite", spec) as store:
+    with lock, AssessmentStore.open(work / "units.sqlite", spec) as store:
         for phase in ("tune", "assess"):
             if phase == "tune" and not spec.tune:
                 continue
@@ -174,11 +203,16 @@ def assess(spec: AssessmentSpec, out: str | os.PathLike[str], *, executor: Any =
                         wall_s=time.perf_counter() - t0, version=__version__, tracking=tracking)
     params = replace(spec.actuator(), thresholds=tuple(sorted(values.items())))
     tmp = out.parent / f".{out.name}.{secrets.token_hex(4)}.tmp"
-    tmp.mkdir()
     try:
+        tmp.mkdir()
         paths = [save_params(params, tmp / "params.toml"), *write_outputs(summary, tmp)]
         shutil.copy2(work / "units.sqlite", tmp / "units.sqlite")
         os.replace(tmp, out)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise AssessmentError(f"--out {out}: cannot write the assessment ({exc.strerror or exc}); "
+                              f"every unit is done and kept in {work}: free some space (or fix "
+                              "the folder) and run the same command again to write it") from None
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

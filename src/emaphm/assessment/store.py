@@ -1,6 +1,9 @@
 """The results of an assessment's units as they finish: one SQLite file, one row per unit,
 committed one by one (write-ahead log), so that a killed assessment resumes where it
 stopped. The spec it holds must be the one resumed (its hash), or the store refuses.
+A store that cannot be written (a full disk, a read-only folder) is an
+:class:`~emaphm.assessment.spec.AssessmentError` that says so: what was committed stays,
+and the same command resumes once there is room.
 """
 
 from __future__ import annotations
@@ -25,6 +28,19 @@ CREATE TABLE IF NOT EXISTS units (
 """
 
 
+def _cannot_write(path: Path, exc: sqlite3.Error) -> AssessmentError:
+    """The refusal of a store SQLite cannot write: its cause, and that the units committed
+    are kept."""
+    text = str(exc)
+    cause = ("the disk is full" if "full" in text else
+             "the disk or the file cannot be written" if "I/O" in text or "readonly" in text
+             else text)
+    return AssessmentError(f"{path}: cannot write the assessment's store: {cause} (SQLite: "
+                           f"{text}); the units done are kept in {path.parent}: free some space "
+                           "(or fix the folder's permissions) and run the same command again "
+                           "to resume")
+
+
 class AssessmentStore:
     """An assessment's unit results (:meth:`open`, :meth:`put`, :meth:`results`)."""
 
@@ -37,6 +53,13 @@ class AssessmentStore:
         """Open (or create) the store of ``spec`` at ``path``; an existing store of another
         spec is refused with the differences."""
         path = Path(path)
+        try:
+            return cls._open(path, spec)
+        except sqlite3.OperationalError as exc:
+            raise _cannot_write(path, exc) from None
+
+    @classmethod
+    def _open(cls, path: Path, spec: AssessmentSpec) -> "AssessmentStore":
         conn = sqlite3.connect(path, timeout=30.0, isolation_level=None)
         try:
             enable_wal(conn)
@@ -63,9 +86,12 @@ class AssessmentStore:
         return cls(path, conn)
 
     def put(self, result: dict[str, Any]) -> None:
-        self._conn.execute("INSERT OR REPLACE INTO units VALUES (?, ?, ?, ?)",
-                           (result["key"], result["phase"], int(result["index"]),
-                            json.dumps(result, sort_keys=True)))
+        try:
+            self._conn.execute("INSERT OR REPLACE INTO units VALUES (?, ?, ?, ?)",
+                               (result["key"], result["phase"], int(result["index"]),
+                                json.dumps(result, sort_keys=True)))
+        except sqlite3.OperationalError as exc:
+            raise _cannot_write(self.path, exc) from None
 
     def results(self, phase: str) -> dict[str, dict[str, Any]]:
         """The stored results of ``phase`` by key (failures included: they carry ``error``)."""
@@ -73,14 +99,20 @@ class AssessmentStore:
                                   (phase,)).fetchall()
         return {k: json.loads(r) for k, r in rows}
 
-    def close(self) -> None:
+    def close(self, strict: bool = True) -> None:
+        """Fold the log into the file and close. Where that cannot be written (a full disk),
+        the log keeps every committed unit (the next open reads it): an AssessmentError
+        with ``strict``, else (an error already on its way) nothing more is said."""
         try:
             self._conn.execute("PRAGMA wal_checkpoint(TRUNCATE)")
+        except sqlite3.OperationalError as exc:
+            if strict:
+                raise _cannot_write(self.path, exc) from None
         finally:
             self._conn.close()
 
     def __enter__(self) -> "AssessmentStore":
         return self
 
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
+    def __exit__(self, kind: Any, *exc: Any) -> None:
+        self.close(strict=kind is None)

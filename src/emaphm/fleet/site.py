@@ -52,11 +52,18 @@ left, soonest first, ties by id.
 The pages are made in ``workers`` processes (default: every core), or on a Dask cluster
 (``executor``: :class:`emaphm.campaign.DaskExecutor`), a few actuators per task; a task
 returns the bytes of its files, which this process writes (a cluster need not share the
-folder). The result does not depend on where they were made. Pages and figures are
-written by a rename, each whole, and flushed to disk together once before the manifest,
-the index and ``fleet.json`` are written (atomically, :mod:`emaphm._files`), so an
-interrupted build never leaves an index that links to a missing page, nor a manifest that
-vouches for a file that is not on disk.
+folder). The result does not depend on where they were made. Every file a build writes
+(pages, figures, the manifest, the assets, the index and ``fleet.json``) is first written
+whole beside its place under a temporary name; once all are written they are flushed to
+disk together and renamed into place, pages first and the index last. A build that fails
+before (a full disk, a crash) removes its temporary files and leaves the site as it was,
+never half new and half old; an interrupted rename leaves every file whole, and never an
+index that links to a missing page, nor a manifest that vouches for a file not on disk.
+A rebuild repairs what it finds damaged: an index or ``fleet.json`` emptied, edited or
+replaced by a link (their SHA-256 are kept with the index key), a page or figure of
+another size, or a link in its place, an asset that differs; a link in the place of
+``assets/`` is replaced by a folder, one in the place of ``actuators/`` refused: a build
+writes nothing outside its folder.
 
 Only the worker's part imports the prognosis (SciPy); no part imports matplotlib: a
 rebuild in which nothing changed imports neither.
@@ -77,7 +84,7 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 
-from .._files import atomic_write, atomic_write_text
+from .._files import atomic_write_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
 from .markup import esc, fmt_deadline, page_stem, schedule_key, script_json, unit_rank
@@ -264,7 +271,7 @@ def _reusable(entry: Any, key: str, folder: Path) -> bool:
         if not isinstance(name, str) or Path(name).name != name:
             return False
         try:
-            st = os.stat(folder / name)
+            st = os.lstat(folder / name)            # a link in its place is not the page
         except (OSError, ValueError):
             return False
         if not stat.S_ISREG(st.st_mode) or st.st_size != size:
@@ -272,18 +279,19 @@ def _reusable(entry: Any, key: str, folder: Path) -> bool:
     return True
 
 
-def _remove_others(folder: Path, known: dict, keep: set[str]) -> int:
+def _remove_others(folder: Path, known: dict, keep: set[str], staging: "_Staging") -> int:
     """Remove from ``folder`` (and from the manifest ``known``) the page and figures of
     every actuator an earlier build wrote that is not in ``keep``: a site rebuilt from a
     history without them must not keep serving their pages. Only the files a build
-    names after a manifest stem are removed. Returns how many actuators were removed."""
+    names after a manifest stem are removed (when ``staging`` commits). Returns how many
+    actuators were removed."""
     gone = [s for s in known if s not in keep]
     for stem in gone:
         del known[stem]
         if Path(stem).name != stem:             # a stem is a plain name (page_stem)
             continue
         for name in (f"{stem}.html", *_figure_names(stem)):
-            (folder / name).unlink(missing_ok=True)
+            staging.remove(folder / name)
     return len(gone)
 
 
@@ -416,18 +424,44 @@ def _run(jobs: list[_Job], executor: Any,
             progress(f"{done}/{len(jobs)} {value[-1]['id']}")
 
 
-def _replace(path: Path, payload: bytes) -> None:
-    """Write ``path`` whole by a rename of a temporary sibling; not flushed to disk here
-    (:func:`_sync` flushes the build's files together: one flush per file cost more than
-    drawing them)."""
-    tmp = path.parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    try:
-        with open(tmp, "xb") as fh:
-            fh.write(payload)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+class _Staging:
+    """The files of a build, each written whole beside its place under a temporary name,
+    then renamed into place all together (:meth:`commit`) once every one is written and
+    flushed: a build that fails on the way (a full disk, a crash of the drawing) removes
+    them (:meth:`discard`) and leaves the site as it was, never half new and half old.
+    A rename needs no room on the disk, and replaces a link in the file's place (never
+    writing through it)."""
+
+    def __init__(self) -> None:
+        self.moves: list[tuple[Path, Path]] = []
+        self.removals: list[Path] = []
+
+    def write(self, path: Path, payload: bytes) -> None:
+        tmp = path.parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
+        try:
+            with open(tmp, "xb") as fh:
+                fh.write(payload)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        self.moves.append((tmp, path))
+
+    def remove(self, path: Path) -> None:
+        self.removals.append(path)
+
+    def commit(self) -> None:
+        if self.moves:
+            _sync([tmp for tmp, _ in self.moves])
+        for tmp, path in self.moves:
+            os.replace(tmp, path)
+        self.moves = []
+        for path in self.removals:
+            path.unlink(missing_ok=True)
+
+    def discard(self) -> None:
+        for tmp, _ in self.moves:
+            tmp.unlink(missing_ok=True)
+        self.moves = []
 
 
 def _sync(paths: Sequence[Path]) -> None:
@@ -951,6 +985,10 @@ def check_site_folder(folder: str | os.PathLike[str]) -> None:
         return
     if not p.is_dir():
         raise ValueError(f"--out {p} is a file, not a folder; give a folder for the site")
+    if (p / "actuators").is_symlink():
+        raise ValueError(f"--out {p}: its actuators/ is a link to {os.readlink(p / 'actuators')}; "
+                         "a site writes only inside its folder: make actuators/ a folder (move "
+                         "the pages there) or give another folder")
     if any((p / "actuators" / name).is_file() for name in (_MANIFEST, _INDEX_KEY)):
         return
     try:
@@ -965,10 +1003,16 @@ def check_site_folder(folder: str | os.PathLike[str]) -> None:
 
 
 def _out_folder(out: str | os.PathLike[str]) -> Path:
+    """The site folder ``out``, its ``actuators/`` and ``assets/`` folders made; a link in
+    the place of either is not followed out of the site: the assets' (emaphm's own
+    files) is replaced by a folder, the pages' refused (:func:`check_site_folder`)."""
     p = Path(out)
     check_site_folder(p)
+    pages = p / "actuators"
     try:
-        (p / "actuators").mkdir(parents=True, exist_ok=True)
+        if (p / "assets").is_symlink():
+            (p / "assets").unlink()
+        pages.mkdir(parents=True, exist_ok=True)
         (p / "assets").mkdir(exist_ok=True)
         if not (p / "actuators" / _MANIFEST).is_file():     # the folder is the site's now
             atomic_write_text(p / "actuators" / _MANIFEST, "{}\n")
@@ -1100,23 +1144,34 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
             h.close()
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     pool = executor is None and n_workers > 1 and len(jobs) > 1
-    made, statuses, written = _make(jobs, _LocalPool(n_workers) if pool else executor,
-                                    figdir, progress)
-    entries.update(made)
-    removed = 0 if actuators else _remove_others(figdir, known, set(stems.values()))
-    if made or removed or not (figdir / _MANIFEST).is_file():
-        known.update({stems[i]: e for i, e in made.items()})
-        atomic_write_text(figdir / _MANIFEST,
-                          json.dumps(known, sort_keys=True, separators=(",", ":")) + "\n")
-    order = sorted(entries, key=lambda i: tuple(entries[i]["order"]))   # status.attention_key
-    places = _inspect_order([entries[i]["row"] for i in order])
-    rows = [_ranked(entries[i]["row"], rank, places.get(i))
-            for rank, i in enumerate(order, start=1)]
-    written += _write_assets(folder)
-    written += _write_index(folder, rows, [entries[i]["cells"] for i in order],
-                            [[stems[i], entries[i]["key"]] for i in order], settings,
-                            title=title, source=h.path.name, thresholds=thresholds, seed=seed,
-                            level=level, policy=policy)
+    staging = _Staging()
+    try:
+        made, statuses, written = _make(jobs, _LocalPool(n_workers) if pool else executor,
+                                        figdir, progress, staging)
+        entries.update(made)
+        removed = 0 if actuators else _remove_others(figdir, known, set(stems.values()),
+                                                     staging)
+        if made or removed or not _regular(figdir / _MANIFEST):
+            known.update({stems[i]: e for i, e in made.items()})
+            staging.write(figdir / _MANIFEST, (json.dumps(
+                known, sort_keys=True, separators=(",", ":")) + "\n").encode())
+        order = sorted(entries, key=lambda i: tuple(entries[i]["order"]))  # attention_key
+        places = _inspect_order([entries[i]["row"] for i in order])
+        rows = [_ranked(entries[i]["row"], rank, places.get(i))
+                for rank, i in enumerate(order, start=1)]
+        written += _write_assets(folder, staging)
+        written += _write_index(folder, rows, [entries[i]["cells"] for i in order],
+                                [[stems[i], entries[i]["key"]] for i in order], settings,
+                                staging, redraw=redraw, title=title, source=h.path.name,
+                                thresholds=thresholds, seed=seed, level=level, policy=policy)
+        staging.commit()
+    except OSError as exc:
+        staging.discard()
+        raise OSError(exc.errno, f"{exc.strerror or exc}; the site in {folder} was left as it "
+                      "was", exc.filename) from None
+    except BaseException:
+        staging.discard()
+        raise
     return FleetSite(out=folder, index=folder / "index.html",
                      pages={i: figdir / f"{stems[i]}.html" for i in order},
                      statuses=tuple(statuses[i] for i in order if i in statuses),
@@ -1126,11 +1181,14 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
 
 
 def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, settings: dict,
-                 *, title: str, source: str, thresholds: FailureThresholds, seed: int,
-                 level: float, policy: InspectionPolicy) -> int:
-    """Write ``index.html`` and ``fleet.json`` of ``rows`` (ranked, in order) unless what
+                 staging: _Staging, *, redraw: bool, title: str, source: str,
+                 thresholds: FailureThresholds, seed: int, level: float,
+                 policy: InspectionPolicy) -> int:
+    """Stage ``index.html`` and ``fleet.json`` of ``rows`` (ranked, in order) unless what
     they were last written from (``keys``: page stem and key of each row, the settings) is
-    the same and both are there; returns the files written."""
+    the same and both are there as they were written (their SHA-256 in the key file:
+    emptied, edited or replaced by a link, they are written again), or ``redraw``;
+    returns the files written."""
     index = folder / "index.html"
     meta = {"title": title, "history": source, "seed": seed, "level": level,
             "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS),
@@ -1138,16 +1196,44 @@ def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, 
     index_key = _digest({"settings": settings, "meta": meta, "page_rows": PAGE_ROWS,
                          "rows": keys})
     key_file = folder / "actuators" / _INDEX_KEY
-    if _read_key(key_file) == index_key and index.is_file() and (folder / "fleet.json").is_file():
+    stored = _read_key(key_file)
+    if not redraw and stored is not None and stored == _index_record(index_key, folder):
         return 0
     trs = [_tr(row, c) for row, c in zip(rows, cells)]
-    atomic_write_text(folder / "fleet.json", json.dumps(
-        {**meta, "actuators": rows}, indent=1, allow_nan=False) + "\n")
-    atomic_write_text(index, _index_html(rows, trs, title=title, source=source,
-                                         thresholds=thresholds, seed=seed, level=level,
-                                         policy=policy))
-    atomic_write_text(key_file, index_key + "\n")
+    # keys sorted: a row kept from the manifest (sorted there) and a row drawn now read alike
+    payloads = {"fleet.json": (json.dumps({**meta, "actuators": rows}, indent=1, sort_keys=True,
+                                          allow_nan=False) + "\n").encode(),
+                "index.html": _index_html(rows, trs, title=title, source=source,
+                                          thresholds=thresholds, seed=seed, level=level,
+                                          policy=policy).encode()}
+    for name, payload in payloads.items():
+        staging.write(folder / name, payload)
+    record = {"key": index_key, **{n: hashlib.sha256(b).hexdigest() for n, b in payloads.items()}}
+    staging.write(key_file, (json.dumps(record, sort_keys=True) + "\n").encode())
     return 2
+
+
+def _index_record(index_key: str, folder: Path) -> str | None:
+    """What the key file holds when the index and ``fleet.json`` of ``index_key`` are there
+    as written (regular files, their digests), else None."""
+    digests = {}
+    for name in ("fleet.json", "index.html"):
+        path = folder / name
+        if not _regular(path):
+            return None
+        try:
+            digests[name] = hashlib.sha256(path.read_bytes()).hexdigest()
+        except OSError:
+            return None
+    return json.dumps({"key": index_key, **digests}, sort_keys=True)
+
+
+def _regular(path: Path) -> bool:
+    """Whether ``path`` is a regular file itself (not a link to one)."""
+    try:
+        return stat.S_ISREG(os.lstat(path).st_mode)
+    except OSError:
+        return False
 
 
 def _plan(h: Any, acts: list, common: dict, digest: str, known: dict, figdir: Path,
@@ -1184,43 +1270,41 @@ def _plan(h: Any, acts: list, common: dict, digest: str, known: dict, figdir: Pa
 
 
 def _make(jobs: list[_Job], executor: Any, figdir: Path,
-          progress: Callable[[str], None] | None) -> tuple[dict, dict, int]:
-    """Make the pages of ``jobs`` and write their files as they come (flushed together at
-    the end); returns their manifest entries and kept statuses by id, and the files
-    written."""
+          progress: Callable[[str], None] | None, staging: _Staging) -> tuple[dict, dict, int]:
+    """Make the pages of ``jobs`` and stage their files as they come (``staging``); returns
+    their manifest entries and kept statuses by id, and the files written."""
     made: dict[str, dict] = {}
     statuses: dict[str, Any] = {}
-    paths: list[Path] = []
+    written = 0
     for res in _run(jobs, executor, progress):
         for name, payload in res["files"].items():
-            _replace(figdir / name, payload)
-            paths.append(figdir / name)
+            staging.write(figdir / name, payload)
+            written += 1
         for name in _figure_names(res["stem"]):       # one it no longer has (fewer inspections)
             if name not in res["files"]:
-                (figdir / name).unlink(missing_ok=True)
+                staging.remove(figdir / name)
         made[res["id"]] = {"key": res["key"], "figures": res["figures"], "row": res["row"],
                            "cells": res["cells"], "order": res["order"],
                            "skipped": res["skipped"],
                            "files": {n: len(b) for n, b in res["files"].items()}}
         if res["status"] is not None:
             statuses[res["id"]] = res["status"]
-    if paths:
-        _sync(paths)
-    return made, statuses, len(paths)
+    return made, statuses, written
 
 
-def _write_assets(folder: Path) -> int:
-    """Copy the shipped assets where they differ from what is there; returns how many."""
+def _write_assets(folder: Path, staging: _Staging) -> int:
+    """Stage the shipped assets where what is there differs (or is a link); returns how
+    many."""
     n = 0
     for name in ASSETS:
         payload = resources.files("emaphm.fleet").joinpath("assets", name).read_bytes()
         path = folder / "assets" / name
         try:
-            same = path.is_file() and path.read_bytes() == payload
+            same = _regular(path) and path.read_bytes() == payload
         except OSError:
             same = False
         if not same:
-            atomic_write(path, lambda fh, b=payload: fh.write(b))
+            staging.write(path, payload)
             n += 1
     return n
 

@@ -25,8 +25,6 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from .._cli_common import (UsageError, actuator_id, arg_type, budget_option,
                            identification_seconds, plot_path, shown, warn_if_long)
 from .._cli_common import seed as _seed
@@ -626,8 +624,7 @@ def _register_add(hs: Any) -> None:
 
 
 def _register_prognose(subparsers: Any) -> None:
-    from .choices import SELECTION_RULES
-    from .thresholds import INDICATORS
+    from .choices import INDICATORS, SELECTION_RULES
 
     p = subparsers.add_parser("prognose", help="fault trends and remaining useful life of an actuator")
     p.add_argument("actuator", type=actuator_id)
@@ -661,9 +658,9 @@ _min_interval = arg_type(float, lambda x: math.isfinite(x) and x >= 0,
 def planning_options(p: argparse.ArgumentParser, *, default_risk: bool = False) -> None:
     """``--risk`` and the intervals of an inspection plan (``prognose``; ``fleet``, whose
     risk defaults to :data:`~emaphm.prognosis.inspection.DEFAULT_RISK`)."""
-    from .inspection import DEFAULT_RISK, INTERVAL_DEFAULTS
+    from .choices import DEFAULT_RISK, FLIGHT_HOUR_INTERVALS
 
-    d = INTERVAL_DEFAULTS["h"]
+    d = argparse.Namespace(**FLIGHT_HOUR_INTERVALS)
     p.add_argument("--risk", type=_risk,
                    help="plan the next inspection: the latest time at which the probability "
                         "that an indicator has crossed its failure threshold stays <= RISK, "
@@ -681,7 +678,7 @@ def planning_options(p: argparse.ArgumentParser, *, default_risk: bool = False) 
 
 
 def _register_demo(subparsers: Any) -> None:
-    from .simulator import DEGRADATION_SCENARIOS
+    from .choices import DEGRADATION_SCENARIO_NAMES as DEGRADATION_SCENARIOS
 
     d = subparsers.add_parser("demo-degradation",
                               help="simulate a growing fault, diagnose, record and predict, end to end")

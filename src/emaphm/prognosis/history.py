@@ -358,6 +358,17 @@ def _json_default(o: Any) -> Any:
     raise TypeError(f"{type(o).__name__} is not JSON serialisable")
 
 
+def _other_store(tables: Any) -> str:
+    """What other emaphm store the tables ``tables`` make ("" where none): a campaign store
+    (its runs), an assessment's (its units)."""
+    names = set(tables or ())
+    if {"meta", "runs"} <= names:
+        return "an emaphm campaign store (emaphm campaign, emaphm report read it)"
+    if {"meta", "units"} <= names:
+        return "an emaphm assessment's store of units (emaphm assess resumes from it)"
+    return ""
+
+
 class HealthHistory:
     """An SQLite health-history store (module docstring). Use as a context manager.
 
@@ -436,6 +447,12 @@ class HealthHistory:
             version, tables = self._version()
             if version > 0:          # an existing history: refuse a damaged file up front
                 self._quick_check()
+            names = {r[0] for r in self._con.execute(
+                "SELECT name FROM sqlite_master WHERE type = 'table'")} if tables else set()
+            other = _other_store(names)
+            if other and "actuators" not in names:
+                raise HistoryError(f"{self.path} is {other}, not a health history; it was not "
+                                   "changed. Give the health history's --db path")
             if version > SCHEMA_VERSION:
                 raise HistoryError(f"{self.path} has schema version {version}, newer than this "
                                    f"emaphm understands ({SCHEMA_VERSION}); upgrade emaphm")

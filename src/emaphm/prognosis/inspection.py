@@ -78,7 +78,7 @@ __all__ = ["IntervalDefaults", "INTERVAL_DEFAULTS", "InspectionPolicy", "NextIns
 
 #: The risk of the fleet's "inspect by" column and of ``emaphm fleet schedule`` unless given
 #: (docs/inspection-planning.md: the risk at which the simulated fleet had no miss).
-DEFAULT_RISK = 0.01
+from .choices import DEFAULT_RISK, FLIGHT_HOUR_INTERVALS  # noqa: E402  (the CLI's parser reads them)
 
 #: An indicator at or above this share of its failure threshold takes part in the risk,
 #: growing or not (module docstring); the same quarter marks where the model discrepancy
@@ -125,9 +125,9 @@ class IntervalDefaults:
 #: Cycles: no fleet in cycles has been simulated; the flight-hour numbers are kept as
 #: they are (one cycle for one hour) and said so: give yours.
 INTERVAL_DEFAULTS: Mapping[str, IntervalDefaults] = MappingProxyType({
-    "h": IntervalDefaults(default=300.0, min=100.0, max=600.0,
+    "h": IntervalDefaults(**FLIGHT_HOUR_INTERVALS,
                           source="the flight-hour defaults, bench_inspection.py --tune"),
-    "cycles": IntervalDefaults(default=300.0, min=100.0, max=600.0,
+    "cycles": IntervalDefaults(**FLIGHT_HOUR_INTERVALS,
                                source="the flight-hour numbers: none measured for cycles; "
                                       "give --max-interval, --min-interval and "
                                       "--default-interval in cycles"),

@@ -55,7 +55,7 @@ __all__ = ["INDICATORS", "INDICATOR_MODE", "INDICATOR_COMPONENT", "FailureThresh
            "DEFAULT_FAILURE_THRESHOLDS", "indicator_values", "parse_threshold"]
 
 #: Health indicators in the order of k.
-INDICATORS = ("friction", "backlash", "short_a", "short_b", "short_c", "eccentricity", "gain_drift")
+from .choices import INDICATORS  # noqa: E402  (the CLI's parser reads it there)
 
 #: The fault mode (:data:`emaphm.diagnosis.FAULT_MODES`) of each indicator.
 INDICATOR_MODE: Mapping[str, str] = MappingProxyType({

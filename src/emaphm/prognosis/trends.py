@@ -353,17 +353,40 @@ def _fit_exponential(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
 def _onset_profile(tau: np.ndarray, y: np.ndarray, c: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For each onset in ``c`` (m,): the least-squares level ``a`` and slope ``b`` of
-    ``y = a + b max(tau, c)`` and its residual sum of squares, each (m,)."""
-    X = np.maximum(tau[None, :], c[:, None])
-    xm = X.mean(axis=1)
-    dx = X - xm[:, None]
-    dy = y - y.mean()
-    sxx = np.einsum("ij,ij->i", dx, dx)
-    sxy = dx @ dy
+    ``y = a + b max(tau, c)`` and its residual sum of squares, each (m,); ``tau`` (n,)
+    ascending, its last 0 (the reference time).
+
+    In closed form, O(n + m) time and memory (the regressor matrix ``max(tau, c)`` of
+    every onset, (m, n), held 1.6 GB at 10,000 inspections): with the ``r`` points after
+    ``c`` (their mean time ``m``, their own sum of squares ``S`` and cross product ``P``
+    with ``y``, ``d = m - c``), the centred sums are ``s_xx = S + r d^2 (1 - r / n)`` and
+    ``s_xy = P + d sum(y - mean(y))`` over them. The sums over the points after ``c`` are
+    taken from the end (reversed cumulative sums, the times measured from the last),
+    where they are small: no sum over all the points is subtracted from another.
+    """
+    n = tau.size
+    cu = np.asarray(c, dtype=float)
+    yc = y - y.mean()
+
+    def from_end(x: np.ndarray) -> np.ndarray:      # [k] = sum of x[k:], [n] = 0
+        return np.concatenate([np.cumsum(x[::-1])[::-1], np.zeros(1)])
+
+    k = np.searchsorted(tau, cu, side="right")       # points at or before the onset
+    r = (n - k).astype(float)
+    s1, s2 = from_end(tau)[k], from_end(tau * tau)[k]
+    sy, sty = from_end(yc)[k], from_end(tau * yc)[k]
     with np.errstate(divide="ignore", invalid="ignore"):
+        m = np.where(r > 0, s1 / r, cu)
+        own = np.where(r > 0, np.maximum(s2 - s1 * m, 0.0), 0.0)
+        cross = np.where(r > 0, sty - m * sy, 0.0)
+    d = m - cu
+    sxx = own + r * d * d * (1.0 - r / n)
+    sxy = cross + d * sy
+    with np.errstate(divide="ignore", invalid="ignore"):      # every x alike: no slope
         b = np.where(sxx > 0, sxy / sxx, 0.0)
-    a = y.mean() - b * xm
-    rss = np.maximum(float(dy @ dy) - b * sxy, 0.0)
+    xm = cu + r * d / n
+    a = float(y.mean()) - b * xm
+    rss = np.maximum(float(yc @ yc) - b * sxy, 0.0)
     return a, b, rss
 
 
@@ -718,7 +741,75 @@ def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_f
     probability ``p_false`` (with the fit's degrees of freedom: about 7 standard
     deviations from 8 dof on, more with fewer), and the screen repeats. At most one in
     five inspections is left out, never the last two (a genuine acceleration shows
-    there first), and only from six inspections on."""
+    there first), and only from six inspections on.
+
+    Each screen is one fit per model: the fit without inspection ``i`` misses it by
+    ``e_i / (1 - h_i)`` and leaves ``RSS - e_i^2 / (1 - h_i)`` (``e`` the residuals and
+    ``h`` the leverages of the fit of all): O(n) per screen instead of a fit per
+    inspection (O(n^2), 8 s of the 11 s of a prognosis of 3,000 inspections).
+    :func:`_inliers_refit` is the readable reference, fit by fit."""
+    keep = np.ones(t.size, dtype=bool)
+    if t.size < 6:
+        return keep
+    models = tuple(m for m in fits if m in ("linear", "quadratic")) or ("linear", "quadratic")
+    for _ in range(max(1, t.size // 5)):
+        idx = np.flatnonzero(keep)
+        z = np.zeros(t.size)
+        crit = np.full(t.size, np.inf)
+        head = idx[:-2]
+        z[head], crit[head] = _loo_scores(t[idx], y[idx], models, sigma_floor, p_false)
+        worst = int(np.argmax(z / crit))
+        if z[worst] <= crit[worst]:
+            break
+        keep[worst] = False
+    return keep
+
+
+def _loo_scores(t: np.ndarray, y: np.ndarray, models: Sequence[str], sigma_floor: float,
+                p_false: float) -> tuple[np.ndarray, np.ndarray]:
+    """For each inspection but the last two: its distance from the best trend of
+    ``models`` fitted without it, in that fit's residual standard deviations, and the
+    Student t quantile it is held to (the models and counts of :func:`fit_trends`)."""
+    n = t.size
+    m = n - 1                                  # points in each leave-one-out fit
+    usable = ([k for k in models if m >= _N_PARAMS[k] + 2]
+              or [k for k in models if m >= _N_PARAMS[k] + 1] or list(models))
+    tau = t - t[-1]                            # the last two stay: t_ref does not move
+    best_aicc = np.full(n - 2, np.inf)
+    z = np.zeros(n - 2)
+    crit = np.full(n - 2, np.inf)
+    for model in usable:
+        p = _N_PARAMS[model]
+        X = _jacobian(model, np.zeros(p), tau)
+        q = np.linalg.qr(X)[0]
+        resid = y - X @ np.linalg.lstsq(X, y, rcond=None)[0]
+        e = resid[:-2]
+        h = np.einsum("ij,ij->i", q, q)[:-2]                # leverages
+        with np.errstate(divide="ignore", invalid="ignore"):
+            miss = np.where(h < 1.0 - 1e-12, e / (1.0 - h), np.inf)
+            rss = np.maximum(float(resid @ resid) - e * miss, 0.0)
+        dof = m - p
+        sigma = np.maximum(np.sqrt(rss / dof) if dof > 0 else np.inf, sigma_floor)
+        aicc = _aicc_vec(rss, m, p)
+        better = aicc < best_aicc
+        best_aicc = np.where(better, aicc, best_aicc)
+        score = np.abs(miss) / np.maximum(sigma, 1e-12)
+        z = np.where(better, score, z)
+        crit = np.where(better, float(stats.t.ppf(1.0 - p_false / 2.0, dof)), crit)
+    return z, crit
+
+
+def _aicc_vec(rss: np.ndarray, n: int, p: int) -> np.ndarray:
+    """:func:`_aicc` of each residual sum of squares of ``rss``."""
+    if n - p - 1 <= 0:
+        return np.full(rss.shape, np.inf)
+    return n * np.log(np.maximum(rss, 1e-300) / n) + 2 * p + 2 * p * (p + 1) / (n - p - 1)
+
+
+def _inliers_refit(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit],
+                   sigma_floor: float, p_false: float = 1e-4) -> np.ndarray:
+    """:func:`_inliers` as it reads, a fit without each inspection (O(n^2)): the reference
+    the tests hold the fast one to."""
     keep = np.ones(t.size, dtype=bool)
     if t.size < 6:
         return keep

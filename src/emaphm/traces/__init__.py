@@ -48,12 +48,22 @@ Writes are atomic: the file is written to a temporary sibling and moved over the
 with :func:`os.replace`, so a failure never leaves a half-written file.
 """
 
-from .container import (COLUMNS, DRIVE_COLUMNS, DRIVE_GROUPS, OPTIONAL_COLUMNS, UNITS, Trace,
-                        TraceError, TraceWarning, fingerprint, resample)
-from .files import SUFFIXES, read_trace, write_trace
-from .limits import MAX_FILE_BYTES, MAX_SAMPLES
-from .metadata import FORMAT_VERSION
-from .validation import MIN_SAMPLES, validate
+from .._lazy import lazy_exports
+
+#: Public name -> the submodule that defines it; imported on first use (PEP 562), so that
+#: importing one submodule (the CLI's, ``emaphm --help``) does not load NumPy and the rest.
+_EXPORTS = {
+    "COLUMNS": "container", "OPTIONAL_COLUMNS": "container", "UNITS": "container",
+    "DRIVE_COLUMNS": "container", "DRIVE_GROUPS": "container",
+    "Trace": "container", "TraceError": "container", "TraceWarning": "container",
+    "fingerprint": "container", "resample": "container",
+    "SUFFIXES": "files", "read_trace": "files", "write_trace": "files",
+    "MAX_FILE_BYTES": "limits", "MAX_SAMPLES": "limits",
+    "FORMAT_VERSION": "metadata",
+    "MIN_SAMPLES": "validation", "validate": "validation",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
 
 __all__ = [
     "COLUMNS",

@@ -19,7 +19,7 @@ from .parquet_format import _read_parquet, _write_parquet
 from .timebase import from_epoch, warn_if_shorter_than_profile
 from .validation import validate as _validate
 
-__all__ = ["SUFFIXES", "write_trace", "read_trace"]
+__all__ = ["SUFFIXES", "write_trace", "read_trace", "first_nonfinite"]
 
 #: File suffixes understood by :func:`write_trace` and :func:`read_trace`.
 SUFFIXES: tuple[str, ...] = (".csv", ".parquet")
@@ -45,16 +45,39 @@ def _atomic_write(path: Path, write: Callable[[IO[bytes]], None]) -> None:
     atomic_write(path, write)
 
 
-def write_trace(trace: Trace, path: str | os.PathLike[str]) -> Path:
+def first_nonfinite(trace: Trace) -> tuple[str, int, int] | None:
+    """``(column, first row, count)`` of the first column of ``trace`` holding NaN or an
+    infinity, or None when every sample is finite."""
+    columns = {"t": trace.t, "theta_ref": trace.theta_ref, "theta_m": trace.theta_m,
+               "omega_m": trace.omega_m, "i_a": trace.i_abc[:, 0], "i_b": trace.i_abc[:, 1],
+               "i_c": trace.i_abc[:, 2]}
+    if trace.torque is not None:
+        columns["torque"] = trace.torque
+    for name, x in columns.items():
+        bad = ~np.isfinite(x)
+        if bad.any():
+            return name, int(np.argmax(bad)), int(bad.sum())
+    return None
+
+
+def write_trace(trace: Trace, path: str | os.PathLike[str], *, finite: bool = False) -> Path:
     """Write ``trace`` atomically to ``path`` (``.csv`` or ``.parquet``, by suffix); return it.
 
-    The trace is written as it is (no validation), metadata included. The parent
-    directory must exist. An existing file is replaced only once the new one is complete.
+    The trace is written as it is (no validation), metadata included; with ``finite``,
+    a trace holding NaN or an infinity is refused (a TraceError, nothing written), as the
+    command line does for every trace it writes. The parent directory must exist. An
+    existing file is replaced only once the new one is complete.
     """
     if not isinstance(trace, Trace):
         raise TypeError(f"write_trace() needs a Trace, got {type(trace).__name__}")
     path = Path(path)
     suffix = _suffix(path)
+    bad = first_nonfinite(trace) if finite else None
+    if bad is not None:
+        name, row, count = bad
+        raise TraceError(f"{path}: not written: column {name} holds {count:,} samples that are NaN "
+                         f"or infinite, the first at row {row:,} of {trace.n:,}; a trace holds "
+                         "finite numbers")
     writer = _write_csv if suffix == ".csv" else _write_parquet
     _atomic_write(path, lambda fh: writer(trace, fh))
     return path

@@ -19,20 +19,30 @@ channel is which column, in what unit; :func:`import_trace` (:mod:`.assemble`) m
 trace; :func:`describe` and :func:`starter_map` (:mod:`.starter`) are ``--inspect``.
 """
 
-from .assemble import Window, file_digest, import_trace
-from .base import ChannelInfo, MissingReaderError, SourceInfo
-from .channel_map import TARGETS, ChannelMap, ChannelSpec, MapError, load_map
-from .registry import FORMATS, SUFFIXES, open_source
-from .starter import describe, starter_map
+from ..._lazy import lazy_exports
+
+#: Public name -> the submodule that defines it, imported on first use (PEP 562): the
+#: parser of ``emaphm import`` (:mod:`.cli`) imports none of them.
+_EXPORTS = {
+    "import_trace": "assemble", "Window": "assemble", "file_digest": "assemble",
+    "ChannelInfo": "base", "MissingReaderError": "base", "SourceInfo": "base",
+    "TARGETS": "channel_map", "ChannelMap": "channel_map", "ChannelSpec": "channel_map",
+    "MapError": "channel_map", "load_map": "channel_map",
+    "FORMATS": "registry", "SUFFIXES": "registry", "open_source": "registry",
+    "describe": "starter", "starter_map": "starter",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
 
 __all__ = ["import_trace", "Window", "file_digest", "ChannelMap", "ChannelSpec", "MapError",
            "load_map", "TARGETS", "ChannelInfo", "SourceInfo", "MissingReaderError",
            "open_source", "FORMATS", "SUFFIXES", "describe", "starter_map", "inspect_source"]
 
 
-def inspect_source(path, options=None) -> SourceInfo:
+def inspect_source(path, options=None):
     """The :class:`SourceInfo` of a bench export: its channels, units, lengths, rates."""
     from .channel_map import SourceOptions
+    from .registry import open_source
 
     with open_source(path, options or SourceOptions()) as source:
         return source.info

@@ -29,6 +29,14 @@ from .registry import open_source
 
 __all__ = ["import_trace", "Window", "file_digest"]
 
+#: What no actuator's recording reaches, per column, in SI (a clock time of the year 2286,
+#: 1.6 million turns, 950,000 rpm, 100 kA, 1 MN m): a channel beyond it is read in the wrong
+#: unit, scale or offset (a current of 1e298 A was taken for one in mA).
+_REACH = {"t": 1e10, "theta_ref": 1e7, "theta_m": 1e7, "omega_m": 1e5, "i_a": 1e5, "i_b": 1e5,
+          "i_c": 1e5, "torque": 1e6,
+          # what the drive logs: voltages of any DC link, duties, references
+          **{f"v_{x}": 1e5 for x in "abcdq"}, "v_dc": 1e5, **{f"d_{x}": 1e3 for x in "abc"},
+          "i_d_ref": 1e5, "i_q_ref": 1e5, "omega_ref": 1e5}
 #: Order the channels are asked for: the first one's time base is an MDF file's master.
 _ORDER = ("i_a", "i_b", "i_c", "theta_ref", "theta_m", "omega_m", "torque", "t") + DRIVE_COLUMNS
 #: Relative spread of the time steps above which an import puts the samples on a uniform
@@ -112,6 +120,18 @@ def _time_base(cmap: ChannelMap, info: SourceInfo, chans: dict[str, ChannelInfo]
                          "rate")
     raise TraceError(f"{where}: no time base: the file has no time for these channels; map a t "
                      "channel in [channels] or give the sample rate in [time] rate = ... (Hz)")
+
+
+def _distinct(chans: dict[str, ChannelInfo], map_name: str) -> None:
+    """Refuse two columns mapped to one channel (theta_m to the time channel read as a
+    motion, theta_ref and theta_m to one position: a diagnosis of nonsense)."""
+    seen: dict[str, str] = {}
+    for target, c in chans.items():
+        if c.label in seen:
+            raise TraceError(f"{map_name}: [channels] {seen[c.label]} and {target} both name "
+                             f"channel {c.label!r}; map each column to its own channel "
+                             "(`emaphm import FILE --inspect` lists them)")
+        seen[c.label] = target
 
 
 def _first(chans: dict[str, ChannelInfo]) -> str:
@@ -222,6 +242,26 @@ class _Collector:
         return t, out
 
 
+def _check_reach(cols: dict[str, np.ndarray], chans: dict[str, ChannelInfo], first_row: int,
+                 where: str) -> None:
+    """Refuse a channel that reaches beyond :data:`_REACH` once converted (an infinity
+    included: a scale that overflows)."""
+    from ...quantities import SI
+    from .channel_map import TARGETS
+
+    for target, x in cols.items():
+        with np.errstate(invalid="ignore"):
+            beyond = np.abs(x) > _REACH[target]               # NaN runs are named later
+        if beyond.any():
+            k = int(np.argmax(beyond))
+            unit = SI[TARGETS[target]]
+            raise TraceError(f"{where}: channel {chans[target].label!r} ({target}) reaches "
+                             f"{x[k]:.4g} {unit} at row {first_row + k:,}, beyond the "
+                             f"{_REACH[target]:g} {unit} of any actuator's recording; check its "
+                             "unit, scale and offset in the map (--inspect lists the units the "
+                             "file declares)")
+
+
 def _read(source, cmap: ChannelMap, chans: dict[str, ChannelInfo], conv: dict[str, Conversion],
           base: _TimeBase, window: Window, limit: int, where: str):
     order = [t for t in _ORDER if t in chans]
@@ -236,7 +276,9 @@ def _read(source, cmap: ChannelMap, chans: dict[str, ChannelInfo], conv: dict[st
             if base.mode in ("rate", "own") and base.rate and n else None)
     collect = _Collector(signals, window, limit, where, span)
     for block in source.blocks([chans[t] for t in order], first, stop):
-        cols = {t: conv[t].apply(x) for t, x in zip(order, block.columns)}
+        with np.errstate(over="ignore", invalid="ignore"):     # refused below, not printed
+            cols = {t: conv[t].apply(x) for t, x in zip(order, block.columns)}
+        _check_reach(cols, chans, block.start, where)
         if base.mode == "channel":
             t = cols.pop("t")
         elif base.mode == "own" and block.t is not None:
@@ -259,8 +301,12 @@ def import_trace(path: str | Path, cmap: ChannelMap, *, window: Window = Window(
     map_name = map_name or cmap.origin
     with open_source(path, cmap.source) as source:
         info = source.info
+        if info.damage:
+            raise TraceError(f"{path}: {info.damage} (`emaphm import {path.name} --inspect` lists "
+                             "what of it can be read)")
         chans = {spec.target: info.find(spec.name, spec.group, f"{map_name}: [channels] "
                                         f"{spec.target}") for spec in cmap.channels}
+        _distinct(chans, map_name)
         for target, c in chans.items():
             if c.text is not None:
                 raise TraceError(f"{map_name}: [channels] {target}: column {c.label!r} holds text, "

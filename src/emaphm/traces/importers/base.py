@@ -17,7 +17,7 @@ import numpy as np
 from ..container import TraceError
 
 __all__ = ["ChannelInfo", "SourceInfo", "Block", "Source", "MissingReaderError", "need",
-           "BLOCK_ROWS"]
+           "BLOCK_ROWS", "cause"]
 
 #: Rows per block a reader yields where it chooses (binary formats).
 BLOCK_ROWS = 1 << 20
@@ -65,8 +65,10 @@ class ChannelInfo:
 class SourceInfo:
     """What :meth:`Source.info` found in a file: its ``format`` (``csv``, ``mat``...), its
     channels, and ``notes`` on how it is written (delimiter, decimal comma, a preamble);
-    ``skipped``, what the file holds that is not read as channels (a MATLAB matrix), and
-    ``hint``, advice a refusal adds (a map's delimiter that the file seems not to use)."""
+    ``skipped``, what the file holds that is not read as channels (a MATLAB matrix),
+    ``hint``, advice a refusal adds (a map's delimiter that the file seems not to use), and
+    ``damage``, what is wrong with a file whose whole part is listed (a truncated one):
+    ``--inspect`` warns of it, an import refuses the file."""
 
     path: Path
     format: str
@@ -76,6 +78,7 @@ class SourceInfo:
     own_time: bool = False
     skipped: tuple[str, ...] = ()
     hint: str = ""
+    damage: str = ""
 
     def find(self, name: str, group: str | None, where: str) -> ChannelInfo:
         """The channel called ``name`` (in ``group``, where given), or a TraceError naming
@@ -84,6 +87,8 @@ class SourceInfo:
         alias = None if group is None else group.replace("/", ".")
         hits = [c for c in self.channels
                 if c.name == name and (group is None or c.group in (group, alias))]
+        if not hits and "/" in name:
+            hits = self._by_label(name, group)
         if len(hits) == 1:
             return hits[0]
         if len(hits) > 1:
@@ -108,6 +113,16 @@ class SourceInfo:
         raise TraceError(f"{where}: no channel {name!r}{in_group} in {self.path.name}{hint}; "
                          f"{has}{skipped} (`emaphm import {self.path.name} --inspect` "
                          "lists them)")
+
+    def _by_label(self, label: str, group: str | None) -> list[ChannelInfo]:
+        """The channels a ``"GROUP/CHANNEL"`` name means (as ``--inspect`` lists them; a
+        MATLAB struct in a struct as ``Run.Messung/x`` or ``Run/Messung/x``), in ``group``
+        where one is given."""
+        head, _, leaf = label.rpartition("/")
+        folded = head.replace("/", ".")
+        return [c for c in self.channels if c.name == leaf and c.group is not None
+                and c.group in (head, folded)
+                and (group is None or c.group in (group, group.replace("/", ".")))]
 
 
 @dataclass(frozen=True)
@@ -137,6 +152,14 @@ class Source(Protocol):
 
     def close(self) -> None:
         ...
+
+
+def cause(exc: BaseException, limit: int = 200) -> str:
+    """What a library's exception says, for a refusal: its class and message on one line of
+    printable characters (a damaged file's bytes can be in it), cut at ``limit``."""
+    text = " ".join(str(exc).split())
+    text = "".join(ch if ch.isprintable() else "?" for ch in text)
+    return f"{type(exc).__name__}: {text[:limit]}"
 
 
 def and_list(items) -> str:

@@ -62,6 +62,15 @@ _SOURCE_FIELDS = ("format", "delimiter", "decimal", "encoding", "group", "voltag
 _FORMATS = ("csv", "parquet", "mat", "tdms", "mf4")
 
 
+#: The slowest sample rate a map may give (a test profile lasts half a second), the
+#: largest start time (a Unix time of the year 2286), and the span of a channel's scale
+#: (as a number) and offset (in its unit): beyond them no recording is meant.
+MIN_RATE = 1.0
+MAX_START = 1e10
+SCALE_SPAN = (1e-9, 1e9)
+MAX_OFFSET = 1e6
+
+
 class MapError(TraceError):
     """A channel map that cannot be used: the message names the table, the field and the
     fix."""
@@ -341,12 +350,20 @@ def _channels(t: dict, src: SourceOptions, source: str) -> tuple[ChannelSpec, ..
             scale = _number(scale, f"{where}.scale")
             if scale == 0.0:
                 raise MapError(f"{where}.scale: must not be 0")
+            if not SCALE_SPAN[0] <= abs(scale) <= SCALE_SPAN[1]:
+                raise MapError(f"{where}.scale = {scale:g} is beyond {SCALE_SPAN[0]:g} to "
+                               f"{SCALE_SPAN[1]:g}; give the factor from the recorded value to "
+                               "the channel's unit (a unit prefix goes in unit = \"...\")")
+        offset = _number(spec.get("offset", 0.0), f"{where}.offset")
+        if abs(offset) > MAX_OFFSET:
+            raise MapError(f"{where}.offset = {offset:g} is beyond +-{MAX_OFFSET:g} in the "
+                           "channel's unit; give the recorded zero of the channel")
         group = spec.get("group", src.group)
         out.append(ChannelSpec(
             target=target, name=_text(spec["name"], f"{where}.name"),
             group=_text(group, f"{where}.group") if group is not None else None,
             unit=_text(spec["unit"], f"{where}.unit") if "unit" in spec else None,
-            scale=scale, offset=_number(spec.get("offset", 0.0), f"{where}.offset")))
+            scale=scale, offset=offset))
     # each conversion is checked once here where the map gives the unit; a unit the file
     # declares is checked when the file is read
     for c in out:
@@ -366,9 +383,13 @@ def _time(t: dict, source: str) -> TimeSpec:
         start = quantity(t.get("start", 0.0), "time", where=f"{source}: [time] start", default="s")
     except QuantityError as exc:
         raise MapError(str(exc)) from None
-    if rate is not None and not (0 < rate <= 10e6):
-        raise MapError(f"{source}: [time] rate = {rate:g} Hz is outside 0 to 10 MHz; give the "
-                       "sample rate in Hz, e.g. rate = 20000 or rate = \"20 kHz\"")
+    if rate is not None and not (MIN_RATE <= rate <= 10e6):
+        raise MapError(f"{source}: [time] rate = {rate:g} Hz is outside {MIN_RATE:g} Hz to 10 MHz; "
+                       "give the sample rate in Hz, e.g. rate = 20000 or rate = \"20 kHz\"")
+    if not abs(start) <= MAX_START:
+        raise MapError(f"{source}: [time] start = {start:g} s is beyond {MAX_START:g} s (a clock "
+                       "time of the year 2286); give the time of the first sample in seconds, "
+                       "e.g. start = 0")
     return TimeSpec(rate=rate, start=start)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from ..._cli_common import UsageError, out_path
@@ -21,6 +22,7 @@ def _source(name: str) -> Path:
 
 def cmd_import(args: argparse.Namespace) -> int:
     from . import Window, describe, import_trace, inspect_source, load_map, starter_map
+    from ..container import TraceWarning
     from ..files import write_trace
     from .channel_map import SourceOptions
 
@@ -28,6 +30,9 @@ def cmd_import(args: argparse.Namespace) -> int:
     cmap = load_map(args.map) if args.map else None
     if args.inspect:
         info = inspect_source(source, cmap.source if cmap else SourceOptions())
+        if info.damage:
+            warnings.warn(TraceWarning(f"{source}: {info.damage}; listed below: what of it can be read"),
+                          stacklevel=2)
         # all of it TOML (the table as comments): `--inspect > map.toml` is a map to edit
         print("\n".join(f"# {line}" for line in describe(info).splitlines()))
         print("#")
@@ -40,7 +45,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     window = Window.parse(args.window)
     t0 = time.perf_counter()
     trace = import_trace(source, cmap, window=window, map_name=str(args.map))
-    write_trace(trace, out)
+    write_trace(trace, out, finite=True)
     if not args.quiet:
         derived = trace.meta.get("derived", {})
         extra = "".join(f"; {k} {v}" for k, v in derived.items())

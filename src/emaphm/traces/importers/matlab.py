@@ -8,14 +8,16 @@ time."""
 
 from __future__ import annotations
 
+import io
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 import numpy as np
 
 from ..container import TraceError
-from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, as_float, need, read_path
+from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, as_float, cause, need, read_path
 from .channel_map import SourceOptions
+from .mat5 import check as check_v5
 
 __all__ = ["MatSource"]
 
@@ -28,6 +30,31 @@ def _is_hdf5(path: Path) -> bool:
     with open(path, "rb") as fh:
         head = fh.read(2048)
     return any(head[k:k + 8] == _HDF5_SIGNATURE for k in (0, 512, 1024))
+
+
+def _hdf5_cut(path: Path) -> str:
+    """Where an HDF5 file ends short of the end its superblock declares ("" when it does
+    not, or where the superblock cannot tell)."""
+    with open(path, "rb") as fh:
+        head = fh.read(2048)
+        size = fh.seek(0, 2)
+    at = next(k for k in (0, 512, 1024) if head[k:k + 8] == _HDF5_SIGNATURE)
+    version = head[at + 8] if len(head) > at + 8 else None
+    if version in (0, 1):
+        width, fields = head[at + 13:at + 14], at + (24 if version == 0 else 28)
+    elif version in (2, 3):
+        width, fields = head[at + 9:at + 10], at + 12
+    else:
+        return ""
+    if width not in (b"\x04", b"\x08") or len(head) < fields + 4 * width[0]:
+        return ""
+    step = width[0]                 # the end of file is counted from the file's start,
+    end = int.from_bytes(head[fields + 2 * step:fields + 3 * step], "little")  # header in
+    if end <= size:
+        return ""
+    return (f"the file is truncated (or a length in it is damaged): its HDF5 header says it "
+            f"ends at byte {end:,}, and it ends at byte {size:,} (a copy cut short, or a "
+            "MATLAB session stopped mid-save?); copy or save it again")
 
 
 #: How to save channels emaphm reads, said where a variable is not read.
@@ -51,27 +78,73 @@ def _vector_length(shape: tuple[int, ...]) -> int | None:
     return None
 
 
+class _Upto(io.RawIOBase):
+    """The first ``limit`` bytes of a file (the whole variables of a truncated one), as
+    scipy reads a file object."""
+
+    def __init__(self, path: Path, limit: int) -> None:
+        self.fh = open(path, "rb")
+        self.limit = limit
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return True
+
+    def readinto(self, b) -> int:
+        left = max(0, self.limit - self.fh.tell())
+        view = memoryview(b)[:left]
+        return self.fh.readinto(view) if left else 0
+
+    def seek(self, offset: int, whence: int = 0) -> int:
+        if whence == 2:
+            return self.fh.seek(self.limit + offset)
+        return self.fh.seek(offset, whence)
+
+    def tell(self) -> int:
+        return self.fh.tell()
+
+    def close(self) -> None:
+        self.fh.close()
+        super().close()
+
+
 class MatSource:
-    """A ``.mat`` file of either version."""
+    """A ``.mat`` file of either version. A version 5 file's layout is checked first
+    (:mod:`.mat5`): scipy reads only one that adds up, and only the whole variables of a
+    truncated one (whose damage ``info`` says)."""
 
     def __init__(self, path: str | Path, options: SourceOptions = SourceOptions()) -> None:
         self.path = read_path(path)
         self.v73 = _is_hdf5(self.path)
         self.scalars: dict[str, float] = {}
         self.skipped: list[str] = []
+        self.whole: int | None = None
         self.info = self._inspect_v73() if self.v73 else self._inspect_v5()
 
     # ------------------------------------------------------------------ version 5
+    def _scipy(self, read, **kwargs):
+        """``read`` (scipy's whosmat or loadmat) of the file, or of the whole part of a
+        truncated one."""
+        if self.whole is None:
+            return read(self.path, **kwargs)
+        with _Upto(self.path, self.whole) as fh:
+            return read(fh, **kwargs)
+
     def _inspect_v5(self) -> SourceInfo:
         from scipy import io as sio
 
+        layout = check_v5(self.path)
+        if layout.damage:
+            self.whole = layout.whole
         try:
-            listing = sio.whosmat(self.path)
-            data = sio.loadmat(self.path, squeeze_me=True, struct_as_record=False,
+            listing = self._scipy(sio.whosmat)
+            data = self._scipy(sio.loadmat, squeeze_me=True, struct_as_record=False,
                                variable_names=[n for n, shape, cls in listing
                                                if cls == "struct" or np.prod(shape) == 1])
         except (ValueError, TypeError, OSError, NotImplementedError) as exc:
-            raise TraceError(f"{self.path}: not a readable MATLAB file ({str(exc)[:200]})") from None
+            raise TraceError(f"{self.path}: not a readable MATLAB file ({cause(exc)})") from None
         chans = []
         for name, shape, cls in listing:
             n = _vector_length(tuple(shape))
@@ -88,7 +161,7 @@ class MatSource:
                 self.skipped.append(_matrix(name, tuple(shape)))
         return SourceInfo(path=self.path, format="mat", channels=tuple(chans),
                           notes=("MATLAB version 5",) + self._scalar_note(),
-                          skipped=tuple(self.skipped))
+                          skipped=tuple(self.skipped), damage=layout.damage)
 
     def _struct_fields(self, name: str, value) -> list[ChannelInfo]:
         """The vectors of the struct ``value`` (the group ``name``) and of the structs in
@@ -124,11 +197,14 @@ class MatSource:
     # ------------------------------------------------------------------ version 7.3
     def _inspect_v73(self) -> SourceInfo:
         h5py = need("h5py", "MATLAB 7.3 files")
+        cut = _hdf5_cut(self.path)
+        if cut:
+            raise TraceError(f"{self.path}: {cut}")
         try:
             self.h5 = h5py.File(self.path, "r")
         except OSError as exc:
             raise TraceError(f"{self.path}: not a readable MATLAB 7.3 (HDF5) file "
-                             f"({str(exc)[:200]})") from None
+                             f"({cause(exc)})") from None
         chans = []
 
         def visit(name: str, obj) -> None:
@@ -169,7 +245,7 @@ class MatSource:
         cols = []
         for c in channels:
             path = c.group.split(".") + [c.name] if c.group else [c.name]
-            value = sio.loadmat(self.path, squeeze_me=True, struct_as_record=False,
+            value = self._scipy(sio.loadmat, squeeze_me=True, struct_as_record=False,
                                 variable_names=[path[0]])[path[0]]
             for field in path[1:]:
                 value = getattr(value, field)

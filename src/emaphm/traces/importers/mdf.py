@@ -1,7 +1,9 @@
 """ASAM MDF 4 exports of data loggers (read by ``asammdf``, from the ``bench`` extra).
 Each channel group has its own master time base; the channels asked for are read on the
 master of the first one's group (the assembler asks for ``i_a`` first) and the others are
-resampled onto it by linear interpolation. Read in record slices."""
+resampled onto it by linear interpolation. Read in record slices, once the file's linked
+lists are walked (:mod:`.mdf_links`: a link back into its own chain would send asammdf
+round forever)."""
 
 from __future__ import annotations
 
@@ -12,8 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ..container import TraceError
-from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, need, read_path
+from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, cause, need, read_path
 from .channel_map import SourceOptions
+from .mdf_links import check
 
 __all__ = ["MdfSource"]
 
@@ -27,11 +30,11 @@ class MdfSource:
     def __init__(self, path: str | Path, options: SourceOptions = SourceOptions()) -> None:
         asammdf = need("asammdf", "ASAM MDF files")
         self.path = read_path(path)
+        check(self.path)
         try:
             self.mdf = asammdf.MDF(str(self.path))
         except Exception as exc:          # noqa: BLE001 - asammdf raises many kinds on a bad file
-            raise TraceError(f"{self.path}: not a readable MDF file ({type(exc).__name__}: "
-                             f"{str(exc)[:200]})") from None
+            raise TraceError(f"{self.path}: not a readable MDF file ({cause(exc)})") from None
         chans = []
         self.index: dict[tuple[str, str], tuple[int, int]] = {}
         self.groups: dict[str, int] = {}

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..container import TraceError
-from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, read_path
+from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, cause, read_path
 from .channel_map import SourceOptions
 
 __all__ = ["ParquetSource"]
@@ -27,7 +27,7 @@ class ParquetSource:
         try:
             self.file = pq.ParquetFile(self.path)
         except (pa.ArrowInvalid, OSError) as exc:
-            raise TraceError(f"{self.path}: not a readable Parquet file ({str(exc)[:200]})") from None
+            raise TraceError(f"{self.path}: not a readable Parquet file ({cause(exc)})") from None
         schema = self.file.schema_arrow
         n = self.file.metadata.num_rows
         chans = [ChannelInfo(name=f.name, samples=n) for f in schema

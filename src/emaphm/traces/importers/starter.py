@@ -4,7 +4,9 @@ units, to check and edit."""
 
 from __future__ import annotations
 
+import json
 import re
+import shlex
 
 from ...quantities import QuantityError, measure
 from .base import ChannelInfo, SourceInfo
@@ -61,13 +63,19 @@ def _guess(info: SourceInfo) -> dict[str, ChannelInfo]:
     return found
 
 
+def _printable(text: str) -> str:
+    """``text``, its control characters escaped (a TOML comment may hold none)."""
+    return text if text.isprintable() else repr(text)[1:-1]
+
+
 def describe(info: SourceInfo) -> str:
     """The channels of ``info`` as a table, under a line on the file's layout."""
-    lines = [f"{info.path.name}: {info.format}" + (f" ({'; '.join(info.notes)})" if info.notes
-                                                    else "")]
+    lines = [_printable(f"{info.path.name}: {info.format}"
+                        + (f" ({'; '.join(info.notes)})" if info.notes else ""))]
     rows = [("channel", "group", "unit", "samples", "rate")]
     for c in info.channels:
-        rows.append((c.name, c.group or "", "(text)" if c.text is not None else c.unit or "-",
+        rows.append((_printable(c.name), _printable(c.group or ""),
+                     "(text)" if c.text is not None else _printable(c.unit or "-"),
                      f"{c.samples:,}" if c.samples is not None else "?",
                      f"{c.rate:g} Hz" if c.rate else ""))
     widths = [min(max(len(r[k]) for r in rows), 40) for k in range(5)]
@@ -75,12 +83,25 @@ def describe(info: SourceInfo) -> str:
         lines.append("  ".join(x[:40].ljust(w) for x, w in zip(r, widths)).rstrip())
     if not info.channels:
         lines.append("(no numeric channels found)")
-    lines += list(info.skipped)
+    lines += [_printable(x) for x in info.skipped]
+    if info.damage:
+        lines.append(f"damaged: {info.damage}; listed: what of it can be read")
     return "\n".join(lines)
 
 
 def _toml_string(text: str) -> str:
-    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    """``text`` as a TOML basic string: quotes, backslashes and control characters (a line
+    break in a channel's name) escaped, as JSON escapes them, which TOML reads alike."""
+    return json.dumps(text, ensure_ascii=False)
+
+
+def _command_name(name: str) -> str:
+    """A file name as the command line a comment suggests takes it: quoted for the shell;
+    one with a line break or another control character cannot be written on one line."""
+    if name.isprintable():
+        return shlex.quote(name)
+    return (f"{name!r:.80} (its name holds a line break or another control character: "
+            "rename the file first)")
 
 
 def starter_map(info: SourceInfo) -> str:
@@ -89,15 +110,16 @@ def starter_map(info: SourceInfo) -> str:
     found = _guess(info)
     timed = list(found.values()) or list(info.channels)
     rates = {c.rate for c in timed if c.rate}
-    lines = [f"# channel map for {info.path.name}: check every line, then run",
-             f"#   emaphm import {info.path.name} --map THIS.toml --out trace.parquet",
+    name = _command_name(info.path.name)
+    lines = [f"# channel map for {name}: check every line, then run",
+             f"#   emaphm import {name} --map THIS.toml --out trace.parquet",
              "# value in SI = (scale * recorded + offset) converted from unit; a current",
              "# recorded in V (a probe) takes scale = \"10 A/V\" or its sensitivity \"100 mV/A\".",
              ""]
     if "t" not in found and not info.own_time and len(rates) > 1:
         at = {r: [c.label for c in timed if c.rate == r] for r in sorted(rates)}
         lines += ["# the channels are at different rates, and emaphm needs one time base:"]
-        lines += [f"#   {r:g} Hz: {', '.join(names)}" for r, names in at.items()]
+        lines += [f"#   {r:g} Hz: {_printable(', '.join(names))}" for r, names in at.items()]
         lines += ["# record or export them at one rate (or resample them in the recorder)", ""]
     elif "t" not in found and not info.own_time and not rates:
         lines += ["[time]", "rate = 0  # sample rate in Hz (the file has no time channel): SET IT",
@@ -134,5 +156,5 @@ def starter_map(info: SourceInfo) -> str:
     lines += ["", "# every channel of the file:"]
     lines += [f"#   {c.label!r} " + ("(text, not read)" if c.text is not None else
                                           f"[{c.unit or '-'}]") for c in info.channels[:200]]
-    lines += [f"# {s}" for s in info.skipped]
+    lines += [f"# {_printable(s)}" for s in info.skipped]
     return "\n".join(lines) + "\n"

@@ -1,21 +1,62 @@
 """NI TDMS exports (read by ``npTDMS``, from the ``bench`` extra): channels in groups, each
 with its unit (``unit_string``) and, for waveforms, its time step (``wf_increment``) and
-start (``wf_start_offset``); read in slices."""
+start (``wf_start_offset``); read in slices. The chain of segments is walked first
+(:func:`segments`): a lead-in that is not one is refused, a file cut inside a segment is
+said to be truncated (npTDMS would read what is left, shorter, with a log line)."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
+import struct
+
 import numpy as np
 
 from ..container import TraceError
-from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, need, read_path
+from .base import BLOCK_ROWS, Block, ChannelInfo, SourceInfo, cause, need, read_path
 from .channel_map import SourceOptions
 
-__all__ = ["TdmsSource"]
+__all__ = ["TdmsSource", "segments"]
+
+_LEAD_IN = 28
+_UNFINISHED = 0xFFFF_FFFF_FFFF_FFFF
 
 
+def segments(path: Path) -> tuple[int, str]:
+    """The number of segments of the TDMS file ``path`` and what is wrong with its end
+    ("" when every segment is whole); a TraceError for a lead-in that does not add up."""
+    with open(path, "rb") as fh:
+        size = fh.seek(0, 2)
+        pos = k = 0
+        while pos < size:
+            k += 1
+            fh.seek(pos)
+            lead = fh.read(_LEAD_IN)
+            where = f"{path}: not a readable TDMS file: segment {k} (at byte {pos:,})"
+            if lead[:4] not in (b"TDSm", b"TDSh"):
+                raise TraceError(f"{where} does not start with 'TDSm' but {lead[:4]!r}; the file "
+                                 "is damaged or is not a TDMS file: export it again")
+            if len(lead) < _LEAD_IN:
+                return k, (f"the file is truncated: it ends at byte {size:,}, inside the lead-in of "
+                           f"segment {k} (a copy cut short, or a logger stopped mid-write); copy "
+                           "or export it again")
+            order = ">" if struct.unpack("<I", lead[4:8])[0] & (1 << 6) else "<"
+            version, following, raw = struct.unpack(order + "IQQ", lead[8:])
+            if version not in (4712, 4713) or (following != _UNFINISHED and raw > following):
+                raise TraceError(f"{where}: its lead-in does not add up (version {version}, raw "
+                                 f"data at {raw:,} of {following:,} bytes); the file is damaged: "
+                                 "export it again")
+            if following == _UNFINISHED:
+                return k, (f"segment {k} (at byte {pos:,}) was never finished by its writer (a "
+                           "logger stopped mid-write): its length is unknown; export it again")
+            if pos + _LEAD_IN + following > size:
+                return k, (f"the file is truncated (or a length in it is damaged): segment "
+                           f"{k} (at byte {pos:,}) needs {following:,} bytes after its lead-in, "
+                           f"and the file ends {size - pos - _LEAD_IN:,} bytes in (a copy cut "
+                           "short, or a logger stopped mid-write?); copy or export it again")
+            pos += _LEAD_IN + following
+        return k, ""
 
 
 class TdmsSource:
@@ -24,11 +65,12 @@ class TdmsSource:
     def __init__(self, path: str | Path, options: SourceOptions = SourceOptions()) -> None:
         nptdms = need("nptdms", "NI TDMS files")
         self.path = read_path(path)
+        count, damage = segments(self.path)
         try:
             self.file = nptdms.TdmsFile.open(self.path)
             groups = self.file.groups()
         except (ValueError, KeyError, OSError, EOFError, TypeError) as exc:
-            raise TraceError(f"{self.path}: not a readable TDMS file ({str(exc)[:200]})") from None
+            raise TraceError(f"{self.path}: not a readable TDMS file ({cause(exc)})") from None
         chans = []
         self.handles = {}
         for g in groups:
@@ -45,7 +87,8 @@ class TdmsSource:
                 chans.append(info)
                 self.handles[(g.name, ch.name)] = ch
         self.info = SourceInfo(path=self.path, format="tdms", channels=tuple(chans),
-                               notes=(f"{len(groups)} group(s)",))
+                               notes=(f"{len(groups)} group(s), {count} segment(s)",),
+                               damage=damage)
 
     def blocks(self, channels: Sequence[ChannelInfo], first: int = 0,
                stop: int | None = None) -> Iterator[Block]:
