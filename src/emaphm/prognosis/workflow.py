@@ -86,6 +86,9 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
         diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
              "fault_model": ident.fault_model,
+             # the drive path, and the modes it could not see (their k is a placeholder)
+             "drive_model": ident.drive_model,
+             "not_observable": list(ident.not_observable),
              "calibrated_at": calibrated_at,
              "nuisance": dict(ident.nuisance),
              "parameters": None if params is None else params.to_dict(),
