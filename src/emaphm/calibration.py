@@ -248,7 +248,8 @@ class _DrivenTarget:
         self.source, self.model, self.i_raw = source, obj.model, obj.model.i_meas
         s_max = float(np.max(sigma))
         self.w = np.concatenate([obj.weights, obj.mech_weights[:, None]], axis=1)
-        self.sqrt_w = np.sqrt(self.w) / np.append(sigma, s_max)[None, :]
+        self.over_sigma = 1.0 / np.append(sigma, s_max)[None, :]
+        self.sqrt_w = np.sqrt(self.w) * self.over_sigma
         self.floor = float(np.sum(self.w * np.append(sigma, s_max)[None, :] ** 2))
         self.size = self.w.size
 
@@ -273,7 +274,7 @@ class _DrivenTarget:
         _, status, out = self.run(params, dev, residuals=True)
         if status[0] != 0:
             return None
-        return (out["residuals"][0] * self.sqrt_w).ravel()
+        return (out["residuals"][0] * self.over_sigma).ravel()       # weighted by the kernel
 
     def fit(self, params: ActuatorParams, dev: dict[str, float]):
         """``(t, measured, model)`` currents and the fit ratio at ``params``."""

@@ -40,6 +40,7 @@ from .firmware import DRIVE_MODELS, MODELLED, RECORDED_VOLTAGES
 from .fitness import (check_diagnosable, check_load, eq4_weights, on_model_grid,
                       trace_fault_model, white_noise_sigma)
 from .models import driven
+from .models.driven_simd import run as run_driven
 from .models.inverter import dead_time_width
 from .models.layout import PopulationPacker
 from .models.monitoring import STATUS_DIVERGED, PopulationResult
@@ -103,7 +104,7 @@ class DrivenModel:
     i_meas: np.ndarray
     T_load: np.ndarray
     n_sub: int = 1
-    kernel: str = "scalar"
+    kernel: str = "simd"
     _packer: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -116,6 +117,7 @@ class DrivenModel:
         l_1, l_2 = driven.observer_gains(inv.T_s)
         scale = driven.mechanical_scale(m.J_m + self.params.load.J_l, self.params.controller.k_T)
         object.__setattr__(self, "_observer", np.array([l_1, l_2, scale]))
+        object.__setattr__(self, "_trig", driven.sample_sines(self.theta, m.p))
         I_max = self.params.controller.I_max or m.I_max
         object.__setattr__(self, "_i_0", dead_time_width(I_max))
 
@@ -134,8 +136,10 @@ class DrivenModel:
     def run(self, K, w_e: np.ndarray, w_m: np.ndarray, **outputs: bool):
         """:func:`emaphm.models.driven.run` of the population ``K``."""
         P, CP = self.pack(K)
-        return driven.run(P, CP, self._observer, self.u, self.theta, float(self.omega[0]),
-                          self.i_meas, self.T_load, w_e, w_m, self._i_0, **outputs)
+        return run_driven(P, CP, self._observer, self.u, self.theta, self._trig,
+                          float(self.omega[0]),
+                          self.i_meas, self.T_load, w_e, w_m, self._i_0, kernel=self.kernel,
+                          **outputs)
 
     def simulate_population(self, K) -> PopulationResult:
         K = np.atleast_2d(np.asarray(K, dtype=float))
@@ -235,8 +239,7 @@ class RecordedVoltageObjective:
         fitness; inf for a diverged candidate."""
         K = np.atleast_2d(np.asarray(K, dtype=float))
         _, status, out = self.model.run(K, self.weights, self.mech_weights, residuals=True)
-        w = np.concatenate([self.weights, self.mech_weights[:, None]], axis=1)
-        R = (np.sqrt(w)[None] * out["residuals"]).reshape(K.shape[0], -1)
+        R = out["residuals"].reshape(K.shape[0], -1)        # weighted by the kernel
         R[status != 0] = np.inf
         return R
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from emaphm.models import driven
+from emaphm.models.driven_simd import run
 from emaphm.models.pmsm import back_emf_coeffs
 from emaphm.problem import IdentificationProblem
 from emaphm.simulate import simulate
@@ -66,7 +67,8 @@ def test_a_diverging_candidate_is_a_value_not_a_crash(averaged_plant):
                 (2, 1))
     P, CP = obj.model.pack(K)
     CP[1, :] = np.nan
-    sse, status, _ = driven.run(P, CP, obj.model._observer, obj.model.u, obj.model.theta, 0.0,
+    sse, status, _ = run(P, CP, obj.model._observer, obj.model.u, obj.model.theta,
+                                obj.model._trig, 0.0,
                                 obj.model.i_meas, obj.model.T_load, obj.weights,
                                 obj.mech_weights, 0.04)
     assert status.tolist() == [0, 1]

@@ -20,9 +20,9 @@ the measured ones at the samples: they depend on the winding and the magnets
 (resistance, inductance, flux, shorts, eccentricity, sensors), not on the mechanics.
 
 **Mechanical.** The mechanics (:func:`emaphm.models.mechanics.transmission_step`: dry
-friction, backlash, inertias, load; with the candidate's Stribeck speed, the reference
-plant's :func:`~emaphm.models.plant_mechanics.plant_step`, whose dry friction falls from
-its static to its dynamic level with speed) are driven by the electromagnetic torque of the
+friction, backlash, inertias, load; the sliding friction falling from its static to its
+dynamic level with speed below the candidate's Stribeck speed,
+:func:`~emaphm.models.mechanics.stribeck_factor`, as the reference plant's does) are driven by the electromagnetic torque of the
 measured phase currents through the candidate's back-EMF coefficients (and its own
 fault-loop currents), so that what the winding model misses does not pass for a torque
 (the currents' noise through the observer's low-pass is a few mA of q current, below
@@ -52,15 +52,15 @@ from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_DELTA, C_ECC, C_ECC_P
                      C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_OMEGA_S, C_PHI,
                      C_PHI_END, C_T0, C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S)
 from .inverter import dead_time_drop
-from .mechanics import transmission_step
-from .plant_mechanics import plant_step
+from .mechanics import stribeck_factor, transmission_step
 from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
                    winding_step)
-from .step import row_reader
+from .step import inlined, row_reader, select
 from .windings import Q
 
-__all__ = ["OBSERVER_HZ", "MECH_SUBSTEPS", "observer_gains", "mechanical_scale", "flux_linkage",
-           "run", "N_RES"]
+__all__ = ["OBSERVER_HZ", "MECH_SUBSTEPS", "observer_gains", "flux_coefficients", "rotate",
+           "sample_sines", "mechanical_scale", "flux_linkage",
+           "N_RES"]
 
 #: Bandwidth [Hz] of the observer the mechanics run as: slow beside the current loop and
 #: the backlash's contact, fast beside the test's motion (so a torque error of friction's
@@ -96,66 +96,80 @@ def mechanical_scale(J: float, k_T: float, hz: float = OBSERVER_HZ) -> float:
     return J * (2.0 * math.pi * hz) ** 2 / k_T
 
 
-@jit
-def flux_linkage(theta, p, c0_a, c0_b, c0_c, ecc, ecc_phase):
-    """``(lambda_a, lambda_b, lambda_c)`` [V s]: the magnets' flux linkage of each phase at
-    the motor angle ``theta`` [rad], the antiderivative in ``theta`` of Eq. 2's back-EMF
-    coefficient ``c_j = c0_j sin(p theta - phi_j) (1 + ecc cos(theta + ecc_phase + psi_j))``
-    (``phi = 0, 2 pi/3, -2 pi/3``, ``psi = 0, 2 pi/3, -2 pi/3``), so that the back-EMF
-    averaged over a step is the change of ``lambda`` over it. Also returns the sine and
-    cosine of ``p theta`` for the coefficients themselves."""
-    x = p * theta
-    s, c = math.sin(x), math.cos(x)
-    # -cos(p theta - phi_j) / p
-    ca = -c / p
-    cb = -(c * COS_2PI_3 + s * SIN_2PI_3) / p
-    cc = -(c * COS_2PI_3 - s * SIN_2PI_3) / p
-    la, lb, lc = c0_a * ca, c0_b * cb, c0_c * cc
-    if ecc != 0.0:
-        # sin(a) cos(b) = (sin(a + b) + sin(a - b)) / 2, a = p theta - phi_j,
-        # b = theta + ecc_phase + psi_j: a + b = (p + 1) theta + ecc_phase for every phase
-        # (phi_j = psi_j), a - b = (p - 1) theta - ecc_phase - 2 phi_j
-        g = (p + 1.0) * theta + ecc_phase
-        up = -math.cos(g) / (p + 1.0)
-        h = (p - 1.0) * theta - ecc_phase
-        if p > 1.0:
-            sh, ch = math.sin(h), math.cos(h)
-            # -cos(h - 2 phi_j) / (p - 1): phi_a = 0, phi_b = 2 pi/3, phi_c = -2 pi/3
-            da = -ch / (p - 1.0)
-            db = -(ch * COS_2PI_3 - sh * SIN_2PI_3) / (p - 1.0)   # cos(h - 4 pi/3)
-            dc = -(ch * COS_2PI_3 + sh * SIN_2PI_3) / (p - 1.0)   # cos(h + 4 pi/3)
-        else:                       # p = 1: a - b does not turn, sin(const) theta
-            da = theta * math.sin(-ecc_phase)
-            db = theta * math.sin(-ecc_phase - 4.0 * math.pi / 3.0)
-            dc = theta * math.sin(-ecc_phase + 4.0 * math.pi / 3.0)
-        la += c0_a * 0.5 * ecc * (up + da)
-        lb += c0_b * 0.5 * ecc * (up + db)
-        lc += c0_c * 0.5 * ecc * (up + dc)
-    return la, lb, lc, s, c
+def flux_coefficients(s, c, sg, cg, theta, p, c0_a, c0_b, c0_c, ecc):
+    """``(lambda_a, lambda_b, lambda_c, c_a, c_b, c_c)``: the magnets' flux linkage of each
+    phase [V s] at the motor angle ``theta`` [rad] and Eq. 2's back-EMF coefficients
+    [V s/rad] there, from the sine and cosine of ``p theta`` (``s, c``) and of ``theta +
+    ecc_phase`` (``sg, cg``).
 
-
-@jit
-def _coefficients(theta, s, c, c0_a, c0_b, c0_c, ecc, ecc_phase):
-    """Eq. 2's back-EMF coefficients [V s/rad] at ``theta`` from the sine and cosine of
-    ``p theta``."""
+    ``lambda_j`` is the antiderivative in ``theta`` of ``c_j = c0_j sin(p theta - phi_j) (1 +
+    ecc cos(theta + ecc_phase + psi_j))`` (``phi = psi = 0, 2 pi/3, -2 pi/3``), so that the
+    back-EMF averaged over a step is the change of ``lambda`` over it: ``sin(a) cos(b) =
+    (sin(a + b) + sin(a - b)) / 2`` with ``a + b = (p + 1) theta + ecc_phase`` for every
+    phase and ``a - b = (p - 1) theta - ecc_phase - 2 phi_j`` (for ``p = 1`` the latter does
+    not turn: its integral grows as ``theta``). The sines of ``(p +- 1) theta +- ecc_phase``
+    come from the two given by the angle sum; no branch (selects), so that the kernels'
+    vector lanes run it.
+    """
+    s1 = s * cg + c * sg                       # sin, cos of (p + 1) theta + ecc_phase
+    c1 = c * cg - s * sg
+    s2 = s * cg - c * sg                       # of (p - 1) theta - ecc_phase
+    c2 = c * cg + s * sg
+    la = c0_a * (-c / p)
+    lb = c0_b * (-(c * COS_2PI_3 + s * SIN_2PI_3) / p)
+    lc = c0_c * (-(c * COS_2PI_3 - s * SIN_2PI_3) / p)
+    up = -c1 / (p + 1.0)
+    turning = p > 1.0
+    q = select(turning, p - 1.0, 1.0)
+    da = select(turning, -c2 / q, theta * s2)
+    db = select(turning, -(c2 * COS_2PI_3 - s2 * SIN_2PI_3) / q,
+                theta * (COS_2PI_3 * s2 + SIN_2PI_3 * c2))
+    dc = select(turning, -(c2 * COS_2PI_3 + s2 * SIN_2PI_3) / q,
+                theta * (COS_2PI_3 * s2 - SIN_2PI_3 * c2))
+    h = 0.5 * ecc
     s_b = s * COS_2PI_3 - c * SIN_2PI_3
     s_c = s * COS_2PI_3 + c * SIN_2PI_3
-    if ecc == 0.0:
-        return c0_a * s, c0_b * s_b, c0_c * s_c
-    g = theta + ecc_phase
-    cg, sg = math.cos(g), math.sin(g)
-    return (c0_a * s * (1.0 + ecc * cg),
+    return (la + c0_a * h * (up + da), lb + c0_b * h * (up + db), lc + c0_c * h * (up + dc),
+            c0_a * s * (1.0 + ecc * cg),
             c0_b * s_b * (1.0 + ecc * (cg * COS_2PI_3 - sg * SIN_2PI_3)),
             c0_c * s_c * (1.0 + ecc * (cg * COS_2PI_3 + sg * SIN_2PI_3)))
 
 
+_flux_coefficients = inlined(flux_coefficients)
+
+
+def flux_linkage(theta, p, c0_a, c0_b, c0_c, ecc, ecc_phase):
+    """:func:`flux_coefficients` at ``theta`` (libm's sines): the flux linkages and the
+    back-EMF coefficients."""
+    return flux_coefficients(math.sin(p * theta), math.cos(p * theta), math.sin(theta + ecc_phase),
+                             math.cos(theta + ecc_phase), theta, float(p), c0_a, c0_b, c0_c,
+                             ecc)
+
+
 @jit
-def _period(c, u, theta1, i_meas1, T_l, z, i, tq, lam, mech_state, p, T_s, i_0, mech):
+def rotate(s, c, sin_a, cos_a):
+    """The sine and cosine of ``x + a`` from those of ``x`` and ``a``."""
+    return s * cos_a + c * sin_a, c * cos_a - s * sin_a
+
+
+def sample_sines(theta: np.ndarray, p: int) -> np.ndarray:
+    """``(n, 4)``: the sine and cosine of ``p theta`` and of ``theta`` at each measured angle
+    (libm's), shared by every candidate; each rotates them by its own encoder offset and
+    eccentricity phase (:func:`rotate`), exactly the sines of its own angles to round-off."""
+    th = np.asarray(theta, dtype=float)
+    return np.ascontiguousarray(np.column_stack([np.sin(p * th), np.cos(p * th), np.sin(th),
+                                                 np.cos(th)]))
+
+
+@jit
+def _period(c, u, theta1, trig1, rot, i_meas1, T_l, z, i, tq, lam, mech_state, p, T_s, i_0, mech):
     """One control period of one candidate: the winding driven by the applied voltages
     ``u`` (less the dead time's drop) and the change of the flux linkage to the next
-    measured angle ``theta1``, then the mechanics predicted over the period on the torque
-    linear between the samples (the next one's from the measured currents ``i_meas1``).
-    Returns the new winding state, phase currents, torque, flux linkages and mechanics."""
+    measured angle ``theta1`` (the sines of ``p theta1`` and ``theta1``, ``trig1``, rotated
+    by the candidate's ``rot``: those of ``p delta`` and ``delta + ecc_phase``), then the
+    mechanics predicted over the period on the torque linear between the samples (the next
+    one's from the measured currents ``i_meas1``). Returns the new winding state, phase
+    currents, torque, flux linkages and mechanics."""
     c0_a, c0_b, c0_c = c[C_C0_A], c[C_C0_B], c[C_C0_C]
     ecc, ecc_ph = c[C_ECC], c[C_ECC_PHASE]
     mu_a, mu_b, mu_c = c[C_MU_A], c[C_MU_B], c[C_MU_C]
@@ -165,7 +179,10 @@ def _period(c, u, theta1, i_meas1, T_l, z, i, tq, lam, mech_state, p, T_s, i_0, 
     la, lb, lc = lam
     thm, wm, thl, wl = mech_state
     J_m, C_m, J_l, C_l, K_c, D_c = mech
-    na, nb, nc, s, co = flux_linkage(theta1 + delta, p, c0_a, c0_b, c0_c, ecc, ecc_ph)
+    s, co = rotate(trig1[0], trig1[1], rot[0], rot[1])
+    sg, cg = rotate(trig1[2], trig1[3], rot[2], rot[3])
+    na, nb, nc, ca, cb, cc = _flux_coefficients(s, co, sg, cg, theta1 + delta, p, c0_a, c0_b,
+                                                c0_c, ecc)
     u_a = u[0] - dead_time_drop(ia, V_dt, 1.0 / i_0)
     u_b = u[1] - dead_time_drop(ib, V_dt, 1.0 / i_0)
     u_c = u[2] - dead_time_drop(ic, V_dt, 1.0 / i_0)
@@ -174,45 +191,39 @@ def _period(c, u, theta1, i_meas1, T_l, z, i, tq, lam, mech_state, p, T_s, i_0, 
     z0, z1, z2, z3, z4 = winding_step(z0, z1, z2, z3, z4, w0, w1, w2, w3, w4,
                                       c[C_PHI:C_PHI_END], c[C_GAMMA:C_GAMMA_END])
     ja, jb, jc = phase_currents(z0, z1)
-    ca, cb, cc = _coefficients(theta1 + delta, s, co, c0_a, c0_b, c0_c, ecc, ecc_ph)
     # the torque of the measured phase currents (the fault loops' of the model)
     tq1 = torque_loops(i_meas1[0], i_meas1[1], i_meas1[2], z2, z3, z4, ca, cb, cc,
                        mu_a, mu_b, mu_c)
     h = T_s / MECH_SUBSTEPS
-    omega_s = c[C_OMEGA_S]
-    stribeck = omega_s > 0.0 and K_c > 0.0
+    omega_s = max(c[C_OMEGA_S], 0.0)
+    FSJ, FDJ = c[C_FSJ], c[C_FDJ]
+    # the sliding friction's drop from static to dynamic with speed (Stribeck), at the
+    # period's start
+    F_d = FDJ + (FSJ - FDJ) * stribeck_factor(wm, omega_s)
     for ss in range(MECH_SUBSTEPS):
         T_m = tq + ((ss + 0.5) / MECH_SUBSTEPS) * (tq1 - tq)
-        if stribeck:            # the dry friction's drop from static to dynamic with speed
-            thm, wm, thl, wl = plant_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
-                                          c[C_FSJ], c[C_FDJ], omega_s, J_l, C_l, c[C_BACKLASH],
-                                          K_c, D_c, h)
-        else:
-            thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
-                                                 c[C_FSJ], c[C_FDJ], J_l, C_l, c[C_BACKLASH],
-                                                 K_c, D_c, h)
+        thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
+                                             FSJ, F_d, J_l, C_l, c[C_BACKLASH], K_c, D_c, h)
     return z0, z1, z2, z3, z4, ja, jb, jc, tq1, na, nb, nc, thm, wm, thl, wl
 
 
 @jit
-def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
+def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i_0,
             sse, residuals, out_i, out_f, out_theta, out_torque, status):
     """Drive ``CP.shape[0]`` candidates through the ``n = theta.shape[0]`` samples of a
-    trace, one candidate after another.
-
-    ``P (N_P,)``, ``CP (n_pop, N_CP)`` packed for one sub-step per period; ``observer =
+    trace, one candidate after another. ``P (N_P,)``, ``CP (n_pop, N_CP)`` packed for one sub-step per period; ``observer =
     (l_1, l_2, scale)`` (:func:`observer_gains`, :func:`mechanical_scale`); ``u (n, 3)``
     the phase voltages [V] applied over each period (the last unused); ``theta (n,)``
-    the measured motor angle [rad], ``omega0`` the speed at the first sample [rad/s];
+    the measured motor angle [rad] and ``trig (n, 4)`` its sines (:func:`sample_sines`),
+    ``omega0`` the speed at the first sample [rad/s];
     ``i_meas (n, 3)`` the measured currents [A]; ``T_load (n,)`` [N m]; ``w_e (n, 3)`` and
     ``w_m (n,)`` the weights of the two residuals; ``i_0`` [A]
     (:func:`emaphm.models.inverter.dead_time_width`).
-    Writes ``sse (n_pop, 2)`` (the weighted sums of the electrical and the mechanical
-    residual; inf for a candidate whose currents left the physical range), and, where
-    they are not zero-sized, ``residuals (n_pop, n, 4)`` (model less measured: currents
-    [A], then the mechanical residual [A]), ``out_i, out_f (n_pop, n, 3)`` (the phase and
-    fault-loop currents), ``out_theta, out_torque (n_pop, n)`` (the predicted angle, the
-    air-gap torque); ``status (n_pop,)`` 1 for a diverged candidate.
+    Writes ``sse (n_pop, 2)`` (the weighted sums of the two residuals; inf for a candidate
+    that left the physical range, ``status`` 1), and, where not zero-sized, ``residuals
+    (n_pop, n, 4)`` (model less measured, currents [A] and mechanics [A], each times the
+    square root of its weight), ``out_i, out_f (n_pop, n, 3)`` (phase and fault-loop
+    currents), ``out_theta, out_torque (n_pop, n)`` (predicted angle, air-gap torque).
     """
     n_pop = CP.shape[0]
     n = theta.shape[0]
@@ -228,6 +239,9 @@ def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
         c0_a, c0_b, c0_c = c[C_C0_A], c[C_C0_B], c[C_C0_C]
         ecc, ecc_ph = c[C_ECC], c[C_ECC_PHASE]
         delta = c[C_DELTA]
+        # the candidate's own angles are the measured ones rotated: by p delta, delta + phase
+        rot = (math.sin(p * delta), math.cos(p * delta), math.sin(delta + ecc_ph),
+               math.cos(delta + ecc_ph))
         # the winding from the measured currents (fault loops at rest)
         z0 = Q[0, 0] * i_meas[0, 0] + Q[1, 0] * i_meas[0, 1] + Q[2, 0] * i_meas[0, 2]
         z1 = Q[1, 1] * i_meas[0, 1] + Q[2, 1] * i_meas[0, 2]
@@ -238,8 +252,10 @@ def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
         wm = omega0
         thl = theta[0]
         wl = omega0
-        la, lb, lc, s, co = flux_linkage(theta[0] + delta, p, c0_a, c0_b, c0_c, ecc, ecc_ph)
-        ca, cb, cc = _coefficients(theta[0] + delta, s, co, c0_a, c0_b, c0_c, ecc, ecc_ph)
+        s, co = rotate(trig[0, 0], trig[0, 1], rot[0], rot[1])
+        sg, cg = rotate(trig[0, 2], trig[0, 3], rot[2], rot[3])
+        la, lb, lc, ca, cb, cc = _flux_coefficients(s, co, sg, cg, theta[0] + delta, p, c0_a,
+                                                    c0_b, c0_c, ecc)
         tq = torque_loops(i_meas[0, 0], i_meas[0, 1], i_meas[0, 2], z2, z3, z4, ca, cb, cc,
                           c[C_MU_A], c[C_MU_B], c[C_MU_C])
         se = 0.0
@@ -252,11 +268,11 @@ def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
             rm = scale * (thm - theta[k])
             se += w_e[k, 0] * ra * ra + w_e[k, 1] * rb * rb + w_e[k, 2] * rc * rc
             sm += w_m[k] * rm * rm
-            if keep_r:
-                residuals[j, k, 0] = ra
-                residuals[j, k, 1] = rb
-                residuals[j, k, 2] = rc
-                residuals[j, k, 3] = rm
+            if keep_r:                  # weighted, as the sums
+                residuals[j, k, 0] = math.sqrt(w_e[k, 0]) * ra
+                residuals[j, k, 1] = math.sqrt(w_e[k, 1]) * rb
+                residuals[j, k, 2] = math.sqrt(w_e[k, 2]) * rc
+                residuals[j, k, 3] = math.sqrt(w_m[k]) * rm
             if keep_t:
                 out_i[j, k, 0] = ia
                 out_i[j, k, 1] = ib
@@ -274,7 +290,9 @@ def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
             wm += l_2 * e
             (z0, z1, z2, z3, z4, ia, ib, ic, tq, la, lb, lc, thm, wm, thl, wl) = _period(
                 c, (u[k, 0], u[k, 1], u[k, 2]), theta[k + 1],
-                (i_meas[k + 1, 0], i_meas[k + 1, 1], i_meas[k + 1, 2]), T_load[k], (z0, z1, z2, z3, z4),
+                (trig[k + 1, 0], trig[k + 1, 1], trig[k + 1, 2], trig[k + 1, 3]), rot,
+                (i_meas[k + 1, 0], i_meas[k + 1, 1], i_meas[k + 1, 2]), T_load[k],
+                (z0, z1, z2, z3, z4),
                 (ia, ib, ic), tq, (la, lb, lc), (thm, wm, thl, wl), p, T_s, i_0,
                 (J_m, C_m, J_l, C_l, K_c, D_c))
             if not (abs(ia) < I_DIVERGED and abs(ib) < I_DIVERGED and abs(ic) < I_DIVERGED
@@ -289,25 +307,3 @@ def _kernel(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0,
             sse[j, 0] = np.inf
             sse[j, 1] = np.inf
             status[j] = 1
-
-
-def run(P, CP, observer, u, theta, omega0, i_meas, T_load, w_e, w_m, i_0, *,
-        residuals=False, traces=False):
-    """:func:`_kernel` with the outputs allocated: ``(sse (n_pop, 2), status, extra)`` where
-    ``extra`` holds ``"residuals"`` and/or ``"i_abc", "f_abc", "theta_m", "torque"`` as
-    asked."""
-    n_pop, n = CP.shape[0], theta.shape[0]
-    sse = np.zeros((n_pop, 2))
-    status = np.zeros(n_pop, dtype=np.int64)
-    r = np.zeros((n_pop, n, N_RES) if residuals else (0, 0, N_RES))
-    shape = (n_pop, n) if traces else (0, 0)
-    out_i, out_f = np.zeros(shape + (3,)), np.zeros(shape + (3,))
-    out_th, out_tq = np.zeros(shape), np.zeros(shape)
-    _kernel(P, CP, observer, u, theta, float(omega0), i_meas, T_load, w_e, w_m, float(i_0),
-            sse, r, out_i, out_f, out_th, out_tq, status)
-    extra = {}
-    if residuals:
-        extra["residuals"] = r
-    if traces:
-        extra.update(i_abc=out_i, f_abc=out_f, theta_m=out_th, torque=out_tq)
-    return sse, status, extra
