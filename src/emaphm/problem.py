@@ -33,8 +33,8 @@ from .fitness import Eq4Objective
 from .params import ActuatorParams
 from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
                        drive_model_of)
-from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_to_box,
-                     to_k)
+from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_start,
+                     nuisance_to_box, to_k)
 from .traces import Trace, validate
 
 __all__ = ["IdentificationProblem", "SearchView", "apply_extra", "DRIFT_NUISANCE", "default_nuisance",
@@ -411,7 +411,7 @@ class SearchView:
 
     def _nu0(self) -> np.ndarray:
         names = self.problem.nuisance
-        return nuisance_to_box(np.zeros((1, len(names))), names) if names else np.zeros((1, 0))
+        return nuisance_to_box(nuisance_start(names)[None, :], names) if names else np.zeros((1, 0))
 
     def starts(self) -> list[np.ndarray]:
         """The problem's warm start (if any), then the healthy actuator, nuisance at zero."""

@@ -42,7 +42,7 @@ from .models.layout import NUISANCE_PARAMETERS
 
 __all__ = ["SEARCH_SPACES", "SC_SEARCH_MAX", "to_k", "from_k", "default_search",
            "least_squares_search", "nuisance_to_box",
-           "NUISANCE_RANGE", "nuisance_from_box", "nuisance_text"]
+           "NUISANCE_RANGE", "nuisance_from_box", "nuisance_text", "nuisance_start"]
 
 SEARCH_SPACES = ("ecc-xy", "k", "ecc-xy-sc", "ecc-xy-sq")
 
@@ -68,6 +68,12 @@ def nuisance_text(name: str, value: float) -> str:
     if n.unit == "decades":
         return f"{n.words} x{10.0 ** value:.3g}"
     return f"{n.words} {value:+.3f} {n.unit}"
+
+
+def nuisance_start(names: tuple[str, ...]) -> np.ndarray:
+    """Where a search starts each parameter searched beside k (its nominal 0, or the
+    registry's ``start`` where 0 is a flat end of its effect)."""
+    return np.array([NUISANCE_PARAMETERS[n].start for n in names], dtype=float)
 
 
 def nuisance_from_box(Z: np.ndarray, names: tuple[str, ...]) -> np.ndarray:

@@ -253,13 +253,15 @@ def _one_winding(R: tuple, L: tuple, sigma: float, mu: tuple, R_f: tuple,
 class Nuisance:
     """A parameter a candidate may carry beside its k: its ``name``, the range ``lo..hi``
     it is searched over, its ``unit`` (``"relative"``: a deviation from the nominal value,
-    ``"N m"``, ``"decades"``) and what it is, in ``words``."""
+    ``"N m"``, ``"decades"``), what it is, in ``words``, and where a search starts it
+    (``start``: the nominal 0, but where 0 is a flat end of its effect)."""
 
     name: str
     lo: float
     hi: float
     unit: str
     words: str
+    start: float = 0.0
 
 
 #: Every parameter a candidate may carry beside its k, listed once (the search ranges and
@@ -289,7 +291,9 @@ NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("Rf_c", -1.5, 1.0, "decades", "fault resistance of phase C"),
     Nuisance("V_dt", 0.0, 30.0, "V", "inverter dead time and device drops"),
     Nuisance("angle", -0.2, 0.2, "rad (electrical)", "encoder offset"),
-    Nuisance("stribeck", 0.0, 5.0, "rad/s", "Stribeck speed of the dry friction"),
+    # a search starts the Stribeck speed at the reference plant's 1 rad/s: at 0 (no drop)
+    # the friction does not change with it, and least squares could not leave it
+    Nuisance("stribeck", 0.0, 5.0, "rad/s", "Stribeck speed of the dry friction", start=1.0),
 )}
 #: Their names.
 NUISANCE = tuple(NUISANCE_PARAMETERS)
