@@ -17,6 +17,8 @@ firmware            what it is
 ``observer-ip``     a foreign drive: I-P speed loop on an observed speed, delay with angle
                     advance (:mod:`emaphm.models.drives`)
 ``deadbeat``        a foreign drive: predictive current control
+``stationary-pi``   a foreign drive: 2-DOF speed PI on a differenced speed, per-phase current
+                    PI in the stationary frame
 ==================  ===========================================================================
 
 A. **Recorded voltages, [controller] NOT describing the drive**: each unit calibrated on
@@ -27,15 +29,15 @@ A. **Recorded voltages, [controller] NOT describing the drive**: each unit calib
    named right and alone.
 B. **The drive described in [controller], no voltages recorded** (the modelled-controller
    path), for the firmwares [controller] can describe: the same, with the firmware in the
-   parameters.
+   parameters' ``[controller]`` and the inverter's dead time and drop in their ``[inverter]``.
 C. **On the data sheet, a drive neither described nor recorded**: healthy units on
    firmwares with a speed filter of 0.1, 0.25 and 1 ms, a period of delay, both
    feed-forwards, a position integrator: the verdicts (``faulty`` must never be one).
 
 Unit seeds 70000+ (no figure is tuned on them), noise seeds 1-5 per trace as listed.
 
-Run: ``python benchmarks/bench_drives.py [--units 20] [--workers 2] [--parts ABC]``
--> ``benchmarks/results/drives.md`` and ``drives.json``.
+Run: ``python benchmarks/bench_drives.py [--units 20] [--workers 2] [--parts ABC]
+[--firmwares F,...] [--tag TAG]`` -> ``benchmarks/results/drives[-TAG].md`` and ``.json``.
 """
 
 from __future__ import annotations
@@ -61,7 +63,8 @@ RESULTS = Path(__file__).parent / "results"
 ACTUATORS = {"preset": None, "ema-270v-750w": ROOT / "examples" / "actuators" / "ema-270v-750w.toml"}
 UNIT_SEED0 = 70_000
 TUNE_SEED0 = 80_000
-FIRMWARES = ("emaphm", "feed-forwards", "speed-filter", "position-pi", "observer-ip", "deadbeat")
+FIRMWARES = ("emaphm", "feed-forwards", "speed-filter", "position-pi", "observer-ip", "deadbeat",
+             "stationary-pi")
 DESCRIBABLE = ("emaphm", "feed-forwards", "speed-filter", "position-pi")
 FAULTS = {"healthy": (), "short 10 % A": ("short_circuit:a:0.1:0.15",),
           "friction x2": ("friction:2",), "demagnetization 15 %": ("demagnetization:0.15",),
@@ -123,8 +126,10 @@ def run_unit(task: tuple[str, str, str, int]) -> dict:
     datasheet = _datasheet(name)
     plant, drive = _firmware(datasheet, firmware)
     recorded = part == "A"
-    # A: the parameters state emaphm's plain cascade; B: the firmware the plant runs
-    params = datasheet if recorded else replace(datasheet, controller=plant.controller)
+    # A: the parameters state emaphm's plain cascade and no dead time; B: the drive as it
+    # is, its firmware ([controller]) and its inverter's dead time and drops ([inverter])
+    params = datasheet if recorded else replace(datasheet, controller=plant.controller,
+                                                inverter=plant.inverter)
     kw = dict(params=plant, sensors=_sensors(), unit_seed=unit_seed, drive=drive,
               drive_signals=recorded)
     out = {"actuator": name, "firmware": firmware, "part": part, "unit_seed": unit_seed}
@@ -290,6 +295,8 @@ def main() -> None:
     ap.add_argument("--parts", default="ABC")
     ap.add_argument("--actuators", default=",".join(ACTUATORS))
     ap.add_argument("--firmwares", default=",".join(FIRMWARES))
+    ap.add_argument("--tag", default="", help="name the outputs drives-TAG.json/.md (a run of some "
+                                               "firmwares beside another's)")
     ap.add_argument("--tune", action="store_true",
                     help="units 80000+, part A: the recorded-voltage path's misfit constants "
                          "(the lognormal of the verdicts' fit ratios where they were right)")
@@ -309,10 +316,11 @@ def main() -> None:
         undescribed = list(pool.map(run_undescribed, c_tasks, chunksize=1))
     wall = time.time() - t0
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "drives.json").write_text(json.dumps({"units": units, "undescribed": undescribed},
-                                                    indent=1) + "\n")
+    stem = "drives" + (f"-{args.tag}" if args.tag else "")
+    (RESULTS / f"{stem}.json").write_text(json.dumps({"units": units, "undescribed": undescribed},
+                                                     indent=1) + "\n")
     text = report(units, undescribed, args, wall)
-    (RESULTS / "drives.md").write_text(text + "\n")
+    (RESULTS / f"{stem}.md").write_text(text + "\n")
     print(text)
 
 

@@ -19,6 +19,9 @@ FOREIGN_DRIVES = {
                    "decoupled dq current PI, one period of delay with the angle advanced",
     "deadbeat": "position PI, speed PI on a filtered speed, predictive (deadbeat) current "
                 "control",
+    "stationary-pi": "position P, 2-DOF speed PI on a speed differenced from the angle over "
+                     "four periods, per-phase current PI in the stationary frame (no dq "
+                     "frame, no decoupling)",
 }
 
 #: The drive's controller as the parameters' ``[controller]`` describes it.

@@ -25,7 +25,7 @@ DATASHEET = siemens_1fk7060()
 PLANT = replace(DATASHEET, inverter=replace(DATASHEET.inverter, dead_time=1e-6, device_drop=1.0))
 SENSORS = replace(DEFAULT_SENSORS, encoder_counts=2 ** 17)
 
-#: Firmwares that are not the data sheet's: two of emaphm's options, two foreign drives.
+#: Firmwares that are not the data sheet's: two of emaphm's options, three foreign drives.
 FIRMWARES = {
     "feed-forwards": dict(params=replace(PLANT, controller=replace(
         DATASHEET.controller, velocity_feedforward=1.0, torque_feedforward=1.0))),
@@ -33,6 +33,7 @@ FIRMWARES = {
         DATASHEET.controller, speed_filter_s=1e-3))),
     "observer-ip": dict(params=PLANT, drive="observer-ip"),
     "deadbeat": dict(params=PLANT, drive="deadbeat"),
+    "stationary-pi": dict(params=PLANT, drive="stationary-pi"),
 }
 
 

@@ -19,6 +19,13 @@ diagnosis on drives it does not model:
     period from the motor's data-sheet model (``R i + L (i_ref - i) / (2 T_s) + omega_e L
     i_cross + e``, no integrator), behind a position PI and a speed PI on a speed low-pass
     filtered at 0.5 ms.
+``"stationary-pi"``
+    An older make: position P, a **2-DOF speed PI** (proportional on ``0.8 omega_ref -
+    omega``) on a speed **differenced from the angle over four periods** (not the sensor's
+    speed), and a **per-phase current PI in the stationary frame**: each phase's current
+    follows its own sinusoidal reference ``i_q,ref sin(theta_e - phi_j)``, with the
+    phase lag such a loop has at speed, no dq frame, no decoupling, no back-EMF
+    feed-forward.
 
 Each is a function of the samples and its own state array, with its settings from the
 actuator's data sheet (:func:`settings`); :func:`step` runs the one a kind names.
@@ -35,7 +42,8 @@ from ..params import ActuatorParams
 from ._jit import jit
 from .inverter import clarke, inv_clarke, inv_park, park
 
-__all__ = ["FOREIGN_DRIVES", "DRIVE_KINDS", "N_FOREIGN_STATE", "settings", "step", "kind_of"]
+__all__ = ["FOREIGN_DRIVES", "DRIVE_KINDS", "N_FOREIGN_STATE", "settings", "step", "kind_of",
+           "initial"]
 
 #: The kind number the plant's kernel dispatches on (0 is emaphm's own drive).
 DRIVE_KINDS = {"emaphm": 0, **{name: j + 1 for j, name in enumerate(FOREIGN_DRIVES)}}
@@ -183,6 +191,46 @@ def _deadbeat(refs, theta_m, omega_m, i_a, i_b, i_c, s_e, c_e, st, s):
 
 
 @jit
+def _stationary_pi(refs, theta_m, i_a, i_b, i_c, s_e, c_e, st, s):
+    """The stationary-pi drive (see the module). State: the speed integral, each phase's
+    current integral, the last four angles (oldest first)."""
+    ref = refs[0]
+    T_s = s[S_T_S]
+    w_hat = (theta_m - st[4]) / (4.0 * T_s)               # over four periods
+    st[4], st[5], st[6], st[7] = st[5], st[6], st[7], theta_m
+    w_ref = _sat(s[S_KP] * (ref - theta_m), s[S_OMEGA_MAX])
+    T_pi = s[S_KP_W] * (0.8 * w_ref - w_hat) + st[0]
+    T_ref = _sat(T_pi, s[S_T_MAX])
+    if T_ref == T_pi:
+        st[0] += T_s * s[S_KI_W] * (w_ref - w_hat)
+    i_q_ref = _sat(T_ref / s[S_K_T], s[S_I_MAX])
+    # each phase on its own: i_j,ref = i_q,ref sin(theta_e - phi_j), a PI per phase
+    s_b = s_e * -0.5 - c_e * (0.5 * math.sqrt(3.0))
+    s_c = s_e * -0.5 + c_e * (0.5 * math.sqrt(3.0))
+    r_a, r_b, r_c = i_q_ref * s_e, i_q_ref * s_b, i_q_ref * s_c
+    kp, ki = 2.0 * s[S_KP_I], 2.0 * s[S_KI_I]     # a stationary loop needs the gain
+    v_a = kp * (r_a - i_a) + st[1]
+    v_b = kp * (r_b - i_b) + st[2]
+    v_c = kp * (r_c - i_c) + st[3]
+    st[1] += T_s * ki * (r_a - i_a)
+    st[2] += T_s * ki * (r_b - i_b)
+    st[3] += T_s * ki * (r_c - i_c)
+    lim = s[S_V_DC] / math.sqrt(3.0)
+    return _sat(v_a, lim), _sat(v_b, lim), _sat(v_c, lim), w_ref, T_ref, i_q_ref
+
+
+@jit
+def initial(kind, theta0, st):
+    """A foreign drive's state at rest at the angle ``theta0`` (in place): the observer's
+    angle (observer-ip), the last four angles (stationary-pi)."""
+    if kind == 1:
+        st[0] = theta0
+    elif kind == 3:
+        for j in range(4, 8):
+            st[j] = theta0
+
+
+@jit
 def step(kind, refs, theta_m, omega_m, i_a, i_b, i_c, s_e, c_e, st, s):
     """One control period of the foreign drive ``kind`` (:data:`DRIVE_KINDS`) from the
     samples, its state array ``st`` (updated in place) and settings ``s``
@@ -190,4 +238,6 @@ def step(kind, refs, theta_m, omega_m, i_a, i_b, i_c, s_e, c_e, st, s):
     voltages it applies this period [V] and its references."""
     if kind == 1:
         return _observer_ip(refs, theta_m, i_a, i_b, i_c, s_e, c_e, st, s)
+    if kind == 3:
+        return _stationary_pi(refs, theta_m, i_a, i_b, i_c, s_e, c_e, st, s)
     return _deadbeat(refs, theta_m, omega_m, i_a, i_b, i_c, s_e, c_e, st, s)

@@ -70,6 +70,7 @@ from ..profiles import Profile
 from ._jit import jit
 from .controller import N_CTL, N_STATE, control_step, feedforward
 from .drives import N_FOREIGN_STATE, kind_of, settings as foreign_settings, step as foreign_step
+from .drives import initial as foreign_initial
 from .inverter import modulate, on_fraction, overcurrent, triangle
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_ECC_PHASE, C_FDJ, C_FSJ, C_KP,
                      C_R_A, P_C_L, P_C_M, P_CTL, P_J_L, P_J_M, P_POLES, P_I_TRIP, P_T_S,
@@ -201,8 +202,8 @@ def _rm_kernel(P, cp, plant, A, B_v, G, L_r, loops, mu, R_f, theta_ref, T_load, 
     ic = 0.0
     ctl = _read_ctl(P, P_CTL)
     cs = _read_state(np.zeros(N_STATE), 0)         # the drive's state, at rest
-    fst = np.zeros(N_FOREIGN_STATE)                # a foreign drive's
-    fst[0] = thm
+    fst = np.zeros(N_FOREIGN_STATE)                # a foreign drive's, at rest
+    foreign_initial(kind, thm, fst)
     E_in = 0.0
     E_loss = 0.0
     E_ag = 0.0
