@@ -150,6 +150,7 @@ def run_unit(task: tuple[str, str, str, int]) -> dict:
         ratio = float(ex.identification.fitness / ex.identification.noise_floor)
         cases[case] = {"verdict": d.verdict, "named": _named(d),
                        "read": [[f.mode, f.phase] for f in (*d.faults, *d.suspected)],
+                       "k": [float(x) for x in d.k],
                        "drive_model": ex.identification.drive_model, "fit_ratio": ratio,
                        "verdict_ratio": d.refit.fit_ratio if d.refit is not None else ratio,
                        "cpu_s": time.process_time() - t1}

@@ -66,6 +66,7 @@ from .fitness import (MIN_NOISE, TRANSIENT_MISFIT, aligned_currents, check_diagn
                       transient_excess, white_noise_sigma)
 from .params import (ActuatorParams, Calibration, CurrentSensors, calibration_digest,
                      siemens_1fk7060)
+from .search import nuisance_start
 from .profiles import Profile
 from .traces import Trace, TraceError, fingerprint, validate
 
@@ -618,7 +619,9 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         # currents by amperes where the unit's deviations move them by milliamperes, and a
         # first fit of everything from zero lands in the dead time's valley
         drive = [n for n in free if n in DRIVE_PARAMETERS]
-        first = fitter.fit(drive, np.zeros(len(drive)))
+        # from where a diagnosis starts them (the Stribeck speed at 1 rad/s: at 0 the
+        # friction does not change with it, and the fit would stay there)
+        first = fitter.fit(drive, nuisance_start(tuple(drive)))
         x0 = np.array([first.x[drive.index(n)] if n in drive else 0.0 for n in free])
     sel = select_identifiable(fitter, free, correlation_limit=correlation_limit,
                               multiple_limit=multiple_limit, x0=x0)
