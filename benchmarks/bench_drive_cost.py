@@ -25,7 +25,6 @@ import json
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
 
@@ -33,6 +32,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import machine  # noqa: E402
+from bench_versions import _extract  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "drive_cost.md"
@@ -54,15 +54,6 @@ for n in names:
     out[n + " path"] = getattr(r, "drive_model", "modelled controller")
 json.dump(out, sys.stdout)
 '''
-
-
-def _extract(rev: str, dest: Path) -> Path:
-    archive = dest / "src.tar"
-    with open(archive, "wb") as f:
-        subprocess.run(["git", "archive", rev, "src"], cwd=ROOT, stdout=f, check=True)
-    with tarfile.open(archive) as t:
-        t.extractall(dest, filter="data")
-    return dest / "src"
 
 
 def _run(src: Path, folder: Path) -> dict:

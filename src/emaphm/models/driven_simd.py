@@ -30,9 +30,10 @@ from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_DELTA, C_ECC, C_ECC_P
                      C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_OMEGA_S, C_PHI,
                      C_PHI_END, C_T0, C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C,
                      P_POLES, P_T_S)
-from .pmsm import phase_currents, torque_loops, winding_input, winding_step
+from .pmsm import phase_currents, torque_loops
 from .step import (inline, inlined, lane_reader, llvm_select as select,
-                   transmission_step_inline)
+                   phase_currents_inline, torque_loops_inline, transmission_step_inline,
+                   winding_input_inline, winding_step_inline)
 from .mechanics import stribeck_factor
 from .windings import Q
 
@@ -52,10 +53,6 @@ N_ROWS = R_CGD + 1
 
 _lane_c = lane_reader(N_CP, "lane_c_driven")
 
-_winding_input = inlined(winding_input)
-_winding_step = inlined(winding_step)
-_phase_currents = inlined(phase_currents)
-_torque_loops = inlined(torque_loops)
 _dead_time_drop = inlined(dead_time_drop)
 _flux = inlined(flux_coefficients)
 _rotate = inlined(rotate)
@@ -106,16 +103,16 @@ def _winding_stage(B, u, i_meas1, T_s, inv_i_0):
             c = _lane_c(B, R_C, b, l)
             V = max(c[C_V_DT], 0.0)
             mu_a, mu_b, mu_c = c[C_MU_A], c[C_MU_B], c[C_MU_C]
-            w0, w1, w2, w3, w4 = _winding_input(
+            w0, w1, w2, w3, w4 = winding_input_inline(
                 u[0] - _dead_time_drop(B[b, R_IA, l], V, inv_i_0),
                 u[1] - _dead_time_drop(B[b, R_IB, l], V, inv_i_0),
                 u[2] - _dead_time_drop(B[b, R_IC, l], V, inv_i_0),
                 (B[b, R_NA, l] - B[b, R_LA, l]) / T_s, (B[b, R_NB, l] - B[b, R_LB, l]) / T_s,
                 (B[b, R_NC, l] - B[b, R_LC, l]) / T_s, mu_a, mu_b, mu_c)
-            z0, z1, z2, z3, z4 = _winding_step(
+            z0, z1, z2, z3, z4 = winding_step_inline(
                 B[b, R_Z0, l], B[b, R_Z1, l], B[b, R_Z2, l], B[b, R_Z3, l], B[b, R_Z4, l],
                 w0, w1, w2, w3, w4, c[C_PHI:C_PHI_END], c[C_GAMMA:C_GAMMA_END])
-            ja, jb, jc = _phase_currents(z0, z1)
+            ja, jb, jc = phase_currents_inline(z0, z1)
             B[b, R_Z0, l] = z0
             B[b, R_Z1, l] = z1
             B[b, R_Z2, l] = z2
@@ -124,7 +121,7 @@ def _winding_stage(B, u, i_meas1, T_s, inv_i_0):
             B[b, R_IA, l] = ja
             B[b, R_IB, l] = jb
             B[b, R_IC, l] = jc
-            B[b, R_TQ1, l] = _torque_loops(i_meas1[0], i_meas1[1], i_meas1[2], z2, z3, z4,
+            B[b, R_TQ1, l] = torque_loops_inline(i_meas1[0], i_meas1[1], i_meas1[2], z2, z3, z4,
                                            B[b, R_CA, l], B[b, R_CB, l], B[b, R_CC, l],
                                            mu_a, mu_b, mu_c)
             B[b, R_LA, l] = B[b, R_NA, l]
