@@ -150,7 +150,10 @@ class Identification:
     what stood in for the drive's controller (:data:`emaphm.recorded.DRIVE_MODELS`), and
     ``not_observable`` the fault modes that path cannot see (their components of k are
     reported healthy, not measured); ``at_bounds``: the parameters searched beside k whose
-    fit ended at an end of their range (the unit is further off than the range allows).
+    fit ended at an end of their range (the unit is further off than the range allows);
+    ``params_source``: where the healthy actuator's parameters came from
+    (:data:`emaphm.params.PARAMS_SOURCES`: given, a history's calibration, the trace's own,
+    the preset) and ``params`` those parameters.
     """
 
     algorithm: str
@@ -185,6 +188,8 @@ class Identification:
     drive_model: str = "modelled controller"
     not_observable: tuple[str, ...] = ()
     at_bounds: tuple[str, ...] = ()
+    params_source: str = "preset"
+    params: ActuatorParams | None = field(default=None, compare=False, repr=False)
 
     @property
     def evals_per_s(self) -> float:
@@ -222,6 +227,8 @@ class Identification:
             "drive_model": self.drive_model,
             "not_observable": list(self.not_observable),
             "at_bounds": list(self.at_bounds),
+            "params_source": self.params_source,
+            "parameters": None if self.params is None else self.params.to_dict(),
         }
         if self.k_true is not None:
             d["k_true"] = [float(x) for x in self.k_true]
@@ -492,7 +499,8 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         run_evaluations=int(res.run_evaluations), noise_sigma=problem.noise_sigma,
         config=_config_of(problem, solver, budget, options, polish),
         drive_model=problem.drive_model, not_observable=problem.not_observable,
-        at_bounds=_at_bounds(problem.nuisance, nu))
+        at_bounds=_at_bounds(problem.nuisance, nu), params_source=problem.params_source,
+        params=problem.params)
 
 
 #: A parameter searched beside k within this share of its range from an end sits at it.

@@ -30,7 +30,7 @@ import numpy as np
 from .diagnosis import diagnose
 from .faults import K_NOMINAL, N_K, as_k, loop_report, shorted_fraction
 from .fitness import Eq4Objective
-from .params import ActuatorParams
+from .params import PARAMS_SOURCES, ActuatorParams, resolve_params
 from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
                        drive_model_of)
 from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_to_box,
@@ -107,8 +107,12 @@ class IdentificationProblem:
     field         meaning
     ============  ===================================================================
     trace         the measured (or simulated) trace; validated on construction
-    params        the healthy actuator the monitoring model assumes (default: the
-                  preset, :func:`emaphm.params.siemens_1fk7060`)
+    params        the healthy actuator the monitoring model assumes: an
+                  :class:`~emaphm.params.ActuatorParams`, a dict or a TOML path; default
+                  the trace's own (its metadata's ``"parameters"``), else the preset
+                  (:func:`emaphm.params.resolve_params`)
+    params_source where ``params`` came from (:data:`emaphm.params.PARAMS_SOURCES`);
+                  resolved on construction (``"given"`` for parameters given)
     fault_model   what k3..k5 mean (:data:`emaphm.faults.FAULT_MODELS`); default the
                   trace's own (:func:`emaphm.fitness.trace_fault_model`)
     nuisance      parameters searched beside k (:data:`emaphm.search.NUISANCE_RANGE`);
@@ -127,8 +131,11 @@ class IdentificationProblem:
                   it has them, else the modelled controller)
     ============  ===================================================================
 
-    After construction ``params``, ``fault_model``, ``nuisance`` and ``drive_model`` hold
-    the resolved values.
+    After construction ``params``, ``params_source``, ``fault_model``, ``nuisance`` and
+    ``drive_model`` hold the resolved values. Parameters given for a trace that names
+    another actuator warn (:class:`~emaphm.params.ActuatorMismatchWarning`) when the
+    problem is first built (a variant made with :func:`dataclasses.replace` keeps the
+    source and does not warn again).
     """
 
     trace: Trace
@@ -142,8 +149,15 @@ class IdentificationProblem:
     min_rotation: float = 2 * math.pi
     objective: Any = field(default=None, repr=False)
     drive_model: str | None = None
+    params_source: str | None = None
 
     def __post_init__(self) -> None:
+        if self.params_source is not None and self.params_source not in PARAMS_SOURCES:
+            raise ValueError(f"params_source must be one of {', '.join(PARAMS_SOURCES)}, got "
+                             f"{self.params_source!r}")
+        params, source = resolve_params(self.params, self.trace, warn=self.params_source is None)
+        object.__setattr__(self, "params", params)
+        object.__setattr__(self, "params_source", self.params_source or source)
         if self.search is not None and self.search not in SEARCH_SPACES:
             raise ValueError(f"unknown search space {self.search!r}; choose one of "
                              f"{', '.join(SEARCH_SPACES)}")

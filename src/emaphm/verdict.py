@@ -39,7 +39,7 @@ from .modes import MODES, thresholds_for
 from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, TRANSIENT_MISFIT,
                       misfit_limit, misfit_p_value, transient_excess)
 from .firmware import MODELLED
-from .params import ActuatorParams
+from .params import ActuatorParams, as_params, resolve_params
 from .problem import IdentificationProblem, apply_extra
 from .recorded import DRIVE_NUISANCE
 from .traces import Trace
@@ -334,12 +334,17 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     power and ampere-turns: readings, not part of the verdict; profiling the valley of a
     short costs a few refits). ``trace`` may be the identification's problem (its parameters,
     sub-steps and fitness mode are then the checks'; ``params`` must not be given beside
-    it), or the trace with the ``params`` it was identified with.
+    it), or the trace with the ``params`` it was identified with (default: the
+    identification's own, :attr:`emaphm.identify.Identification.params`).
     """
     if isinstance(trace, IdentificationProblem):
         if params is not None:
             raise ValueError("give params to the IdentificationProblem, not beside it")
         params = trace.params
+    elif params is None:                 # the actuator the identification was made on
+        params = getattr(ident, "params", None) or resolve_params(None, trace)[0]
+    else:
+        params = as_params(params)
     k = ident.k if k is None else k
     seed = int(ident.seed or 0)
     findings = dict(findings or {})
@@ -428,9 +433,10 @@ def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, 
     from .modes.current_sensor import resolve, screen
 
     fault_model = config.fault_model or trace_fault_model(trace)
-    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
+    actuator = resolve_params(params, trace, warn=False)[0]
+    limits = thresholds if thresholds is not None else thresholds_for(fault_model, actuator)
     scored = replace(config, fault_model=fault_model)
-    return resolve(trace, screen(trace, params, limits),
+    return resolve(trace, screen(trace, actuator, limits),
                    lambda t: identify(t, config, seed=seed, params=params, callback=callback),
                    lambda t: scored.problem(t, params).fitness_at(K_NOMINAL))
 

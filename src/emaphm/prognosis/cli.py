@@ -100,15 +100,16 @@ def cmd_register(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from .._cli_common import calibration_seconds
     from ..calibration import CalibrationError, calibrate
-    from ..params import load_params, siemens_1fk7060
+    from ..params import load_params, resolve_params
     from ..progress import CountProgress, compile_notice
     from ..traces import read_trace
     from .history import HealthHistory
 
-    base = load_params(args.params, partial=True) if args.params else siemens_1fk7060()
+    given = load_params(args.params, partial=True) if args.params else None
     with HealthHistory(db_path(args), create=False) as h:
         h.check_time(args.actuator, args.at, "calibration time")   # cheap checks before the fit
         traces = [read_trace(_trace_path(name)) for name in args.traces]
+        base = resolve_params(given, traces, warn=False)[0]       # else the traces' own
         progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs")
         if not args.quiet:
             warn_if_long("emaphm history calibrate",
@@ -117,7 +118,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                          "diagnostic profile each is enough)")
         try:
             with compile_notice(progress, enabled=not args.quiet):
-                res = calibrate(traces, base, sources=[Path(n).name for n in args.traces],
+                res = calibrate(traces, given, sources=[Path(n).name for n in args.traces],
                                 progress=progress.update)
         except CalibrationError as exc:
             raise _usage(str(exc)) from None
@@ -173,10 +174,10 @@ def cmd_add(args: argparse.Namespace) -> int:
         trace = read_trace(_trace_path(args.trace))
         if not args.quiet:
             if params is None:
-                from ..params import siemens_1fk7060
+                from ..params import resolve_params
 
                 cal = h.calibration(args.actuator, args.at)
-                est_params = cal[1] if cal is not None else siemens_1fk7060()
+                est_params = cal[1] if cal is not None else resolve_params(None, trace)[0]
             else:
                 est_params = params
             warn_if_long("emaphm history add",
@@ -560,7 +561,8 @@ def _register_history(subparsers: Any) -> None:
     c.add_argument("actuator", type=actuator_id)
     c.add_argument("traces", nargs="+", help="healthy traces (.csv or .parquet)")
     c.add_argument("--at", type=_time, required=True, help="time of the calibration")
-    c.add_argument("--params", help="data-sheet parameters TOML (default: the preset)")
+    c.add_argument("--params", help="data-sheet parameters TOML (default: the traces' own "
+                   "actuator, from their metadata, else the preset)")
     c.add_argument("--json", action="store_true")
     c.add_argument("--quiet", action="store_true", help="no progress line")
     _db_arg(c)
@@ -615,7 +617,8 @@ def _register_add(hs: Any) -> None:
     a.add_argument("--runs", type=_spread_runs, default=5,
                    help="identifications for seeds/bootstrap (default 5)")
     a.add_argument("--params", help="actuator parameters TOML (default: the actuator's latest "
-                                    "calibration at that time, else the preset)")
+                                    "calibration at that time, else the trace's own actuator, "
+                                    "else the preset)")
     a.add_argument("--json", action="store_true")
     a.add_argument("--quiet", action="store_true",
                    help="no progress and no table: the record in one line")

@@ -42,7 +42,10 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     default the least-squares pipeline's) holds the identification's settings; ``method``,
     ``n_runs`` and ``level`` the interval's
     (:func:`emaphm.prognosis.uncertainty.identify_with_spread`); ``params`` the healthy
-    actuator (default: the actuator's own calibration at ``at``, else the preset). With
+    actuator (an :class:`~emaphm.params.ActuatorParams`, a dict or a TOML path; default:
+    the actuator's own calibration at ``at``, else the trace's own actuator, else the
+    preset: :func:`emaphm.params.resolve_params`; the identification's ``params_source``
+    says which). With
     the least-squares pipeline the search starts first from ``start``, by default the k
     of the actuator's last inspection under the same fault model (a warm start: faults
     grow slowly between inspections). Returns ``(inspection, assessment)``
@@ -53,6 +56,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     from ..fitness import trace_fault_model
     from ..identify import DEFAULT_ALGORITHM, IdentificationConfig
     from ..modes.current_sensor import UNOBSERVABLE_NOTE
+    from ..params import as_params
     from ..traces import validate
     from ..verdict import diagnose_identification, screen_sensors
     from .uncertainty import identify_with_spread
@@ -64,6 +68,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     history.check_next(actuator_id, at, fp)
     validate(trace, min_rotation=config.min_rotation)
     calibrated_at = None
+    params = as_params(params)
     if params is None:                 # the actuator's own calibration, where it has one
         cal = history.calibration(actuator_id, at)
         if cal is not None:
@@ -80,6 +85,9 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     a = identify_with_spread(work, config, seed=seed, method=method, level=level, n_runs=n_runs,
                              params=params, start=start, callback=callback)
     ident = a.identification
+    if calibrated_at is not None:       # given here, from the history: say so
+        ident = replace(ident, params_source="calibration")
+        a = replace(a, identification=ident)
     diag = diagnose_identification(work, ident, params=params, thresholds=thresholds, k=a.k,
                                    findings={"current_sensor": finding})
     if not finding.observable:
@@ -89,6 +97,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
              "calibrated_at": calibrated_at,
              "nuisance": dict(ident.nuisance),
              "parameters": None if params is None else params.to_dict(),
+             "params_source": ident.params_source,
              "k_true": None if ident.k_true is None else ident.k_true.tolist(),
              "interval_details": {k: v for k, v in a.interval.details.items()
                                   if isinstance(v, (int, float, str))},
