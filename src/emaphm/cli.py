@@ -315,7 +315,7 @@ def _table(ident, diag) -> str:
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .faults import scenario
-    from .identify import ALGORITHM_NAMES, IdentificationConfig
+    from .identify import IdentificationConfig, algorithm_names
     from .params import resolve_params
     from .verdict import examine
     from .plots import plot_identification
@@ -325,9 +325,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
     if (args.trace is None) == (args.scenario is None):
         raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
-    if args.algorithm not in ALGORITHM_NAMES:
+    if args.algorithm not in algorithm_names():
         raise UsageError(f"unknown algorithm {shown(args.algorithm)}; choose one of "
-                         f"{', '.join(ALGORITHM_NAMES)}")
+                         f"{', '.join(algorithm_names())}")
     budget = budget_option(args.budget)
     plot = plot_path(args.plot)
     given = _load_params(args.params) if args.params else None   # else the trace's own

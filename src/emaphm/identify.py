@@ -34,6 +34,7 @@ from .fitness import FITNESS_MODES, misfit_limit
 from .optim import (ALL_ALGORITHMS, MaxEvaluations, Optimizer, Termination, WallClock,
                     get_optimizer)
 from .optim.lsq import MultistartLeastSquares
+from .optim.registry import Renamed, lookup, registered, registered_kind
 from .optim.solvers import CallableSolver, Metaheuristic, Solver, optimizer_options, solve
 from .params import ActuatorParams
 from .recorded import DRIVE_MODELS
@@ -44,6 +45,7 @@ from .search import NUISANCE_RANGE, SEARCH_SPACES, default_search, least_squares
 from .traces import Trace, TraceError
 
 __all__ = ["Identification", "IdentificationConfig", "identify", "minimize", "make_solver",
+           "algorithm_names", "algorithm_name",
            "parse_budget", "DEFAULT_ALGORITHM", "ALGORITHM_NAMES", "DRIFT_NUISANCE",
            "default_nuisance", "single_fault_points", "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS",
            "LSQ_RESTARTS", "LSQ_ACCEPT_P", "DEFAULT_RESTARTS", "POLISH_MAX_EVALUATIONS",
@@ -57,6 +59,25 @@ DEFAULT_ALGORITHM = "lsq"
 #: Every name :func:`make_solver` accepts: the default pipeline and the optimizers of
 #: :data:`emaphm.optim.ALL_ALGORITHMS`.
 ALGORITHM_NAMES: tuple[str, ...] = (DEFAULT_ALGORITHM, *sorted(ALL_ALGORITHMS))
+
+def algorithm_names() -> tuple[str, ...]:
+    """Every name :func:`make_solver` accepts now: :data:`ALGORITHM_NAMES` and the names
+    registered in this process (:func:`emaphm.optim.register`)."""
+    return ALGORITHM_NAMES + tuple(sorted(registered()))
+
+
+def algorithm_name(algorithm: Any) -> str:
+    """The name of an algorithm given as a name or as a registered object (its registered
+    name); a TypeError that says how to register anything else."""
+    if isinstance(algorithm, str):
+        return algorithm
+    for name, obj in registered().items():
+        if obj is algorithm:
+            return name
+    raise TypeError(f"an algorithm here is a name ({', '.join(algorithm_names())}); register "
+                    f"your {type(algorithm).__name__} first, emaphm.optim.register('mine', obj), "
+                    "and give 'mine'")
+
 
 #: Further starts the least-squares solver may take after the first.
 LSQ_RESTARTS = 3
@@ -153,7 +174,9 @@ class Identification:
     fit ended at an end of their range (the unit is further off than the range allows);
     ``params_source``: where the healthy actuator's parameters came from
     (:data:`emaphm.params.PARAMS_SOURCES`: given, a history's calibration, the trace's own,
-    the preset) and ``params`` those parameters.
+    the preset) and ``params`` those parameters; ``skipped``: what the solver promises and
+    did not make, with the reason (``{"polish": ..., "restarts": ...}``: a budget too small
+    for the polish, a fit far above the noise floor with no restart left).
     """
 
     algorithm: str
@@ -190,6 +213,7 @@ class Identification:
     at_bounds: tuple[str, ...] = ()
     params_source: str = "preset"
     params: ActuatorParams | None = field(default=None, compare=False, repr=False)
+    skipped: dict = field(default_factory=dict)
 
     @property
     def evals_per_s(self) -> float:
@@ -228,13 +252,48 @@ class Identification:
             "not_observable": list(self.not_observable),
             "at_bounds": list(self.at_bounds),
             "params_source": self.params_source,
+            "skipped": dict(self.skipped),
             "parameters": None if self.params is None else self.params.to_dict(),
         }
+        d["config"] = None if self.config is None else self.config.to_dict()
         if self.k_true is not None:
             d["k_true"] = [float(x) for x in self.k_true]
             d["error_pct"] = float(self.error_pct)
             d["error_pct_raw"] = self.error_pct_raw
         return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Identification":
+        """The identification :meth:`to_dict` wrote (``model_trace``, a trace, is not in it:
+        None here); ``from_dict(x.to_dict()).to_dict() == x.to_dict()``."""
+        d = dict(data)
+        arr = (lambda v: None if v is None else np.asarray(v, dtype=float))
+        params = d.get("parameters")
+        config = d.get("config")
+        return cls(
+            algorithm=d["algorithm"], seed=d["seed"], k=arr(d["k"]), fitness=float(d["fitness"]),
+            evaluations=int(d["evaluations"]), iterations=int(d["iterations"]),
+            elapsed_s=float(d["elapsed_s"]), kernel_s=float(d["kernel_s"]),
+            history=arr(d["history"]), reason=d["reason"], model_trace=None,
+            k_true=arr(d.get("k_true")), error_pct=d.get("error_pct"),
+            diverged=int(d.get("diverged", 0)), options=dict(d.get("options") or {}),
+            k_raw=arr(d.get("k_raw")), fitness_raw=d.get("fitness_raw"),
+            error_pct_raw=d.get("error_pct_raw"),
+            polish_evaluations=int(d.get("polish_evaluations", 0)),
+            polish_s=float(d.get("polish_s", 0.0)), restarts=int(d.get("restarts", 0)),
+            noise_floor=float(d.get("noise_floor", 0.0)), suspect=bool(d.get("suspect", False)),
+            run_evaluations=int(d.get("run_evaluations", 0)),
+            fault_model=d.get("fault_model", "paper"), compile_s=float(d.get("compile_s", 0.0)),
+            nuisance=dict(d.get("nuisance") or {}),
+            config=None if config is None else IdentificationConfig.from_dict(config),
+            noise_sigma=float(d.get("noise_sigma", float("nan"))),
+            drive_model=d.get("drive_model", "modelled controller"),
+            not_observable=tuple(d.get("not_observable") or ()),
+            at_bounds=tuple(d.get("at_bounds") or ()),
+            params_source=d.get("params_source", "preset"),
+            params=None if params is None else ActuatorParams.from_dict(params,
+                                                                        source="identification"),
+            skipped=dict(d.get("skipped") or {}))
 
 
 
@@ -264,8 +323,9 @@ def make_solver(name: str, *, options: Mapping[str, Any] | None = None, polish: 
     least-squares start is worth it. ``budget``: whether a budget caps the search (then
     the metaheuristics restart by default no more).
     """
-    if name not in ALGORITHM_NAMES:
-        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(ALGORITHM_NAMES)}")
+    if name not in algorithm_names():
+        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(algorithm_names())}"
+                         " (or register your own: emaphm.optim.register)")
     if restarts is not None and (isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer))
                                  or restarts < 0):
         raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
@@ -281,17 +341,35 @@ def make_solver(name: str, *, options: Mapping[str, Any] | None = None, polish: 
             restarts=LSQ_RESTARTS if restarts is None else int(restarts),
             accept_ratio=misfit_limit(LSQ_ACCEPT_P), settle_ratio=float(suspect_ratio),
             polish_evaluations=POLISH_LSQ_EVALUATIONS if polish else 0)
+    kind = registered_kind(name)
+    if kind in ("function", "solver") and options:
+        raise ValueError(f"{name!r} (a registered {kind}) takes no options, got {dict(options)}")
+    if kind == "function":
+        return _callable(lookup(name), name, polish, restarts, float(suspect_ratio), budget)
+    if kind == "solver":
+        return Renamed(lookup(name), name)
     optimizer = get_optimizer(name, **dict(options or {}))
-    return _metaheuristic(optimizer, polish, restarts, suspect_ratio, budget)
+    return _metaheuristic(optimizer, polish, restarts, suspect_ratio, budget,
+                          label=name if kind is not None else "")
 
 
 def _metaheuristic(optimizer: Any, polish: bool, restarts: int | None, suspect_ratio: float,
-                   budget: bool) -> Metaheuristic:
+                   budget: bool, label: str = "") -> Metaheuristic:
     if restarts is None:          # none under a budget (a cap) or for the bare algorithm
         restarts = DEFAULT_RESTARTS if not budget and polish else 0
     return Metaheuristic(optimizer, polish=bool(polish), restarts=int(restarts),
                          restart_ratio=float(suspect_ratio),
-                         polish_evaluations=POLISH_MAX_EVALUATIONS)
+                         polish_evaluations=POLISH_MAX_EVALUATIONS, label=label)
+
+
+def _callable(fn: Any, name: str, polish: bool, restarts: int | None, suspect_ratio: float,
+              budget: bool) -> CallableSolver:
+    """A plain function polished and restarted as the metaheuristics are."""
+    if restarts is None:
+        restarts = DEFAULT_RESTARTS if not budget and polish else 0
+    return CallableSolver(fn, name=name, polish=bool(polish), restarts=int(restarts),
+                          restart_ratio=float(suspect_ratio),
+                          polish_evaluations=POLISH_MAX_EVALUATIONS)
 
 
 def as_solver(solver: Any, *, budget: bool = False) -> Solver:
@@ -301,13 +379,16 @@ def as_solver(solver: Any, *, budget: bool = False) -> Solver:
     (:class:`~emaphm.optim.solvers.CallableSolver`)."""
     if isinstance(solver, str):
         return make_solver(solver, budget=budget)
+    own = next((n for n, obj in registered().items() if obj is solver), None)
+    if own is not None:                    # a registered object goes by its name
+        return make_solver(own, budget=budget)
     if all(hasattr(solver, m) for m in ("init", "step", "result")):
         return solver
     if isinstance(solver, Optimizer):
         return _metaheuristic(solver, True, None, misfit_limit(), budget)
     if callable(solver):
-        return CallableSolver(solver)
-    raise ValueError(f"solver must be a name ({', '.join(ALGORITHM_NAMES)}), a solver, an ask/tell "
+        return _callable(solver, "", True, None, misfit_limit(), budget)
+    raise ValueError(f"solver must be a name ({', '.join(algorithm_names())}), a solver, an ask/tell "
                      f"optimizer or a function f(objective, bounds, rng) -> x; got "
                      f"{type(solver).__name__}")
 
@@ -316,6 +397,8 @@ def _solver_settings(solver: Solver) -> tuple[dict, bool]:
     """``(options, polish)`` of a solver as :attr:`Identification.options` reports them."""
     if isinstance(solver, Metaheuristic):
         return optimizer_options(solver.optimizer), solver.polish
+    if isinstance(solver, CallableSolver):
+        return {}, solver.polish
     if isinstance(solver, MultistartLeastSquares):
         return {}, solver.polish_evaluations > 0
     return {}, False
@@ -336,7 +419,9 @@ class IdentificationConfig:
     ==============  ========================================================================
     field           meaning
     ==============  ========================================================================
-    algorithm       a name of :data:`ALGORITHM_NAMES` (:func:`make_solver`)
+    algorithm       a name of :func:`algorithm_names` (:func:`make_solver`): a built-in
+                    one or one registered (:func:`emaphm.optim.register`; the registered
+                    object itself is taken by its name)
     options         the optimizer's settings (e.g. ``{"pop_size": 30}``); none for ``lsq``
     budget          evaluations (int), wall-clock seconds (``"30s"``) or None (the
                     algorithm's own stopping rule), :func:`parse_budget`
@@ -372,6 +457,7 @@ class IdentificationConfig:
     drive_model: str | None = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "algorithm", algorithm_name(self.algorithm))
         object.__setattr__(self, "options", dict(_jsonable(dict(self.options or {}))))
         if self.drive_model is not None and self.drive_model not in DRIVE_MODELS:
             raise ValueError(f"unknown drive model {self.drive_model!r}; choose one of "
@@ -500,7 +586,7 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         config=_config_of(problem, solver, budget, options, polish),
         drive_model=problem.drive_model, not_observable=problem.not_observable,
         at_bounds=_at_bounds(problem.nuisance, nu), params_source=problem.params_source,
-        params=problem.params)
+        params=problem.params, skipped=dict(getattr(res, "skipped", None) or {}))
 
 
 #: A parameter searched beside k within this share of its range from an end sits at it.
@@ -520,11 +606,28 @@ def _at_bounds(names: tuple[str, ...], values: Any) -> tuple[str, ...]:
     return tuple(out)
 
 
+def _named(solver: Solver) -> bool:
+    """Whether ``solver`` is what its name builds: a built-in name, or a name registered to
+    the solver's own function, optimizer (or its class) or solver."""
+    name = solver.name
+    if name in ALGORITHM_NAMES:
+        return not (isinstance(solver, Metaheuristic) and solver.label)
+    kind = registered_kind(name)
+    if kind is None:
+        return False
+    obj = lookup(name)
+    if isinstance(solver, CallableSolver):
+        return solver.fn is obj
+    if isinstance(solver, Metaheuristic):
+        return solver.optimizer is obj or type(solver.optimizer) is obj
+    return isinstance(solver, Renamed) and solver.solver is obj
+
+
 def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, options: dict,
                polish: bool) -> IdentificationConfig | None:
     """The settings an identification was made with (None for a solver without a name of
     :data:`ALGORITHM_NAMES`); the restarts and the suspect ratio as resolved."""
-    if solver.name not in ALGORITHM_NAMES:
+    if not _named(solver):
         return None
     return IdentificationConfig(
         algorithm=solver.name, options=options,
