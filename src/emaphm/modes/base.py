@@ -44,6 +44,14 @@ class Fault:
         d.update(self.details)
         return d
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Fault":
+        """The fault :meth:`to_dict` wrote (the keys beyond the six fields are its
+        ``details``)."""
+        own = ("mode", "component", "k", "severity", "reading", "phase")
+        return cls(**{n: data[n] for n in own if n in data},
+                   details={n: v for n, v in data.items() if n not in own})
+
 
 @dataclass(frozen=True)
 class Reading:

@@ -38,6 +38,14 @@ MAX_SPREAD_RUNS = 100
 MAX_INSPECTIONS = 200
 
 
+def _algorithm_choices() -> tuple[str, ...]:
+    """The names --algorithm takes: the built-in ones and those registered in this process
+    (:func:`emaphm.optim.register`; read without importing NumPy when none can be)."""
+    reg = sys.modules.get("emaphm.optim.registry")
+    own = tuple(sorted(reg.registered())) if reg is not None else ()
+    return ("lsq", "pso", "de", "gwo", "scipy-de", "cmaes") + own
+
+
 def _usage(msg: str) -> Exception:
     return UsageError(msg)
 
@@ -156,7 +164,7 @@ def cmd_add(args: argparse.Namespace) -> int:
     from ..traces import TraceError, read_trace
     from ..identify import IdentificationConfig
     from .history import HealthHistory
-    from .workflow import inspect
+    from .workflow import record_inspection as inspect
 
     budget = budget_option(args.budget)
     params = None
@@ -604,7 +612,7 @@ def _register_add(hs: Any) -> None:
     a.add_argument("--at", type=_time, required=True,
                    help="time of the inspection (flight hours, 0 to 1e6, or cycles, 0 to 1e9), "
                         "after the last one")
-    a.add_argument("--algorithm", default="lsq", choices=("lsq", "pso", "de", "gwo", "scipy-de", "cmaes"),
+    a.add_argument("--algorithm", default="lsq", choices=_algorithm_choices(),
                    help="lsq (default: least squares, warm-started from the last inspection), "
                         "the paper's pso, de, gwo, or the baselines")
     a.add_argument("--fault-model", choices=("physical", "paper"), default=None,

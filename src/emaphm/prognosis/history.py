@@ -942,10 +942,11 @@ def __getattr__(name: str):
     if name == "inspect":
         import warnings
 
-        from .workflow import inspect
+        from .workflow import record_inspection as inspect
 
-        warnings.warn("emaphm.prognosis.history.inspect moved to emaphm.prognosis.workflow.inspect "
-                      "(also emaphm.prognosis.inspect); the old name goes in the next release",
+        warnings.warn("emaphm.prognosis.history.inspect moved to emaphm.prognosis.workflow."
+                      "record_inspection (also emaphm.prognosis.record_inspection); the old name "
+                      "goes in the next release",
                       DeprecationWarning, stacklevel=2)
         return inspect
     raise AttributeError(f"module 'emaphm.prognosis.history' has no attribute {name!r}")

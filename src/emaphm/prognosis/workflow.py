@@ -1,6 +1,6 @@
 """The workflows of prognosis: diagnose a trace and record it; a whole degradation demo.
 
-:func:`inspect` is what ``emaphm history add``, the fleet demo and the degradation demo
+:func:`record_inspection` is what ``emaphm history add``, the fleet demo and the degradation demo
 do for each inspection: the cheap checks, the identification with the interval of each
 component (:func:`emaphm.prognosis.uncertainty.identify_with_spread`), the verdict
 (:func:`emaphm.verdict.diagnose_identification`) and the record
@@ -21,7 +21,7 @@ import numpy as np
 
 from .history import HealthHistory, Inspection, trace_fingerprint
 
-__all__ = ["inspect", "run_demo"]
+__all__ = ["record_inspection", "inspect", "run_demo"]
 
 #: inspect()'s keywords of version 0.3 that are identification settings now
 #: (:class:`emaphm.identify.IdentificationConfig`).
@@ -29,7 +29,7 @@ _OLD_CONFIG = ("algorithm", "budget", "options", "polish", "suspect_ratio", "fau
                "n_sub", "mode", "nuisance")
 
 
-def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, seed: int,
+def record_inspection(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, seed: int,
             config: Any = None, method: str = "population", n_runs: int = 5,
             level: float = 0.9, source: str | None = None, params: Any = None,
             thresholds: Any = None, start: Any = None, callback: Any = None,
@@ -49,7 +49,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     the least-squares pipeline the search starts first from ``start``, by default the k
     of the actuator's last inspection under the same fault model (a warm start: faults
     grow slowly between inspections). Returns ``(inspection, assessment)``
-    (:class:`emaphm.prognosis.uncertainty.Assessment`). The keywords of version 0.3
+    (:class:`emaphm.prognosis.uncertainty.IdentificationSpread`). The keywords of version 0.3
     (``algorithm``, ``budget``, ``options``, ``fault_model``, ...) still work for one
     release, with a DeprecationWarning.
     """
@@ -112,6 +112,15 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     return ins, a
 
 
+def inspect(*args: Any, **kw: Any) -> tuple[Inspection, Any]:
+    """:func:`record_inspection` under its name before 0.5 (which shadowed the standard
+    library's ``inspect``), kept for one release with a DeprecationWarning."""
+    warnings.warn("emaphm.prognosis.inspect is now record_inspection (the old name shadows the "
+                  "standard library's inspect); it goes in the next release",
+                  DeprecationWarning, stacklevel=2)
+    return record_inspection(*args, **kw)
+
+
 def _old_keywords(config: Any, kw: dict[str, Any]) -> Any:
     """The 0.3 keywords as an identification config, with a warning."""
     from ..identify import IdentificationConfig
@@ -150,7 +159,7 @@ def _record_demo(h: HealthHistory, actuator: str, sc: Any, times: np.ndarray, *,
     for j, (t, tr) in enumerate(zip(times, run.traces)):
         if progress is not None:
             progress.restart(f"{sc.name}: inspection {j + 1}/{len(times)}: ")
-        inspect(h, actuator, tr, float(t), seed=seed, config=config, callback=progress)
+        record_inspection(h, actuator, tr, float(t), seed=seed, config=config, callback=progress)
     if progress is not None:
         progress.close()
 
