@@ -649,11 +649,11 @@ _OLD_KEYWORDS = {"budget": "termination", "options": "config", "polish": "config
                  "start": "problem", "objective": "problem"}
 
 
-def identify(trace: Trace | IdentificationProblem, solver: Any = DEFAULT_ALGORITHM, *,
-             seed: int, termination: Any = None, params: ActuatorParams | None = None,
+def identify(trace: Trace | IdentificationProblem | list, solver: Any = DEFAULT_ALGORITHM, *,
+             seed: int, termination: Any = None, params: Any = None,
              fault_model: str | None = None,
-             callback: Callable[[Any], bool | None] | None = None,
-             **deprecated: Any) -> Identification:
+             callback: Callable[[Any], bool | None] | None = None, workers: int | None = None,
+             **deprecated: Any) -> Identification | list[Identification]:
     """Identify the fault vector of a trace (see :func:`minimize`).
 
     ``trace`` is a :class:`~emaphm.traces.Trace` (its problem is built with ``params``,
@@ -665,11 +665,27 @@ def identify(trace: Trace | IdentificationProblem, solver: Any = DEFAULT_ALGORIT
     ``termination``: a budget or a termination (:func:`parse_budget`). ``seed``: an int,
     required (same seed, same result). ``callback(state)``: progress; True stops.
 
+    ``params``: an :class:`~emaphm.params.ActuatorParams`, a dict or a TOML path (default:
+    the trace's own, else the preset; :func:`emaphm.params.resolve_params`).
+
+    A list of traces is a batch (:func:`emaphm.batch.identify_many`): each identified as
+    this call would identify it alone, on ``workers`` processes (None, 0 or 1: here, one
+    after the other); the identifications come back in the order of the traces.
+
     The keywords of version 0.3 (``budget``, ``options``, ``polish``, ``restarts``,
     ``suspect_ratio``, ``n_sub``, ``mode``, ``search``, ``nuisance``, ``start``,
     ``objective``) still work for one release, with a DeprecationWarning.
     """
     seed = check_seed(seed)
+    if isinstance(trace, (list, tuple)):
+        from .batch import identify_many
+
+        return identify_many(trace, solver, workers=workers, seed=seed, termination=termination,
+                             params=params, fault_model=fault_model, callback=callback,
+                             **deprecated)
+    if workers is not None and workers > 1:
+        raise ValueError("workers= shares a list of traces among processes; give a list of "
+                         "traces, or drop workers")
     if isinstance(trace, IdentificationProblem) and (params is not None or fault_model is not None):
         raise ValueError("give params and fault_model to the IdentificationProblem, not beside it")
     if deprecated:

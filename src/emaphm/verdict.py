@@ -441,9 +441,9 @@ def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, 
                    lambda t: scored.problem(t, params).fitness_at(K_NOMINAL))
 
 
-def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any = None,
+def examine(trace: Trace | list, *, params: Any = None, config: Any = None,
             seed: int = 0, callback: Any = None, thresholds: Thresholds | None = None,
-            loops: bool = True) -> Examination:
+            loops: bool = True, workers: int | None = None) -> Examination | list[Examination]:
     """Fault detection and identification of one trace, as ``emaphm diagnose`` makes it.
 
     1. The current sensors, judged from the sum of the three measured currents
@@ -455,7 +455,18 @@ def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any =
        least-squares solver's settings; ``params`` the actuator, default the preset).
     3. The verdict with its checks (:func:`diagnose_identification`; ``loops``: with the
        report of a short's fault loop).
+
+    A list of traces is a batch (:func:`emaphm.batch.examine_many`): each examined as this
+    call would examine it alone, on ``workers`` processes; the examinations in order.
     """
+    if isinstance(trace, (list, tuple)):
+        from .batch import examine_many
+
+        return examine_many(trace, workers=workers, params=params, config=config, seed=seed,
+                            callback=callback, thresholds=thresholds, loops=loops)
+    if workers is not None and workers > 1:
+        raise ValueError("workers= shares a list of traces among processes; give a list of "
+                         "traces, or drop workers")
     from .identify import IdentificationConfig, identify
     from .modes.current_sensor import UNOBSERVABLE_NOTE
 
