@@ -30,6 +30,7 @@ import numpy as np
 from .diagnosis import diagnose
 from .faults import K_NOMINAL, N_K, as_k, loop_report, shorted_fraction
 from .fitness import Eq4Objective
+from .logs import announce_compiles
 from .params import PARAMS_SOURCES, ActuatorParams, resolve_params
 from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
                        drive_model_of)
@@ -243,6 +244,7 @@ class IdentificationProblem:
         once, the first time only; returns the seconds it took (0 once warm)."""
         if self._warm:
             return 0.0
+        announce_compiles()
         t0 = time.perf_counter()
         model = self.objective.model
         model.simulate(K_NOMINAL)                                       # the scalar kernel

@@ -9,10 +9,9 @@ import numpy as np
 
 from . import __version__
 from .acquisition import Sensors
+from .logs import announce_compiles
 from .faults import (as_k, check_fault_model, loop_report, scenario as scenario_k,
                      scenario_fault_model, shorted_fraction)
-from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
-from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
 from .modes import Injection, parse_fault
@@ -102,6 +101,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     if (drive_signals or drive not in (None, "emaphm")) and model != "reference":
         raise ValueError("the drive's signals (drive_signals) and its firmware (drive) are the "
                          "plant's: use model='reference'")
+    announce_compiles()
     injections = [parse_fault(f) if isinstance(f, str) else f for f in faults]
     kk, fault_model = _fault_vector(k, scenario, fault_model, injections)
     if seed is not None:
@@ -172,6 +172,8 @@ def _run_model(model: str, params: ActuatorParams, unit: Unit, injections: Seque
     """``(signals, drive status, the recording chain, the plant's parameters)`` of one
     simulation: the plant (a production unit, the injections' changes, its drive's
     firmware) or the monitoring model."""
+    from .models.reference import run_reference     # the kernels: imported on first use
+
     plant = _plant_of(injections)
     if model == "reference":
         sensors = _faulty_sensors(sensors.with_unit(unit.sensor_gain, unit.sensor_offset),
@@ -209,6 +211,8 @@ def _run_monitoring(params: ActuatorParams, profile: Profile, k: np.ndarray, n_s
                     fault_model: str) -> tuple[dict, str]:
     """The monitoring model's signals for one k, as the plant's, and its drive status;
     a diverged state is an error here (one simulation a user asked for)."""
+    from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
+
     r = MonitoringModel(params, profile, n_sub=n_sub, fault_model=fault_model).simulate(k)
     out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
            "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}
