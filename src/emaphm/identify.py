@@ -39,7 +39,8 @@ from .optim.solvers import CallableSolver, Metaheuristic, Solver, optimizer_opti
 from .params import ActuatorParams
 from .recorded import DRIVE_MODELS
 from .problem import (DRIFT_NUISANCE, LSQ_SAMPLE, LSQ_SINGLE_FAULT_LEVELS,
-                      IdentificationProblem, default_nuisance, single_fault_points)
+                      IdentificationProblem, default_nuisance, error_all_pct,
+                      single_fault_points)
 from .seeds import check_seed
 from .search import NUISANCE_RANGE, SEARCH_SPACES, default_search, least_squares_search
 from .traces import Trace, TraceError
@@ -109,14 +110,22 @@ MAX_BUDGET_SECONDS = 86_400.0
 
 
 def parse_budget(budget: Any) -> Termination | None:
-    """A termination from a budget: ``None`` (the algorithm's paper default), an
-    int (objective evaluations), a string ``"5000"`` / ``"5000evals"`` /
-    ``"30s"`` (wall-clock seconds), or a :class:`emaphm.optim.Termination`. At most
-    :data:`MAX_BUDGET_EVALUATIONS` evaluations or :data:`MAX_BUDGET_SECONDS` seconds."""
+    """A termination from a budget, the one convention of emaphm: ``None`` (the algorithm's
+    own stopping rule), an int (objective evaluations), a float (wall-clock seconds), a
+    string ``"5000"`` / ``"5000evals"`` (evaluations) or ``"30s"`` (seconds), or a
+    :class:`emaphm.optim.Termination`. At most :data:`MAX_BUDGET_EVALUATIONS` evaluations
+    or :data:`MAX_BUDGET_SECONDS` seconds."""
     if budget is None:
         return None
     if isinstance(budget, bool):
         raise ValueError(f"budget must be a number of evaluations or seconds, got {budget!r}")
+    if isinstance(budget, (float, np.floating)):
+        if not (math.isfinite(budget) and budget > 0):
+            raise ValueError(f"a budget in seconds (a float) must be positive, got {budget!r}")
+        if budget > MAX_BUDGET_SECONDS:
+            raise ValueError(f"budget {budget!r} s is above a day ({MAX_BUDGET_SECONDS:g} s); "
+                             "give at most 86400.0 (a float is seconds, an int evaluations)")
+        return WallClock(float(budget))
     if isinstance(budget, (int, np.integer)):
         if budget <= 0:
             raise ValueError(f"budget must be a positive number of evaluations, got {budget}")
@@ -176,7 +185,11 @@ class Identification:
     (:data:`emaphm.params.PARAMS_SOURCES`: given, a history's calibration, the trace's own,
     the preset) and ``params`` those parameters; ``skipped``: what the solver promises and
     did not make, with the reason (``{"polish": ..., "restarts": ...}``: a budget too small
-    for the polish, a fit far above the noise floor with no restart left).
+    for the polish, a fit far above the noise floor with no restart left);
+    ``nuisance_true``: the true values of parameters beside k of a simulated trace's
+    injected faults (``{"demag": -0.3}``: :func:`emaphm.problem.true_nuisance`), and
+    ``error_all_pct`` Eq. 9 extended to them (:func:`emaphm.problem.error_all_pct`: a
+    parameter not searched counts as nominal), where the trace has its truth.
     """
 
     algorithm: str
@@ -214,6 +227,23 @@ class Identification:
     params_source: str = "preset"
     params: ActuatorParams | None = field(default=None, compare=False, repr=False)
     skipped: dict = field(default_factory=dict)
+    nuisance_true: dict = field(default_factory=dict)
+    error_all_pct: float | None = None
+
+    @property
+    def nfev(self) -> int:
+        """:attr:`evaluations`, by the name of the optimizers' states and SciPy's results."""
+        return self.evaluations
+
+    @property
+    def nit(self) -> int:
+        """:attr:`iterations`, by the name of the optimizers' states and SciPy's results."""
+        return self.iterations
+
+    @property
+    def best_f(self) -> float:
+        """:attr:`fitness`, by the name of a callback's state."""
+        return self.fitness
 
     @property
     def evals_per_s(self) -> float:
@@ -253,6 +283,8 @@ class Identification:
             "at_bounds": list(self.at_bounds),
             "params_source": self.params_source,
             "skipped": dict(self.skipped),
+            "nuisance_true": dict(self.nuisance_true),
+            "error_all_pct": self.error_all_pct,
             "parameters": None if self.params is None else self.params.to_dict(),
         }
         d["config"] = None if self.config is None else self.config.to_dict()
@@ -293,7 +325,8 @@ class Identification:
             params_source=d.get("params_source", "preset"),
             params=None if params is None else ActuatorParams.from_dict(params,
                                                                         source="identification"),
-            skipped=dict(d.get("skipped") or {}))
+            skipped=dict(d.get("skipped") or {}),
+            nuisance_true=dict(d.get("nuisance_true") or {}), error_all_pct=d.get("error_all_pct"))
 
 
 
@@ -507,6 +540,7 @@ class IdentificationConfig:
         d["options"] = dict(self.options)
         d["nuisance"] = None if self.nuisance is None else list(self.nuisance)
         d["budget"] = self.budget if self.budget is None or isinstance(self.budget, (int, str)) \
+            else float(self.budget) if isinstance(self.budget, (float, np.floating)) \
             else str(self.budget)
         return d
 
@@ -586,7 +620,10 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         config=_config_of(problem, solver, budget, options, polish),
         drive_model=problem.drive_model, not_observable=problem.not_observable,
         at_bounds=_at_bounds(problem.nuisance, nu), params_source=problem.params_source,
-        params=problem.params, skipped=dict(getattr(res, "skipped", None) or {}))
+        params=problem.params, skipped=dict(getattr(res, "skipped", None) or {}),
+        nuisance_true=problem.nuisance_true,
+        error_all_pct=None if k_true is None else error_all_pct(
+            k, k_true, dict(zip(problem.nuisance, nu)), problem.nuisance_true))
 
 
 #: A parameter searched beside k within this share of its range from an end sits at it.
@@ -631,7 +668,7 @@ def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, opti
         return None
     return IdentificationConfig(
         algorithm=solver.name, options=options,
-        budget=budget if budget is None or isinstance(budget, (int, np.integer, str)) else None,
+        budget=budget if budget is None or isinstance(budget, (int, np.integer, str, float)) else None,
         polish=polish, restarts=getattr(solver, "restarts", None),
         suspect_ratio=getattr(solver, "settle_ratio", getattr(solver, "restart_ratio", None)),
         search=problem.search, n_sub=problem.n_sub, mode=problem.mode,

@@ -28,18 +28,19 @@ from typing import Any
 import numpy as np
 
 from .diagnosis import diagnose
-from .faults import K_NOMINAL, N_K, as_k, loop_report, shorted_fraction
+from .faults import K_NOMINAL, N_K, as_k, error_pct, loop_report, shorted_fraction
 from .fitness import Eq4Objective
 from .logs import announce_compiles
 from .params import PARAMS_SOURCES, ActuatorParams, resolve_params
 from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
                        drive_model_of)
-from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_to_box,
-                     to_k)
+from .search import (NUISANCE_RANGE, SEARCH_SPACES, default_search, from_k, nuisance_from_box,
+                     nuisance_to_box, to_k)
 from .traces import Trace, validate
 
 __all__ = ["IdentificationProblem", "SearchView", "apply_extra", "DRIFT_NUISANCE", "default_nuisance",
-           "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS", "single_fault_points", "true_k"]
+           "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS", "single_fault_points", "true_k",
+           "true_nuisance", "error_all_pct"]
 
 #: Nuisance parameters searched with k by default for a calibrated unit: what drifts most
 #: after a calibration (winding resistance and magnet flux, with temperature).
@@ -88,6 +89,31 @@ def true_k(trace: Trace) -> np.ndarray | None:
         return as_k(k)
     except ValueError:
         return None
+
+
+def true_nuisance(trace: Trace) -> dict[str, float]:
+    """The true values of the parameters searched beside k that a simulated trace's injected
+    faults carry (its metadata's ``truth``, :func:`emaphm.simulate.simulate`); empty for a
+    bench trace or one without such faults."""
+    truth = trace.meta.get("truth") if isinstance(trace.meta, dict) else None
+    if not isinstance(truth, dict):
+        return {}
+    return {str(n): float(v) for n, v in truth.items() if n in NUISANCE_RANGE}
+
+
+def error_all_pct(k: Any, k_true: Any, nuisance: Any, truth: Any) -> float:
+    """Eq. 9 extended to the parameters searched beside k: the true ones (``truth``, by
+    name) against the values found (``nuisance``; 0, nominal, where one was not searched),
+    each difference in units of its range (:data:`emaphm.search.NUISANCE_RANGE`, as k's
+    components are in units of [0, 1]). Eq. 9 itself where ``truth`` is empty:
+    ``100 / sqrt(6.5 + m) sqrt(S_9 + sum_j ((nu_j - nu_j,true) / w_j)^2)`` with ``S_9``
+    Eq. 9's sum of squares and ``m`` the parameters of ``truth``."""
+    truth = dict(truth or {})
+    found = dict(nuisance or {})
+    s9 = (error_pct(k, k_true) * math.sqrt(6.5) / 100.0) ** 2
+    extra = sum(((found.get(n, 0.0) - v) / (NUISANCE_RANGE[n][1] - NUISANCE_RANGE[n][0])) ** 2
+                for n, v in truth.items())
+    return 100.0 / math.sqrt(6.5 + len(truth)) * math.sqrt(s9 + extra)
 
 
 def _sobol(d: int, seed: int):
@@ -238,6 +264,12 @@ class IdentificationProblem:
     def k_true(self) -> np.ndarray | None:
         """The true k of a simulated trace (:func:`true_k`)."""
         return true_k(self.trace)
+
+    @property
+    def nuisance_true(self) -> dict[str, float]:
+        """The true values of parameters beside k of a simulated trace's injected faults
+        (:func:`true_nuisance`)."""
+        return true_nuisance(self.trace)
 
     def warm_up(self) -> float:
         """Compile (or load from the disk cache) the model kernels by running the model

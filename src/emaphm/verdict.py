@@ -409,12 +409,19 @@ def _drive_deviations(problem, diag, k, extra, ratio, seed, findings, noiseless,
 class Examination:
     """The whole examination of one trace (:func:`examine`): the ``identification`` the
     verdict reads (of the ``trace`` examined: corrected for a faulty current sensor), the
-    ``diagnosis`` and the ``sensor`` finding."""
+    ``diagnosis`` and the ``sensor`` finding; ``k`` and ``nuisance``: what the verdict was
+    read on (a hypothesis' refit where one was kept, :attr:`Diagnosis.refit`, else the
+    identification's), and ``error_all_pct`` their error against a simulated trace's truth
+    (:func:`emaphm.problem.error_all_pct`: Eq. 9 with the parameters beside k; None for a
+    bench trace)."""
 
     identification: Any
     diagnosis: Diagnosis
     trace: Trace
     sensor: Any
+    k: Any = None
+    nuisance: dict | None = None
+    error_all_pct: float | None = None
 
 
 def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, seed: int,
@@ -479,4 +486,17 @@ def examine(trace: Trace | list, *, params: Any = None, config: Any = None,
                                    findings={"current_sensor": finding}, loops=loops)
     if not finding.observable:
         diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
-    return Examination(ident, diag, work, finding)
+    return _examination(ident, diag, work, finding)
+
+
+def _examination(ident: Any, diag: Diagnosis, work: Trace, finding: Any) -> Examination:
+    """The examination, with what the verdict was read on and its error against the truth."""
+    from .problem import error_all_pct
+
+    refit = diag.refit
+    k = np.asarray(ident.k if refit is None else refit.k, dtype=float)
+    nu = dict(ident.nuisance if refit is None else refit.nuisance)
+    k_true = getattr(ident, "k_true", None)
+    err = None if k_true is None else error_all_pct(k, k_true, nu,
+                                                    getattr(ident, "nuisance_true", {}))
+    return Examination(ident, diag, work, finding, k, nu, err)

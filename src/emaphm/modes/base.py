@@ -78,6 +78,15 @@ class Injection:
     plant: Callable[[ActuatorParams], ActuatorParams] | None = None
     sensor: tuple[int, float, float] | None = None
 
+    def to_dict(self) -> dict[str, Any]:
+        """As data (what a trace's metadata keeps): the components of k set (``"k1"``..),
+        whether the plant changes, the faulty sensor (phase, gain, offset [A])."""
+        return {"k": {f"k{j + 1}": float(v) for j, v in sorted(self.k.items())},
+                "plant": self.plant is not None,
+                "sensor": None if self.sensor is None else {
+                    "phase": PHASES[self.sensor[0]], "gain": float(self.sensor[1]),
+                    "offset_a": float(self.sensor[2])}}
+
 
 @dataclass(frozen=True)
 class Grid:
