@@ -168,3 +168,22 @@ def test_save_and_load_every_kind(tmp_path, ident, planned, trace):
         tmp_path / "p.json")), type(siemens_1fk7060()))
     assert Identification.from_dict(ident.to_dict()).to_dict() == ident.to_dict()
     assert IdentificationSpread and Diagnosis        # the classes the kinds name
+
+
+def test_a_history_record_and_the_alpha_lambda_metric(tmp_path, history, trace):
+    from emaphm.prognosis import HealthHistory, Inspection, alpha_lambda
+
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        h.register("EMA-1")
+        ins = h.add("EMA-1", 10.0, np.full(8, 0.1), diagnosis={"verdict": "healthy"},
+                    extra={"fault_model": "physical", "x": [1, 2]})
+    back = assert_round_trip(ins)
+    np.testing.assert_array_equal(back.k, ins.k)
+    assert back.fault_model == "physical" and back.extra == ins.extra
+    assert Inspection.from_dict(ins.to_dict()).to_dict() == ins.to_dict()
+    times, _ = history
+    samples = np.tile(np.linspace(400.0, 600.0, 50), (len(times), 1))
+    al = alpha_lambda(times, samples, eol=1000.0 + times[0])
+    back = assert_round_trip(al)
+    np.testing.assert_array_equal(back.passed, al.passed)
+    assert back.score == al.score

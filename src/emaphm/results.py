@@ -20,6 +20,8 @@ kind                       class
 ``rul_track``              :class:`emaphm.prognosis.RULTrack`
 ``next_inspection``        :class:`emaphm.prognosis.NextInspection`
 ``inspection_policy``      :class:`emaphm.prognosis.InspectionPolicy`
+``inspection``             :class:`emaphm.prognosis.Inspection` (a history's record)
+``alpha_lambda``           :class:`emaphm.prognosis.metrics.AlphaLambda`
 ``parameters``             :class:`emaphm.params.ActuatorParams`
 =========================  =====================================================
 
@@ -51,6 +53,8 @@ KINDS: dict[str, tuple[str, str]] = {
     "rul_track": ("emaphm.prognosis.trends", "RULTrack"),
     "next_inspection": ("emaphm.prognosis.inspection", "NextInspection"),
     "inspection_policy": ("emaphm.prognosis.inspection", "InspectionPolicy"),
+    "inspection": ("emaphm.prognosis.history", "Inspection"),
+    "alpha_lambda": ("emaphm.prognosis.metrics", "AlphaLambda"),
     "parameters": ("emaphm.params", "ActuatorParams"),
 }
 

@@ -235,6 +235,15 @@ class Inspection:
             d[name] = [float(x) for x in d[name]]
         return d
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Inspection":
+        """The record :meth:`to_dict` wrote (``fault_model`` is read from ``extra``)."""
+        d = {k: v for k, v in data.items() if k != "fault_model"}
+        for name in ("k", "k_lo", "k_hi"):
+            d[name] = np.asarray(d[name], dtype=float)
+        d["extra"] = dict(d.get("extra") or {})
+        return cls(**d)
+
 
 @dataclass(frozen=True)
 class SkippedInspection:
