@@ -120,3 +120,18 @@ def test_the_problem_takes_a_dict_or_a_path_and_says_where_they_came_from(trace2
     assert replace(a, n_sub=1).params_source == "trace"
     with pytest.raises(ValueError, match="params_source must be one of"):
         IdentificationProblem(trace270, params_source="mine")
+
+
+def test_calibrate_works_around_the_traces_own_actuator(ema270):
+    from emaphm.calibration import CalibrationResult, calibrate
+
+    healthy = simulate(scenario="nominal", params=ema270, unit_seed=7, sensors=DEFAULT_SENSORS,
+                       seed=1)
+    cal = calibrate([healthy])
+    assert cal.params_source == "trace" and cal.params.name == "ema-270v-750w"
+    assert cal.params.calibration.date                    # a calibration of its own
+    back = CalibrationResult.from_dict(json.loads(json.dumps(cal.to_dict())))
+    assert back.to_dict() == cal.to_dict() and back.params == cal.params
+    with warnings.catch_warnings():                       # its own calibration: no warning
+        warnings.simplefilter("error")
+        assert resolve_params(cal.params, healthy) == (cal.params, "given")
