@@ -13,7 +13,7 @@ ROOT = Path(__file__).parent
 ORDER = ["plant.md", "commissioning.md", "assess.md", "pipeline.md", "identification.md", "identification_twin.md",
          "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
          "inspection.md", "fault_coverage.md", "fleet.md", "long_history.md", "versions.md",
-         "import.md"]
+         "import.md", "batch_identify.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
 CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
 HEADER = """# Benchmarks
@@ -55,6 +55,7 @@ functions: it does not depend on the actuator model. Every script re-runs its se
 | prognosis of one actuator as its history grows (time, memory) | `benchmarks/bench_long_history.py` |
 | two versions side by side (a refactor keeps the speed) | `benchmarks/bench_versions.py` |
 | trace files at scale: the limits' refusals, the CSV writer, a 1-hour bench export (`emaphm import`) | `benchmarks/bench_import.py` |
+| a batch of traces on worker processes against the calls in a row | `benchmarks/bench_batch.py` |
 
 """
 

@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from emaphm.identify import ALGORITHM_NAMES, DEFAULT_ALGORITHM, IdentificationConfig
-from emaphm.prognosis import (DEGRADATION_SCENARIOS, HealthHistory, degradation_scenario, inspect,
-                              inspection_times, prognose, simulate_degradation,
-                              synthetic_k_history)
+from emaphm.prognosis import (DEGRADATION_SCENARIOS, HealthHistory, degradation_scenario,
+                              inspection_times, prognose, record_inspection,
+                              simulate_degradation, synthetic_k_history)
 from emaphm.prognosis.metrics import alpha_lambda, coverage
 from emaphm.prognosis.plots import plot_alpha_lambda, plot_history, plot_prognosis
 from emaphm.prognosis.trends import MIN_INSPECTIONS, RULTrack
@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> dict:
                 config = IdentificationConfig(algorithm=args.algorithm, budget=args.budget)
                 run = simulate_degradation(sc, times, seed=args.seed)
                 for t, trace in zip(times, run.traces):
-                    ins, _ = inspect(history, "EMA-DEMO", trace, float(t), seed=args.seed,
+                    ins, _ = record_inspection(history, "EMA-DEMO", trace, float(t), seed=args.seed,
                                      config=config)
                     print(f"t = {t:6.0f} h  identified {sc.indicator} = "
                           f"{ins.k[_component(sc)]:.4f}  verdict "

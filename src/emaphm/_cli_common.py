@@ -226,7 +226,10 @@ def expected_evaluations(algorithm: str, budget: Any = None,
         evals = [t.n for t in list(getattr(term, "terms", None) or [term])
                  if isinstance(t, MaxEvaluations)]
         return int(min([LSQ_EQUIVALENT_EVALUATIONS] + [LSQ_BATCH_COST * n for n in evals]))
-    opt = get_optimizer(algorithm, **(options or {}))
+    try:
+        opt = get_optimizer(algorithm, **(options or {}))
+    except ValueError:                    # a registered function or solver: no estimate
+        return None
     if term is None:
         term = opt.default_termination()
     terms = list(getattr(term, "terms", None) or [term])

@@ -65,7 +65,7 @@ from .fitness import (MIN_NOISE, TRANSIENT_MISFIT, aligned_currents, check_diagn
                       effective_samples, eq4_weights, noise_samples, on_model_grid,
                       transient_excess, white_noise_sigma)
 from .params import (ActuatorParams, Calibration, CurrentSensors, calibration_digest,
-                     siemens_1fk7060)
+                     resolve_params, siemens_1fk7060)
 from .search import nuisance_start
 from .profiles import Profile
 from .traces import Trace, TraceError, fingerprint, validate
@@ -312,7 +312,9 @@ class CalibrationResult:
     ``weak``: the parameters found not identifiable, with the change of the fit ratio a
     typical deviation of theirs makes (see :data:`MIN_EFFECT`);
     ``fit_ratio``: per source, the fitted Eq. 4 over the trace's white-noise floor;
-    ``fits``: per source, ``(t, measured, model)`` currents on the model grid (for plots).
+    ``fits``: per source, ``(t, measured, model)`` currents on the model grid (for plots;
+    not in :meth:`to_dict`); ``params_source``: where the data sheet calibrated around came
+    from (:data:`emaphm.params.PARAMS_SOURCES`).
     """
 
     params: ActuatorParams
@@ -324,6 +326,7 @@ class CalibrationResult:
     evaluations: int
     elapsed_s: float
     fits: tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...] = ()   # (t, measured, model)
+    params_source: str = "given"
 
     def to_dict(self) -> dict[str, Any]:
         return {"estimates": self.estimates, "fixed": list(self.fixed),
@@ -331,7 +334,19 @@ class CalibrationResult:
                 "not_identifiable": [list(w) for w in self.weak],
                 "fit_ratio": self.fit_ratio, "evaluations": self.evaluations,
                 "elapsed_s": self.elapsed_s, "calibration": self.params.calibration.date,
-                "parameters": self.params.to_dict()}
+                "parameters": self.params.to_dict(), "params_source": self.params_source}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "CalibrationResult":
+        """The result :meth:`to_dict` wrote (without the ``fits``, which it leaves out)."""
+        return cls(params=ActuatorParams.from_dict(data["parameters"], source="calibration"),
+                   estimates={n: dict(e) for n, e in data["estimates"].items()},
+                   fixed=tuple(data["fixed"]),
+                   correlated=tuple((str(a), str(b), float(r)) for a, b, r in data["correlated"]),
+                   weak=tuple((str(n), float(e)) for n, e in data["not_identifiable"]),
+                   fit_ratio=dict(data["fit_ratio"]), evaluations=int(data["evaluations"]),
+                   elapsed_s=float(data["elapsed_s"]),
+                   params_source=str(data.get("params_source", "given")))
 
     def summary(self) -> str:
         lines = [f"{'parameter':10s} {'deviation':>10s} {'95 % interval':>22s}  unit"]
@@ -566,7 +581,10 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
               multiple_limit: float = MULTIPLE_CORRELATION_LIMIT,
               progress: Callable[[int], Any] | None = None,
               tolerances: Any = None) -> CalibrationResult:
-    """Calibrate a healthy unit on ``traces`` around its data sheet ``params``.
+    """Calibrate a healthy unit on ``traces`` around its data sheet ``params`` (an
+    :class:`ActuatorParams`, a dict or a TOML path; default the traces' own actuator,
+    their metadata's ``"parameters"``, else the preset: :func:`emaphm.params.resolve_params`;
+    :attr:`CalibrationResult.params_source` says which).
 
     ``free``: the parameters to estimate (default all of :data:`PARAMETERS`);
     ``sources``: a name per trace for the report; ``progress``: called with the number of
@@ -579,8 +597,8 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     than its own 95 % interval (:data:`TOLERANCE_CHECKED`): the model does not describe the
     unit (its drive's control, most often), and the parameters would absorb it.
     """
-    base = params if params is not None else siemens_1fk7060()
     traces = list(traces)
+    base, params_source = resolve_params(params, traces)
     if not traces:
         raise CalibrationError("calibration needs at least one trace of the healthy unit")
     sources = list(sources) if sources is not None else [f"trace {i + 1}" for i in range(len(traces))]
@@ -655,7 +673,8 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     return CalibrationResult(params=unit, estimates=est,
                              fixed=tuple(sel["fixed"]), correlated=tuple(sel["pairs"]),
                              weak=tuple(sel["weak"]), fit_ratio=ratios,
-                             evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits))
+                             evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits),
+                             params_source=params_source)
 
 
 def _provenance(unit: ActuatorParams, traces: Sequence[Trace], sources: Sequence[str],

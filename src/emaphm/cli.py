@@ -37,6 +37,11 @@ from .firmware import DRIVE_MODELS, FOREIGN_DRIVES
 __all__ = ["main", "build_parser", "EXIT_USAGE", "UsageError"]
 
 
+#: What --params defaults to where a trace is identified (emaphm.params.resolve_params).
+_PARAMS_DEFAULT = ("(missing fields from the preset; default: the trace's own actuator, from "
+                   "its metadata, else the preset)")
+
+
 def _load_params(path: str | None):
     from .params import load_params, siemens_1fk7060
 
@@ -310,7 +315,8 @@ def _table(ident, diag) -> str:
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .faults import scenario
-    from .identify import ALGORITHM_NAMES, IdentificationConfig
+    from .identify import IdentificationConfig, algorithm_names
+    from .params import resolve_params
     from .verdict import examine
     from .plots import plot_identification
     from .progress import SearchProgress, compile_notice
@@ -319,12 +325,13 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
     if (args.trace is None) == (args.scenario is None):
         raise UsageError("give exactly one of a TRACE file or --scenario NAME (see `emaphm scenarios`)")
-    if args.algorithm not in ALGORITHM_NAMES:
+    if args.algorithm not in algorithm_names():
         raise UsageError(f"unknown algorithm {shown(args.algorithm)}; choose one of "
-                         f"{', '.join(ALGORITHM_NAMES)}")
+                         f"{', '.join(algorithm_names())}")
     budget = budget_option(args.budget)
     plot = plot_path(args.plot)
-    params = _load_params(args.params)
+    given = _load_params(args.params) if args.params else None   # else the trace's own
+    params = given if given is not None else _load_params(None)
     progress = SearchProgress(enabled=not args.quiet,
                               header=f"identifying with {args.algorithm.upper()} (seed {args.seed})")
     if args.trace is not None:
@@ -347,6 +354,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             trace = simulate(k_true, model="reference", params=params, sensors=DEFAULT_SENSORS,
                              seed=args.seed, fault_model=sim_fault_model,
                              **unit).with_meta(scenario=args.scenario)
+    if args.trace is not None:
+        params = resolve_params(given, trace, warn=False)[0]
     if not args.quiet:
         warn_if_long("emaphm diagnose", identification_seconds(trace.duration, params,
                                                                args.algorithm, budget),
@@ -361,7 +370,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                                           nuisance=_nuisance_option(args.nuisance),
                                           **({} if args.min_rotation is None
                                              else {"min_rotation": args.min_rotation}))
-            exam = examine(trace, params=params, config=config, seed=args.seed,
+            exam = examine(trace, params=given, config=config, seed=args.seed,
                            callback=progress)
     except TraceError as exc:            # found in the trace's content: name the file
         raise UsageError(f"{args.trace}: {exc}" if args.trace else str(exc)) from None
@@ -395,23 +404,25 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from .calibration import CalibrationError, calibrate
-    from .params import save_params
+    from .params import resolve_params, save_params
     from .progress import CountProgress, compile_notice
 
     out = out_path(args.out, (".toml",), "--out", inputs=[*args.traces, args.params])
     plot = plot_path(args.plot)
-    params = _load_params(args.params)
+    given = _load_params(args.params) if args.params else None     # else the traces' own
     traces = [_trace_file(name) for name in args.traces]
+    params, source = resolve_params(given, traces, warn=False)
+    around = {"given": args.params, "trace": f"the traces' own actuator ({shown(params.name)})",
+              "preset": "the default preset"}[source]
     progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs",
-                             header=f"calibrating on {len(traces)} healthy trace(s) around "
-                                    f"{args.params or 'the default preset'}")
+                             header=f"calibrating on {len(traces)} healthy trace(s) around {around}")
     if not args.quiet:
         warn_if_long("emaphm calibrate", calibration_seconds([t.duration for t in traces], params),
                      "this calibration", "calibrate on shorter traces (one 0.5 s diagnostic "
                      "profile each is enough)")
     try:
         with compile_notice(progress, enabled=not args.quiet):
-            res = calibrate(traces, params, sources=[str(Path(n).name) for n in args.traces],
+            res = calibrate(traces, given, sources=[str(Path(n).name) for n in args.traces],
                             progress=progress.update)
     except CalibrationError as exc:
         raise UsageError(str(exc)) from None
@@ -542,7 +553,7 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     d.add_argument("--history", action="store_true", help="include the convergence history in the JSON")
     d.add_argument("--plot", help="write measured vs identified currents and convergence (.png)")
-    d.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")
+    d.add_argument("--params", help=f"actuator parameters TOML {_PARAMS_DEFAULT}")
     d.add_argument("--quiet", action="store_true", help="no progress line")
     d.add_argument("--min-rotation", type=_min_rotation, default=None, metavar="RAD",
                    help="least motor rotation range the trace must show [rad] (default 6.283, "
@@ -564,7 +575,7 @@ def build_parser() -> argparse.ArgumentParser:
                                      "of a unit known to be healthy; write its parameters.")
     cal.add_argument("traces", nargs="+", help="traces of the healthy unit (.csv or .parquet)")
     cal.add_argument("--out", required=True, help="calibrated parameters, .toml")
-    cal.add_argument("--params", help="data-sheet parameters TOML (default: the preset)")
+    cal.add_argument("--params", help=f"data-sheet parameters TOML {_PARAMS_DEFAULT}")
     cal.add_argument("--json", action="store_true", help="print one JSON object on stdout")
     cal.add_argument("--plot", help="measured vs calibrated currents of the first trace (.png)")
     cal.add_argument("--quiet", action="store_true")
@@ -598,18 +609,21 @@ def trace_warnings_as_lines(cmd: str):
     written), a :class:`~emaphm.params.CalibrationWarning` (a parameter file's
     calibration not as ``emaphm calibrate`` wrote it) or a
     :class:`~emaphm.params.PlausibilityWarning` (a parameter near the edge of what servo
-    actuators have) is printed as one line on stderr, ``CMD: warning: ...``; other
+    actuators have) or an :class:`~emaphm.params.ActuatorMismatchWarning` (parameters given
+    for a trace of another actuator, once) is printed as one line on stderr, ``CMD: warning: ...``; other
     warnings as Python prints them."""
-    from .params import CalibrationWarning, PlausibilityWarning
+    from .params import ActuatorMismatchWarning, CalibrationWarning, PlausibilityWarning
     from .traces import TraceWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("always", TraceWarning)
         warnings.simplefilter("always", PlausibilityWarning)
+        warnings.simplefilter("once", ActuatorMismatchWarning)
         original = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if issubclass(category, (TraceWarning, CalibrationWarning, PlausibilityWarning)):
+            if issubclass(category, (TraceWarning, CalibrationWarning, PlausibilityWarning,
+                                     ActuatorMismatchWarning)):
                 print(f"{cmd}: warning: {one_line(str(message))}", file=sys.stderr)
             else:
                 original(message, category, filename, lineno, file, line)

@@ -91,6 +91,10 @@ class Nameplate:
 
     @classmethod
     def from_dict(cls, data: dict, source: str = "nameplate") -> "Nameplate":
+        """A nameplate from a file's tables (``{"datasheet": {...}}``) or from the
+        ``[datasheet]`` table itself (``{"poles": 10, "ke": "30 V/krpm", ...}``)."""
+        if isinstance(data, dict) and "datasheet" not in data and set(data) & set(_REQUIRED):
+            data = {"datasheet": data}
         table = data.get("datasheet") if isinstance(data, dict) else None
         if not isinstance(table, dict):
             raise ParameterError(f"{source}: no [datasheet] table; write the motor's catalogue "

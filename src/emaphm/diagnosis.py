@@ -80,6 +80,10 @@ class MismatchFit:
                 "nuisance": {n: float(v) for n, v in self.nuisance.items()},
                 "fit_ratio": None if self.fit_ratio is None else float(self.fit_ratio)}
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "MismatchFit":
+        return cls(np.asarray(data["k"], dtype=float), dict(data["nuisance"]), data.get("fit_ratio"))
+
 
 @dataclass(frozen=True)
 class Refit:
@@ -97,6 +101,11 @@ class Refit:
         return {"mode": self.mode, "k": [float(x) for x in self.k],
                 "nuisance": {n: float(v) for n, v in self.nuisance.items()},
                 "fit_ratio": None if self.fit_ratio is None else float(self.fit_ratio)}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Refit":
+        return cls(data["mode"], np.asarray(data["k"], dtype=float), dict(data["nuisance"]),
+                   data.get("fit_ratio"))
 
 
 @dataclass(frozen=True)
@@ -137,6 +146,8 @@ class Diagnosis:
         return tuple(f.mode for f in self.faults)
 
     def to_dict(self) -> dict[str, Any]:
+        """As data; the k read is ``k_read`` (beside an identification's ``k`` in the
+        command line's JSON, it differs from it where a hypothesis' refit was read)."""
         return {"verdict": self.verdict, "healthy": self.healthy,
                 "faults": [f.to_dict() for f in self.faults],
                 "unexplained": None if self.unexplained is None else asdict(self.unexplained),
@@ -144,7 +155,32 @@ class Diagnosis:
                 "thresholds": asdict(self.thresholds), "fault_model": self.fault_model,
                 "mismatch_check": None if self.mismatch is None else self.mismatch.to_dict(),
                 "hypothesis_check": None if self.refit is None else self.refit.to_dict(),
-                "notes": list(self.notes)}
+                "notes": list(self.notes), "k_read": [float(x) for x in self.k]}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Diagnosis":
+        """The diagnosis :meth:`to_dict` wrote (extra keys, such as an identification's in
+        the command line's JSON, are ignored)."""
+        u, m, r = data.get("unexplained"), data.get("mismatch_check"), data.get("hypothesis_check")
+        return cls(k=np.asarray(data["k_read"], dtype=float),
+                   faults=tuple(Fault.from_dict(f) for f in data["faults"]),
+                   thresholds=Thresholds(**data["thresholds"]), fault_model=data["fault_model"],
+                   unexplained=None if u is None else Unexplained(**u),
+                   suspected=tuple(Fault.from_dict(f) for f in data.get("suspected", ())),
+                   mismatch=None if m is None else MismatchFit.from_dict(m),
+                   notes=tuple(data.get("notes", ())),
+                   refit=None if r is None else Refit.from_dict(r))
+
+    def to_frame(self) -> Any:
+        """The faults named (and, for an unexplained verdict, those suspected) as a
+        :class:`pandas.DataFrame`, one row each (``suspected`` says which)."""
+        from .frames import require_pandas
+
+        pd = require_pandas("Diagnosis.to_frame")
+        rows = [{**f.to_dict(), "suspected": False} for f in self.faults]
+        rows += [{**f.to_dict(), "suspected": True} for f in self.suspected]
+        cols = ["mode", "component", "k", "severity", "reading", "phase", "suspected"]
+        return pd.DataFrame(rows, columns=list(dict.fromkeys(cols + [c for r in rows for c in r])))
 
     def summary(self) -> str:
         if self.unexplained is not None:

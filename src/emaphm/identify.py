@@ -34,16 +34,19 @@ from .fitness import FITNESS_MODES, misfit_limit
 from .optim import (ALL_ALGORITHMS, MaxEvaluations, Optimizer, Termination, WallClock,
                     get_optimizer)
 from .optim.lsq import MultistartLeastSquares
+from .optim.registry import Renamed, lookup, registered, registered_kind
 from .optim.solvers import CallableSolver, Metaheuristic, Solver, optimizer_options, solve
 from .params import ActuatorParams
 from .recorded import DRIVE_MODELS
 from .problem import (DRIFT_NUISANCE, LSQ_SAMPLE, LSQ_SINGLE_FAULT_LEVELS,
-                      IdentificationProblem, default_nuisance, single_fault_points)
+                      IdentificationProblem, default_nuisance, error_all_pct,
+                      single_fault_points)
 from .seeds import check_seed
 from .search import NUISANCE_RANGE, SEARCH_SPACES, default_search, least_squares_search
 from .traces import Trace, TraceError
 
 __all__ = ["Identification", "IdentificationConfig", "identify", "minimize", "make_solver",
+           "algorithm_names", "algorithm_name",
            "parse_budget", "DEFAULT_ALGORITHM", "ALGORITHM_NAMES", "DRIFT_NUISANCE",
            "default_nuisance", "single_fault_points", "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS",
            "LSQ_RESTARTS", "LSQ_ACCEPT_P", "DEFAULT_RESTARTS", "POLISH_MAX_EVALUATIONS",
@@ -57,6 +60,25 @@ DEFAULT_ALGORITHM = "lsq"
 #: Every name :func:`make_solver` accepts: the default pipeline and the optimizers of
 #: :data:`emaphm.optim.ALL_ALGORITHMS`.
 ALGORITHM_NAMES: tuple[str, ...] = (DEFAULT_ALGORITHM, *sorted(ALL_ALGORITHMS))
+
+def algorithm_names() -> tuple[str, ...]:
+    """Every name :func:`make_solver` accepts now: :data:`ALGORITHM_NAMES` and the names
+    registered in this process (:func:`emaphm.optim.register`)."""
+    return ALGORITHM_NAMES + tuple(sorted(registered()))
+
+
+def algorithm_name(algorithm: Any) -> str:
+    """The name of an algorithm given as a name or as a registered object (its registered
+    name); a TypeError that says how to register anything else."""
+    if isinstance(algorithm, str):
+        return algorithm
+    for name, obj in registered().items():
+        if obj is algorithm:
+            return name
+    raise TypeError(f"an algorithm here is a name ({', '.join(algorithm_names())}); register "
+                    f"your {type(algorithm).__name__} first, emaphm.optim.register('mine', obj), "
+                    "and give 'mine'")
+
 
 #: Further starts the least-squares solver may take after the first.
 LSQ_RESTARTS = 3
@@ -88,14 +110,22 @@ MAX_BUDGET_SECONDS = 86_400.0
 
 
 def parse_budget(budget: Any) -> Termination | None:
-    """A termination from a budget: ``None`` (the algorithm's paper default), an
-    int (objective evaluations), a string ``"5000"`` / ``"5000evals"`` /
-    ``"30s"`` (wall-clock seconds), or a :class:`emaphm.optim.Termination`. At most
-    :data:`MAX_BUDGET_EVALUATIONS` evaluations or :data:`MAX_BUDGET_SECONDS` seconds."""
+    """A termination from a budget, the one convention of emaphm: ``None`` (the algorithm's
+    own stopping rule), an int (objective evaluations), a float (wall-clock seconds), a
+    string ``"5000"`` / ``"5000evals"`` (evaluations) or ``"30s"`` (seconds), or a
+    :class:`emaphm.optim.Termination`. At most :data:`MAX_BUDGET_EVALUATIONS` evaluations
+    or :data:`MAX_BUDGET_SECONDS` seconds."""
     if budget is None:
         return None
     if isinstance(budget, bool):
         raise ValueError(f"budget must be a number of evaluations or seconds, got {budget!r}")
+    if isinstance(budget, (float, np.floating)):
+        if not (math.isfinite(budget) and budget > 0):
+            raise ValueError(f"a budget in seconds (a float) must be positive, got {budget!r}")
+        if budget > MAX_BUDGET_SECONDS:
+            raise ValueError(f"budget {budget!r} s is above a day ({MAX_BUDGET_SECONDS:g} s); "
+                             "give at most 86400.0 (a float is seconds, an int evaluations)")
+        return WallClock(float(budget))
     if isinstance(budget, (int, np.integer)):
         if budget <= 0:
             raise ValueError(f"budget must be a positive number of evaluations, got {budget}")
@@ -150,7 +180,16 @@ class Identification:
     what stood in for the drive's controller (:data:`emaphm.recorded.DRIVE_MODELS`), and
     ``not_observable`` the fault modes that path cannot see (their components of k are
     reported healthy, not measured); ``at_bounds``: the parameters searched beside k whose
-    fit ended at an end of their range (the unit is further off than the range allows).
+    fit ended at an end of their range (the unit is further off than the range allows);
+    ``params_source``: where the healthy actuator's parameters came from
+    (:data:`emaphm.params.PARAMS_SOURCES`: given, a history's calibration, the trace's own,
+    the preset) and ``params`` those parameters; ``skipped``: what the solver promises and
+    did not make, with the reason (``{"polish": ..., "restarts": ...}``: a budget too small
+    for the polish, a fit far above the noise floor with no restart left);
+    ``nuisance_true``: the true values of parameters beside k of a simulated trace's
+    injected faults (``{"demag": -0.3}``: :func:`emaphm.problem.true_nuisance`), and
+    ``error_all_pct`` Eq. 9 extended to them (:func:`emaphm.problem.error_all_pct`: a
+    parameter not searched counts as nominal), where the trace has its truth.
     """
 
     algorithm: str
@@ -185,6 +224,26 @@ class Identification:
     drive_model: str = "modelled controller"
     not_observable: tuple[str, ...] = ()
     at_bounds: tuple[str, ...] = ()
+    params_source: str = "preset"
+    params: ActuatorParams | None = field(default=None, compare=False, repr=False)
+    skipped: dict = field(default_factory=dict)
+    nuisance_true: dict = field(default_factory=dict)
+    error_all_pct: float | None = None
+
+    @property
+    def nfev(self) -> int:
+        """:attr:`evaluations`, by the name of the optimizers' states and SciPy's results."""
+        return self.evaluations
+
+    @property
+    def nit(self) -> int:
+        """:attr:`iterations`, by the name of the optimizers' states and SciPy's results."""
+        return self.iterations
+
+    @property
+    def best_f(self) -> float:
+        """:attr:`fitness`, by the name of a callback's state."""
+        return self.fitness
 
     @property
     def evals_per_s(self) -> float:
@@ -222,12 +281,52 @@ class Identification:
             "drive_model": self.drive_model,
             "not_observable": list(self.not_observable),
             "at_bounds": list(self.at_bounds),
+            "params_source": self.params_source,
+            "skipped": dict(self.skipped),
+            "nuisance_true": dict(self.nuisance_true),
+            "error_all_pct": self.error_all_pct,
+            "parameters": None if self.params is None else self.params.to_dict(),
         }
+        d["config"] = None if self.config is None else self.config.to_dict()
         if self.k_true is not None:
             d["k_true"] = [float(x) for x in self.k_true]
             d["error_pct"] = float(self.error_pct)
             d["error_pct_raw"] = self.error_pct_raw
         return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Identification":
+        """The identification :meth:`to_dict` wrote (``model_trace``, a trace, is not in it:
+        None here); ``from_dict(x.to_dict()).to_dict() == x.to_dict()``."""
+        d = dict(data)
+        arr = (lambda v: None if v is None else np.asarray(v, dtype=float))
+        params = d.get("parameters")
+        config = d.get("config")
+        return cls(
+            algorithm=d["algorithm"], seed=d["seed"], k=arr(d["k"]), fitness=float(d["fitness"]),
+            evaluations=int(d["evaluations"]), iterations=int(d["iterations"]),
+            elapsed_s=float(d["elapsed_s"]), kernel_s=float(d["kernel_s"]),
+            history=arr(d["history"]), reason=d["reason"], model_trace=None,
+            k_true=arr(d.get("k_true")), error_pct=d.get("error_pct"),
+            diverged=int(d.get("diverged", 0)), options=dict(d.get("options") or {}),
+            k_raw=arr(d.get("k_raw")), fitness_raw=d.get("fitness_raw"),
+            error_pct_raw=d.get("error_pct_raw"),
+            polish_evaluations=int(d.get("polish_evaluations", 0)),
+            polish_s=float(d.get("polish_s", 0.0)), restarts=int(d.get("restarts", 0)),
+            noise_floor=float(d.get("noise_floor", 0.0)), suspect=bool(d.get("suspect", False)),
+            run_evaluations=int(d.get("run_evaluations", 0)),
+            fault_model=d.get("fault_model", "paper"), compile_s=float(d.get("compile_s", 0.0)),
+            nuisance=dict(d.get("nuisance") or {}),
+            config=None if config is None else IdentificationConfig.from_dict(config),
+            noise_sigma=float(d.get("noise_sigma", float("nan"))),
+            drive_model=d.get("drive_model", "modelled controller"),
+            not_observable=tuple(d.get("not_observable") or ()),
+            at_bounds=tuple(d.get("at_bounds") or ()),
+            params_source=d.get("params_source", "preset"),
+            params=None if params is None else ActuatorParams.from_dict(params,
+                                                                        source="identification"),
+            skipped=dict(d.get("skipped") or {}),
+            nuisance_true=dict(d.get("nuisance_true") or {}), error_all_pct=d.get("error_all_pct"))
 
 
 
@@ -257,8 +356,9 @@ def make_solver(name: str, *, options: Mapping[str, Any] | None = None, polish: 
     least-squares start is worth it. ``budget``: whether a budget caps the search (then
     the metaheuristics restart by default no more).
     """
-    if name not in ALGORITHM_NAMES:
-        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(ALGORITHM_NAMES)}")
+    if name not in algorithm_names():
+        raise ValueError(f"unknown algorithm {name!r}; choose one of {', '.join(algorithm_names())}"
+                         " (or register your own: emaphm.optim.register)")
     if restarts is not None and (isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer))
                                  or restarts < 0):
         raise ValueError(f"restarts must be an integer >= 0, got {restarts!r}")
@@ -274,17 +374,35 @@ def make_solver(name: str, *, options: Mapping[str, Any] | None = None, polish: 
             restarts=LSQ_RESTARTS if restarts is None else int(restarts),
             accept_ratio=misfit_limit(LSQ_ACCEPT_P), settle_ratio=float(suspect_ratio),
             polish_evaluations=POLISH_LSQ_EVALUATIONS if polish else 0)
+    kind = registered_kind(name)
+    if kind in ("function", "solver") and options:
+        raise ValueError(f"{name!r} (a registered {kind}) takes no options, got {dict(options)}")
+    if kind == "function":
+        return _callable(lookup(name), name, polish, restarts, float(suspect_ratio), budget)
+    if kind == "solver":
+        return Renamed(lookup(name), name)
     optimizer = get_optimizer(name, **dict(options or {}))
-    return _metaheuristic(optimizer, polish, restarts, suspect_ratio, budget)
+    return _metaheuristic(optimizer, polish, restarts, suspect_ratio, budget,
+                          label=name if kind is not None else "")
 
 
 def _metaheuristic(optimizer: Any, polish: bool, restarts: int | None, suspect_ratio: float,
-                   budget: bool) -> Metaheuristic:
+                   budget: bool, label: str = "") -> Metaheuristic:
     if restarts is None:          # none under a budget (a cap) or for the bare algorithm
         restarts = DEFAULT_RESTARTS if not budget and polish else 0
     return Metaheuristic(optimizer, polish=bool(polish), restarts=int(restarts),
                          restart_ratio=float(suspect_ratio),
-                         polish_evaluations=POLISH_MAX_EVALUATIONS)
+                         polish_evaluations=POLISH_MAX_EVALUATIONS, label=label)
+
+
+def _callable(fn: Any, name: str, polish: bool, restarts: int | None, suspect_ratio: float,
+              budget: bool) -> CallableSolver:
+    """A plain function polished and restarted as the metaheuristics are."""
+    if restarts is None:
+        restarts = DEFAULT_RESTARTS if not budget and polish else 0
+    return CallableSolver(fn, name=name, polish=bool(polish), restarts=int(restarts),
+                          restart_ratio=float(suspect_ratio),
+                          polish_evaluations=POLISH_MAX_EVALUATIONS)
 
 
 def as_solver(solver: Any, *, budget: bool = False) -> Solver:
@@ -294,13 +412,16 @@ def as_solver(solver: Any, *, budget: bool = False) -> Solver:
     (:class:`~emaphm.optim.solvers.CallableSolver`)."""
     if isinstance(solver, str):
         return make_solver(solver, budget=budget)
+    own = next((n for n, obj in registered().items() if obj is solver), None)
+    if own is not None:                    # a registered object goes by its name
+        return make_solver(own, budget=budget)
     if all(hasattr(solver, m) for m in ("init", "step", "result")):
         return solver
     if isinstance(solver, Optimizer):
         return _metaheuristic(solver, True, None, misfit_limit(), budget)
     if callable(solver):
-        return CallableSolver(solver)
-    raise ValueError(f"solver must be a name ({', '.join(ALGORITHM_NAMES)}), a solver, an ask/tell "
+        return _callable(solver, "", True, None, misfit_limit(), budget)
+    raise ValueError(f"solver must be a name ({', '.join(algorithm_names())}), a solver, an ask/tell "
                      f"optimizer or a function f(objective, bounds, rng) -> x; got "
                      f"{type(solver).__name__}")
 
@@ -309,6 +430,8 @@ def _solver_settings(solver: Solver) -> tuple[dict, bool]:
     """``(options, polish)`` of a solver as :attr:`Identification.options` reports them."""
     if isinstance(solver, Metaheuristic):
         return optimizer_options(solver.optimizer), solver.polish
+    if isinstance(solver, CallableSolver):
+        return {}, solver.polish
     if isinstance(solver, MultistartLeastSquares):
         return {}, solver.polish_evaluations > 0
     return {}, False
@@ -329,7 +452,9 @@ class IdentificationConfig:
     ==============  ========================================================================
     field           meaning
     ==============  ========================================================================
-    algorithm       a name of :data:`ALGORITHM_NAMES` (:func:`make_solver`)
+    algorithm       a name of :func:`algorithm_names` (:func:`make_solver`): a built-in
+                    one or one registered (:func:`emaphm.optim.register`; the registered
+                    object itself is taken by its name)
     options         the optimizer's settings (e.g. ``{"pop_size": 30}``); none for ``lsq``
     budget          evaluations (int), wall-clock seconds (``"30s"``) or None (the
                     algorithm's own stopping rule), :func:`parse_budget`
@@ -365,6 +490,7 @@ class IdentificationConfig:
     drive_model: str | None = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "algorithm", algorithm_name(self.algorithm))
         object.__setattr__(self, "options", dict(_jsonable(dict(self.options or {}))))
         if self.drive_model is not None and self.drive_model not in DRIVE_MODELS:
             raise ValueError(f"unknown drive model {self.drive_model!r}; choose one of "
@@ -414,6 +540,7 @@ class IdentificationConfig:
         d["options"] = dict(self.options)
         d["nuisance"] = None if self.nuisance is None else list(self.nuisance)
         d["budget"] = self.budget if self.budget is None or isinstance(self.budget, (int, str)) \
+            else float(self.budget) if isinstance(self.budget, (float, np.floating)) \
             else str(self.budget)
         return d
 
@@ -492,7 +619,11 @@ def minimize(problem: IdentificationProblem, solver: Any = DEFAULT_ALGORITHM,
         run_evaluations=int(res.run_evaluations), noise_sigma=problem.noise_sigma,
         config=_config_of(problem, solver, budget, options, polish),
         drive_model=problem.drive_model, not_observable=problem.not_observable,
-        at_bounds=_at_bounds(problem.nuisance, nu))
+        at_bounds=_at_bounds(problem.nuisance, nu), params_source=problem.params_source,
+        params=problem.params, skipped=dict(getattr(res, "skipped", None) or {}),
+        nuisance_true=problem.nuisance_true,
+        error_all_pct=None if k_true is None else error_all_pct(
+            k, k_true, dict(zip(problem.nuisance, nu)), problem.nuisance_true))
 
 
 #: A parameter searched beside k within this share of its range from an end sits at it.
@@ -512,15 +643,32 @@ def _at_bounds(names: tuple[str, ...], values: Any) -> tuple[str, ...]:
     return tuple(out)
 
 
+def _named(solver: Solver) -> bool:
+    """Whether ``solver`` is what its name builds: a built-in name, or a name registered to
+    the solver's own function, optimizer (or its class) or solver."""
+    name = solver.name
+    if name in ALGORITHM_NAMES:
+        return not (isinstance(solver, Metaheuristic) and solver.label)
+    kind = registered_kind(name)
+    if kind is None:
+        return False
+    obj = lookup(name)
+    if isinstance(solver, CallableSolver):
+        return solver.fn is obj
+    if isinstance(solver, Metaheuristic):
+        return solver.optimizer is obj or type(solver.optimizer) is obj
+    return isinstance(solver, Renamed) and solver.solver is obj
+
+
 def _config_of(problem: IdentificationProblem, solver: Solver, budget: Any, options: dict,
                polish: bool) -> IdentificationConfig | None:
     """The settings an identification was made with (None for a solver without a name of
     :data:`ALGORITHM_NAMES`); the restarts and the suspect ratio as resolved."""
-    if solver.name not in ALGORITHM_NAMES:
+    if not _named(solver):
         return None
     return IdentificationConfig(
         algorithm=solver.name, options=options,
-        budget=budget if budget is None or isinstance(budget, (int, np.integer, str)) else None,
+        budget=budget if budget is None or isinstance(budget, (int, np.integer, str, float)) else None,
         polish=polish, restarts=getattr(solver, "restarts", None),
         suspect_ratio=getattr(solver, "settle_ratio", getattr(solver, "restart_ratio", None)),
         search=problem.search, n_sub=problem.n_sub, mode=problem.mode,
@@ -538,11 +686,11 @@ _OLD_KEYWORDS = {"budget": "termination", "options": "config", "polish": "config
                  "start": "problem", "objective": "problem"}
 
 
-def identify(trace: Trace | IdentificationProblem, solver: Any = DEFAULT_ALGORITHM, *,
-             seed: int, termination: Any = None, params: ActuatorParams | None = None,
+def identify(trace: Trace | IdentificationProblem | list, solver: Any = DEFAULT_ALGORITHM, *,
+             seed: int, termination: Any = None, params: Any = None,
              fault_model: str | None = None,
-             callback: Callable[[Any], bool | None] | None = None,
-             **deprecated: Any) -> Identification:
+             callback: Callable[[Any], bool | None] | None = None, workers: int | None = None,
+             **deprecated: Any) -> Identification | list[Identification]:
     """Identify the fault vector of a trace (see :func:`minimize`).
 
     ``trace`` is a :class:`~emaphm.traces.Trace` (its problem is built with ``params``,
@@ -554,11 +702,27 @@ def identify(trace: Trace | IdentificationProblem, solver: Any = DEFAULT_ALGORIT
     ``termination``: a budget or a termination (:func:`parse_budget`). ``seed``: an int,
     required (same seed, same result). ``callback(state)``: progress; True stops.
 
+    ``params``: an :class:`~emaphm.params.ActuatorParams`, a dict or a TOML path (default:
+    the trace's own, else the preset; :func:`emaphm.params.resolve_params`).
+
+    A list of traces is a batch (:func:`emaphm.batch.identify_many`): each identified as
+    this call would identify it alone, on ``workers`` processes (None, 0 or 1: here, one
+    after the other); the identifications come back in the order of the traces.
+
     The keywords of version 0.3 (``budget``, ``options``, ``polish``, ``restarts``,
     ``suspect_ratio``, ``n_sub``, ``mode``, ``search``, ``nuisance``, ``start``,
     ``objective``) still work for one release, with a DeprecationWarning.
     """
     seed = check_seed(seed)
+    if isinstance(trace, (list, tuple)):
+        from .batch import identify_many
+
+        return identify_many(trace, solver, workers=workers, seed=seed, termination=termination,
+                             params=params, fault_model=fault_model, callback=callback,
+                             **deprecated)
+    if workers is not None and workers > 1:
+        raise ValueError("workers= shares a list of traces among processes; give a list of "
+                         "traces, or drop workers")
     if isinstance(trace, IdentificationProblem) and (params is not None or fault_model is not None):
         raise ValueError("give params and fault_model to the IdentificationProblem, not beside it")
     if deprecated:

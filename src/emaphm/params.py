@@ -107,6 +107,11 @@ __all__ = [
     "check_plausible",
     "PlausibilityWarning",
     "PLAUSIBLE",
+    "PARAMS_SOURCES",
+    "ActuatorMismatchWarning",
+    "as_params",
+    "trace_params",
+    "resolve_params",
 ]
 
 
@@ -1128,3 +1133,83 @@ def save_params(params: ActuatorParams, path: str | os.PathLike[str]) -> Path:
     from ._files import atomic_write_text
 
     return atomic_write_text(p, text)
+
+
+# ----------------------------------------------------------------------------- which actuator
+
+#: Where the parameters an identification used came from, in the order they are looked
+#: for (:func:`resolve_params`): given by the caller, a health history's calibration of
+#: the unit, the trace's own metadata (the actuator it was simulated or recorded on), the
+#: preset (:func:`siemens_1fk7060`).
+PARAMS_SOURCES = ("given", "calibration", "trace", "preset")
+
+
+class ActuatorMismatchWarning(UserWarning):
+    """Parameters given for a trace that names another actuator (another name) in its
+    metadata; a calibration of the trace's own actuator does not warn. The command line
+    prints it as one line."""
+
+
+def as_params(value: Any, *, what: str = "params") -> "ActuatorParams | None":
+    """Parameters from what the API accepts everywhere: an :class:`ActuatorParams`, a
+    mapping (:meth:`ActuatorParams.to_dict`'s form; sections left out are the preset's,
+    as a file given to ``--params``) or the path of a TOML file (:func:`load_params`,
+    ``partial=True``); None stays None. Anything else is a :class:`TypeError` that names
+    ``what``."""
+    if value is None or isinstance(value, ActuatorParams):
+        return value
+    if isinstance(value, dict) or (hasattr(value, "keys") and hasattr(value, "__getitem__")
+                                   and not isinstance(value, (str, bytes))):
+        return ActuatorParams.from_dict(dict(value), source=what, defaults=siemens_1fk7060())
+    if isinstance(value, (str, os.PathLike)):
+        return load_params(value, partial=True)
+    raise TypeError(f"{what} must be an ActuatorParams, a dict of its sections or the path of a "
+                    f"TOML parameter file, got {type(value).__name__}")
+
+
+def trace_params(trace: Any) -> "ActuatorParams | None":
+    """The actuator a trace names in its metadata (``meta["parameters"]``, written by
+    :func:`emaphm.simulate.simulate`), or None where it names none. Metadata that do not
+    read as parameters are a :class:`ParameterError` that says so."""
+    meta = getattr(trace, "meta", trace)
+    data = meta.get("parameters") if isinstance(meta, dict) else None
+    if data is None:
+        return None
+    try:
+        return ActuatorParams.from_dict(data, source="the trace's metadata \"parameters\"")
+    except (ParameterError, TypeError, ValueError) as exc:
+        raise ParameterError(f"{exc}; give the actuator's parameters (params=, --params), or "
+                             "remove \"parameters\" from the trace's metadata") from None
+
+
+def resolve_params(params: Any, trace: Any = None, *,
+                   warn: bool = True) -> "tuple[ActuatorParams, str]":
+    """``(parameters, source)``: the actuator a trace is identified or diagnosed on, and
+    where it came from (:data:`PARAMS_SOURCES`).
+
+    ``params`` given (an :class:`ActuatorParams`, a dict or a TOML path, :func:`as_params`)
+    wins (``"given"``); a health history's calibration of the unit is given the same way
+    by :func:`emaphm.prognosis.record_inspection`, which reports ``"calibration"``; else
+    the trace's own (:func:`trace_params`, ``"trace"``); else the preset (``"preset"``).
+    ``trace`` may be a list of traces: their own actuators must then agree. With ``warn``,
+    parameters given for a trace that names another actuator (another ``name``) warn
+    (:class:`ActuatorMismatchWarning`); a calibration of the trace's own actuator, or a
+    variant of it, keeps its name and does not.
+    """
+    traces = list(trace) if isinstance(trace, (list, tuple)) else [trace]
+    owns = [trace_params(t) for t in traces if t is not None]
+    own = next((p for p in owns if p is not None), None)
+    if any(p is not None and p != own for p in owns):
+        raise ValueError("the traces name different actuators in their metadata; give the "
+                         "parameters of the one they were recorded on (params=, --params)")
+    given = as_params(params)
+    if given is None:
+        return (own, "trace") if own is not None else (siemens_1fk7060(), "preset")
+    if warn and own is not None and given.name != own.name:
+        import warnings
+
+        warnings.warn(f"the trace names the actuator {shown(own.name)} in its metadata, and "
+                      f"other parameters ({shown(given.name)}) were given: the monitoring "
+                      "model uses the given ones; leave params (--params) out to use the "
+                      "trace's own", ActuatorMismatchWarning, stacklevel=2)
+    return given, "given"

@@ -28,17 +28,19 @@ from typing import Any
 import numpy as np
 
 from .diagnosis import diagnose
-from .faults import K_NOMINAL, N_K, as_k, loop_report, shorted_fraction
+from .faults import K_NOMINAL, N_K, as_k, error_pct, loop_report, shorted_fraction
 from .fitness import Eq4Objective
-from .params import ActuatorParams
+from .logs import announce_compiles
+from .params import PARAMS_SOURCES, ActuatorParams, resolve_params
 from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
                        drive_model_of)
-from .search import (SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_start,
+from .search import (NUISANCE_RANGE, SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_start,
                      nuisance_to_box, to_k)
 from .traces import Trace, validate
 
 __all__ = ["IdentificationProblem", "SearchView", "apply_extra", "DRIFT_NUISANCE", "default_nuisance",
-           "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS", "single_fault_points", "true_k"]
+           "LSQ_SAMPLE", "LSQ_SINGLE_FAULT_LEVELS", "single_fault_points", "true_k",
+           "true_nuisance", "error_all_pct"]
 
 #: Nuisance parameters searched with k by default for a calibrated unit: what drifts most
 #: after a calibration (winding resistance and magnet flux, with temperature).
@@ -89,6 +91,31 @@ def true_k(trace: Trace) -> np.ndarray | None:
         return None
 
 
+def true_nuisance(trace: Trace) -> dict[str, float]:
+    """The true values of the parameters searched beside k that a simulated trace's injected
+    faults carry (its metadata's ``truth``, :func:`emaphm.simulate.simulate`); empty for a
+    bench trace or one without such faults."""
+    truth = trace.meta.get("truth") if isinstance(trace.meta, dict) else None
+    if not isinstance(truth, dict):
+        return {}
+    return {str(n): float(v) for n, v in truth.items() if n in NUISANCE_RANGE}
+
+
+def error_all_pct(k: Any, k_true: Any, nuisance: Any, truth: Any) -> float:
+    """Eq. 9 extended to the parameters searched beside k: the true ones (``truth``, by
+    name) against the values found (``nuisance``; 0, nominal, where one was not searched),
+    each difference in units of its range (:data:`emaphm.search.NUISANCE_RANGE`, as k's
+    components are in units of [0, 1]). Eq. 9 itself where ``truth`` is empty:
+    ``100 / sqrt(6.5 + m) sqrt(S_9 + sum_j ((nu_j - nu_j,true) / w_j)^2)`` with ``S_9``
+    Eq. 9's sum of squares and ``m`` the parameters of ``truth``."""
+    truth = dict(truth or {})
+    found = dict(nuisance or {})
+    s9 = (error_pct(k, k_true) * math.sqrt(6.5) / 100.0) ** 2
+    extra = sum(((found.get(n, 0.0) - v) / (NUISANCE_RANGE[n][1] - NUISANCE_RANGE[n][0])) ** 2
+                for n, v in truth.items())
+    return 100.0 / math.sqrt(6.5 + len(truth)) * math.sqrt(s9 + extra)
+
+
 def _sobol(d: int, seed: int):
     """SciPy's scrambled Sobol engine seeded by ``seed`` (``rng=`` where SciPy has it, the
     same stream as the older ``seed=``)."""
@@ -107,8 +134,12 @@ class IdentificationProblem:
     field         meaning
     ============  ===================================================================
     trace         the measured (or simulated) trace; validated on construction
-    params        the healthy actuator the monitoring model assumes (default: the
-                  preset, :func:`emaphm.params.siemens_1fk7060`)
+    params        the healthy actuator the monitoring model assumes: an
+                  :class:`~emaphm.params.ActuatorParams`, a dict or a TOML path; default
+                  the trace's own (its metadata's ``"parameters"``), else the preset
+                  (:func:`emaphm.params.resolve_params`)
+    params_source where ``params`` came from (:data:`emaphm.params.PARAMS_SOURCES`);
+                  resolved on construction (``"given"`` for parameters given)
     fault_model   what k3..k5 mean (:data:`emaphm.faults.FAULT_MODELS`); default the
                   trace's own (:func:`emaphm.fitness.trace_fault_model`)
     nuisance      parameters searched beside k (:data:`emaphm.search.NUISANCE_RANGE`);
@@ -127,8 +158,11 @@ class IdentificationProblem:
                   it has them, else the modelled controller)
     ============  ===================================================================
 
-    After construction ``params``, ``fault_model``, ``nuisance`` and ``drive_model`` hold
-    the resolved values.
+    After construction ``params``, ``params_source``, ``fault_model``, ``nuisance`` and
+    ``drive_model`` hold the resolved values. Parameters given for a trace that names
+    another actuator warn (:class:`~emaphm.params.ActuatorMismatchWarning`) when the
+    problem is first built (a variant made with :func:`dataclasses.replace` keeps the
+    source and does not warn again).
     """
 
     trace: Trace
@@ -142,8 +176,15 @@ class IdentificationProblem:
     min_rotation: float = 2 * math.pi
     objective: Any = field(default=None, repr=False)
     drive_model: str | None = None
+    params_source: str | None = None
 
     def __post_init__(self) -> None:
+        if self.params_source is not None and self.params_source not in PARAMS_SOURCES:
+            raise ValueError(f"params_source must be one of {', '.join(PARAMS_SOURCES)}, got "
+                             f"{self.params_source!r}")
+        params, source = resolve_params(self.params, self.trace, warn=self.params_source is None)
+        object.__setattr__(self, "params", params)
+        object.__setattr__(self, "params_source", self.params_source or source)
         if self.search is not None and self.search not in SEARCH_SPACES:
             raise ValueError(f"unknown search space {self.search!r}; choose one of "
                              f"{', '.join(SEARCH_SPACES)}")
@@ -224,11 +265,18 @@ class IdentificationProblem:
         """The true k of a simulated trace (:func:`true_k`)."""
         return true_k(self.trace)
 
+    @property
+    def nuisance_true(self) -> dict[str, float]:
+        """The true values of parameters beside k of a simulated trace's injected faults
+        (:func:`true_nuisance`)."""
+        return true_nuisance(self.trace)
+
     def warm_up(self) -> float:
         """Compile (or load from the disk cache) the model kernels by running the model
         once, the first time only; returns the seconds it took (0 once warm)."""
         if self._warm:
             return 0.0
+        announce_compiles()
         t0 = time.perf_counter()
         model = self.objective.model
         model.simulate(K_NOMINAL)                                       # the scalar kernel

@@ -9,10 +9,9 @@ import numpy as np
 
 from . import __version__
 from .acquisition import Sensors
+from .logs import announce_compiles
 from .faults import (as_k, check_fault_model, loop_report, scenario as scenario_k,
                      scenario_fault_model, shorted_fraction)
-from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
-from .models.reference import run_reference
 from .params import ActuatorParams, siemens_1fk7060
 from .profiles import Profile, diagnostic
 from .modes import Injection, parse_fault
@@ -84,7 +83,9 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
         (:func:`emaphm.modes.parse_fault`: ``"friction:2.5"``,
         ``"short_circuit:a:0.3:0.05"``) or their :class:`~emaphm.modes.Injection`: the
         components of k they set, what they change in the plant, a faulty current sensor
-        of the recording chain.
+        of the recording chain. The trace's metadata keeps them as data (``injected``:
+        each one's spec, components of k and sensor) and ``truth``: the true values of the
+        parameters an identification may search beside k (``{"demag": -0.3}``).
     drive_signals
         Reference model only: the trace also carries what the plant's drive logs
         (:attr:`emaphm.traces.Trace.drive`): the phase voltages it applied in each control
@@ -102,6 +103,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     if (drive_signals or drive not in (None, "emaphm")) and model != "reference":
         raise ValueError("the drive's signals (drive_signals) and its firmware (drive) are the "
                          "plant's: use model='reference'")
+    announce_compiles()
     injections = [parse_fault(f) if isinstance(f, str) else f for f in faults]
     kk, fault_model = _fault_vector(k, scenario, fault_model, injections)
     if seed is not None:
@@ -116,7 +118,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
     t_rec, rec = sensors.record(out["t"], {k: out[k] for k in ("theta_ref", "theta_m", "omega_m",
                                                                 "i_abc", "torque")}, rng)
     meta = _metadata(model, kk, fault_model, scenario, params, profile, seed, sensors, n_sub, pwm,
-                     status, faults, drive)
+                     status, faults, drive, injections)
     if model == "reference":
         meta["unit"] = unit.to_dict()
         meta["plant"] = _plant_report(out, plant_params, kk, fault_model)
@@ -131,7 +133,7 @@ def simulate(k: Sequence[float] | np.ndarray | str | None = None, *,
 def _metadata(model: str, k: np.ndarray, fault_model: str, scenario: str | None,
               params: ActuatorParams, profile: Profile, seed: int | None, sensors: Sensors,
               n_sub: int | None, pwm: bool, status: str, faults: Sequence[Any],
-              drive: str | None) -> dict[str, Any]:
+              drive: str | None, injections: Sequence[Injection] = ()) -> dict[str, Any]:
     """A simulated trace's metadata: how it was made."""
     meta = {
         "model": model,
@@ -151,7 +153,27 @@ def _metadata(model: str, k: np.ndarray, fault_model: str, scenario: str | None,
         meta["firmware"] = drive
     if faults:
         meta["faults"] = [f if isinstance(f, str) else repr(f) for f in faults]
+        meta.update(_injected(faults, injections, params, _plant_of(injections)))
     return meta
+
+
+def _injected(faults: Sequence[Any], injections: Sequence[Injection], params: ActuatorParams,
+              plant: Any) -> dict[str, Any]:
+    """The injected faults as data (:meth:`emaphm.modes.Injection.to_dict`, with each one's
+    spec) and ``truth``: the values the parameters searched beside k
+    (:data:`emaphm.search.NUISANCE_RANGE`) take on the plant the injections make, read from
+    its parameters against the data sheet (a lost flux is ``demag``, a changed resistance
+    ``R``, a fault-bridge resistance ``Rf_a``..``Rf_c`` in decades, a load ``load``)."""
+    items = [{"spec": f if isinstance(f, str) else repr(f),
+              "mode": f.split(":")[0].strip() if isinstance(f, str) else None, **inj.to_dict()}
+             for f, inj in zip(faults, injections)]
+    faulty = plant(params)
+    m, f = params.motor, faulty.motor
+    truth = {"demag": float(np.mean(np.divide(f.c0, m.c0)) - 1.0),
+             "R": float(np.mean(np.divide(f.R, m.R)) - 1.0),
+             **{f"Rf_{p}": float(np.log10(b / a)) for p, a, b in zip("abc", m.R_f, f.R_f)},
+             "load": float(faulty.load.T_0 - params.load.T_0)}
+    return {"injected": items, "truth": {n: v for n, v in truth.items() if v != 0.0}}
 
 
 #: The columns of the plant's drive log (:func:`emaphm.models.reference.run_reference`).
@@ -172,6 +194,8 @@ def _run_model(model: str, params: ActuatorParams, unit: Unit, injections: Seque
     """``(signals, drive status, the recording chain, the plant's parameters)`` of one
     simulation: the plant (a production unit, the injections' changes, its drive's
     firmware) or the monitoring model."""
+    from .models.reference import run_reference     # the kernels: imported on first use
+
     plant = _plant_of(injections)
     if model == "reference":
         sensors = _faulty_sensors(sensors.with_unit(unit.sensor_gain, unit.sensor_offset),
@@ -209,6 +233,8 @@ def _run_monitoring(params: ActuatorParams, profile: Profile, k: np.ndarray, n_s
                     fault_model: str) -> tuple[dict, str]:
     """The monitoring model's signals for one k, as the plant's, and its drive status;
     a diverged state is an error here (one simulation a user asked for)."""
+    from .models.monitoring import STATUS_OK, STATUS_TRIPPED, MonitoringModel
+
     r = MonitoringModel(params, profile, n_sub=n_sub, fault_model=fault_model).simulate(k)
     out = {"t": r.t, "theta_ref": r.theta_ref, "theta_m": r.theta_m[0],
            "omega_m": r.omega_m[0], "i_abc": r.i_abc[0], "torque": r.torque[0]}

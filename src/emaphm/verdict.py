@@ -39,7 +39,7 @@ from .modes import MODES, thresholds_for
 from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, TRANSIENT_MISFIT,
                       misfit_limit, misfit_p_value, transient_excess)
 from .firmware import MODELLED
-from .params import ActuatorParams
+from .params import ActuatorParams, as_params, resolve_params
 from .problem import IdentificationProblem, apply_extra
 from .recorded import DRIVE_NUISANCE
 from .traces import Trace
@@ -334,12 +334,17 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     power and ampere-turns: readings, not part of the verdict; profiling the valley of a
     short costs a few refits). ``trace`` may be the identification's problem (its parameters,
     sub-steps and fitness mode are then the checks'; ``params`` must not be given beside
-    it), or the trace with the ``params`` it was identified with.
+    it), or the trace with the ``params`` it was identified with (default: the
+    identification's own, :attr:`emaphm.identify.Identification.params`).
     """
     if isinstance(trace, IdentificationProblem):
         if params is not None:
             raise ValueError("give params to the IdentificationProblem, not beside it")
         params = trace.params
+    elif params is None:                 # the actuator the identification was made on
+        params = getattr(ident, "params", None) or resolve_params(None, trace)[0]
+    else:
+        params = as_params(params)
     k = ident.k if k is None else k
     seed = int(ident.seed or 0)
     findings = dict(findings or {})
@@ -404,12 +409,19 @@ def _drive_deviations(problem, diag, k, extra, ratio, seed, findings, noiseless,
 class Examination:
     """The whole examination of one trace (:func:`examine`): the ``identification`` the
     verdict reads (of the ``trace`` examined: corrected for a faulty current sensor), the
-    ``diagnosis`` and the ``sensor`` finding."""
+    ``diagnosis`` and the ``sensor`` finding; ``k`` and ``nuisance``: what the verdict was
+    read on (a hypothesis' refit where one was kept, :attr:`Diagnosis.refit`, else the
+    identification's), and ``error_all_pct`` their error against a simulated trace's truth
+    (:func:`emaphm.problem.error_all_pct`: Eq. 9 with the parameters beside k; None for a
+    bench trace)."""
 
     identification: Any
     diagnosis: Diagnosis
     trace: Trace
     sensor: Any
+    k: Any = None
+    nuisance: dict | None = None
+    error_all_pct: float | None = None
 
 
 def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, seed: int,
@@ -428,16 +440,17 @@ def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, 
     from .modes.current_sensor import resolve, screen
 
     fault_model = config.fault_model or trace_fault_model(trace)
-    limits = thresholds if thresholds is not None else thresholds_for(fault_model, params)
+    actuator = resolve_params(params, trace, warn=False)[0]
+    limits = thresholds if thresholds is not None else thresholds_for(fault_model, actuator)
     scored = replace(config, fault_model=fault_model)
-    return resolve(trace, screen(trace, params, limits),
+    return resolve(trace, screen(trace, actuator, limits),
                    lambda t: identify(t, config, seed=seed, params=params, callback=callback),
                    lambda t: scored.problem(t, params).fitness_at(K_NOMINAL))
 
 
-def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any = None,
+def examine(trace: Trace | list, *, params: Any = None, config: Any = None,
             seed: int = 0, callback: Any = None, thresholds: Thresholds | None = None,
-            loops: bool = True) -> Examination:
+            loops: bool = True, workers: int | None = None) -> Examination | list[Examination]:
     """Fault detection and identification of one trace, as ``emaphm diagnose`` makes it.
 
     1. The current sensors, judged from the sum of the three measured currents
@@ -449,7 +462,18 @@ def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any =
        least-squares solver's settings; ``params`` the actuator, default the preset).
     3. The verdict with its checks (:func:`diagnose_identification`; ``loops``: with the
        report of a short's fault loop).
+
+    A list of traces is a batch (:func:`emaphm.batch.examine_many`): each examined as this
+    call would examine it alone, on ``workers`` processes; the examinations in order.
     """
+    if isinstance(trace, (list, tuple)):
+        from .batch import examine_many
+
+        return examine_many(trace, workers=workers, params=params, config=config, seed=seed,
+                            callback=callback, thresholds=thresholds, loops=loops)
+    if workers is not None and workers > 1:
+        raise ValueError("workers= shares a list of traces among processes; give a list of "
+                         "traces, or drop workers")
     from .identify import IdentificationConfig, identify
     from .modes.current_sensor import UNOBSERVABLE_NOTE
 
@@ -462,4 +486,17 @@ def examine(trace: Trace, *, params: ActuatorParams | None = None, config: Any =
                                    findings={"current_sensor": finding}, loops=loops)
     if not finding.observable:
         diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
-    return Examination(ident, diag, work, finding)
+    return _examination(ident, diag, work, finding)
+
+
+def _examination(ident: Any, diag: Diagnosis, work: Trace, finding: Any) -> Examination:
+    """The examination, with what the verdict was read on and its error against the truth."""
+    from .problem import error_all_pct
+
+    refit = diag.refit
+    k = np.asarray(ident.k if refit is None else refit.k, dtype=float)
+    nu = dict(ident.nuisance if refit is None else refit.nuisance)
+    k_true = getattr(ident, "k_true", None)
+    err = None if k_true is None else error_all_pct(k, k_true, nu,
+                                                    getattr(ident, "nuisance_true", {}))
+    return Examination(ident, diag, work, finding, k, nu, err)

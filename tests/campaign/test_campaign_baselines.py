@@ -130,7 +130,10 @@ def test_identify_reaches_the_baselines():
     trace = simulate(scenario="gain-high", sensors=DEFAULT_SENSORS, seed=1)
     for name in NAMES:
         ident = identify(trace, name, seed=0, termination=400)
-        assert ident.algorithm == name and 400 <= ident.evaluations < 460
+        # the run stops at 360 (a tenth of the budget held back for the polish, issue 34),
+        # the polish takes the rest
+        assert ident.algorithm == name and 360 <= ident.evaluations < 460
+        assert ident.polish_evaluations > 0 or ident.skipped
         assert np.isfinite(ident.fitness) and ident.error_pct is not None
 
 

@@ -587,9 +587,10 @@ def test_simulate_help_names_every_mode_that_can_be_injected(capsys):
 
 
 def test_a_trace_of_another_actuator_says_whose_it_is(tmp_path, capsys):
-    """A trace of ema-270v-750w diagnosed with the preset reads unexplained (1000x the noise
-    floor); its metadata names the actuator it was simulated for, and the note says so."""
-    from emaphm.params import load_params
+    """A trace of ema-270v-750w is diagnosed on its own actuator, which its metadata names
+    (issue 34); diagnosed with the preset given it reads unexplained (1000x the noise floor),
+    and a warning and the note say whose it is."""
+    from emaphm.params import load_params, save_params, siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
     from emaphm.traces import write_trace
 
@@ -601,9 +602,16 @@ def test_a_trace_of_another_actuator_says_whose_it_is(tmp_path, capsys):
                        tmp_path / "ema.parquet")
     assert main(["diagnose", str(path), "--quiet", "--json"]) == 0
     out, err = capsys.readouterr()
+    d = json.loads(out)
+    assert d["verdict"] == "healthy" and d["params_source"] == "trace"
+    assert d["parameters"]["name"] == "ema-270v-750w" and "warning" not in err
+    preset = save_params(siemens_1fk7060(), tmp_path / "preset.toml")
+    assert main(["diagnose", str(path), "--quiet", "--json", "--params", str(preset)]) == 0
+    out, err = capsys.readouterr()
     assert json.loads(out)["verdict"] == "unexplained"
     assert ("the trace's metadata says it was simulated for 'ema-270v-750w', and it was "
             "diagnosed with 'siemens-1fk7060-2ac71': give that actuator's parameters") in err
+    assert err.count("emaphm diagnose: warning: the trace names the actuator 'ema-270v-750w'") == 1
     assert main(["diagnose", str(path), "--quiet", "--json", "--params",
                  str(root / "examples" / "actuators" / "ema-270v-750w.toml")]) == 0
     assert "metadata says" not in capsys.readouterr().err

@@ -22,6 +22,7 @@ EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
 RUNS = {
     "own_optimizer.py": ["--quick"],
     "degradation_demo.py": ["--inspections", "3", "--budget", "150", "--out-dir", "{out}"],
+    "study.py": ["--quick"],
 }
 
 
@@ -74,3 +75,13 @@ def test_the_examples_say_how_to_run_them_short(name):
     text = (ROOT / "examples" / name).read_text()
     for flag in (a for a in RUNS[name] if a.startswith("--")):
         assert f'"{flag}"' in text, f"{name} has no {flag}"
+
+
+def test_the_study_matches_the_long_way_round(tmp_path):
+    """Issue 34's acceptance: a study from a script (a second actuator identified without
+    params=, an optimizer registered by name in a 6-run campaign on 2 workers, a batch of 8
+    traces on 2 workers, every kind of result through JSON, a frame with two currents and
+    no speed), each step checked in the script against the long way round."""
+    r, _ = _run("study.py", tmp_path)
+    steps = [ln.split(":")[0] for ln in r.stdout.strip().splitlines()]
+    assert steps == ["1. own actuator", "2. campaign", "3. batch", "4. round trips", "5. frame"]

@@ -161,6 +161,8 @@ def test_parse_budget_forms():
     assert parse_budget(" 5000 eval ") == MaxEvaluations(5000)
     assert parse_budget("2s") == WallClock(2.0)
     assert parse_budget("2.5s") == WallClock(2.5)
+    assert parse_budget(2.5) == WallClock(2.5)          # a float is seconds (issue 34)
+    assert parse_budget(np.float64(30)) == WallClock(30.0)
     term = MaxIterations(7)
     assert parse_budget(term) is term
 
@@ -173,7 +175,9 @@ def test_parse_budget_forms():
     ("0", "budget must be positive"),
     ("0s", "budget must be positive"),
     ("1.5", "whole number"),
-    (1.5, "budget must be evaluations"),
+    (-1.5, "a budget in seconds \\(a float\\) must be positive"),
+    (float("nan"), "must be positive"),
+    (1e6, "above a day"),
     (True, "budget must be a number of evaluations or seconds, got True"),
     (False, "got False"),
     ([100], "budget must be evaluations"),

@@ -168,53 +168,72 @@ def random_search(objective, bounds, rng):
 
 def test_a_plain_function_is_a_solver_and_its_budget_is_enforced():
     p = Box(sphere)
-    res = solve(p, CallableSolver(random_search), None, seed=2)
+    bare = CallableSolver(random_search, polish=False)
+    res = solve(p, bare, None, seed=2)
     assert res.algorithm == "random_search" and res.reason == "returned"
     assert res.nfev == p.evaluated == 20 * 50 + 1 and res.fun < 0.05
-    again = solve(Box(sphere), CallableSolver(random_search), None, seed=2)
+    again = solve(Box(sphere), bare, None, seed=2)
     np.testing.assert_array_equal(res.x, again.x)
-    capped = solve(Box(sphere), CallableSolver(random_search), MaxEvaluations(230), seed=2)
+    capped = solve(Box(sphere), bare, MaxEvaluations(230), seed=2)
     assert capped.reason == "max_evaluations" and capped.nfev == 200   # 4 batches fit, not 5
     with pytest.raises(ValueError, match="fn\\(objective, bounds, rng\\)"):
         CallableSolver(42)
 
 
-def test_a_solver_written_outside_emaphm_runs_in_the_same_loop():
-    """The protocol is all a solver needs: init, step (until state.reason), result."""
+def test_a_plain_function_is_polished_and_its_budget_holds_the_polish_back():
+    """Issue 34: a function gets the polish a metaheuristic gets, under a budget too."""
+    free = solve(Box(sphere), CallableSolver(random_search), None, seed=2)
+    assert free.polish_evaluations > 0 and free.fun < free.fun_raw and free.skipped == {}
+    p = Box(sphere)
+    capped = solve(p, CallableSolver(random_search), MaxEvaluations(230), seed=2)
+    # the function gets 230 less 23 (POLISH_SHARE): four batches fit; the polish the rest
+    assert capped.fun_raw == solve(Box(sphere), CallableSolver(random_search, polish=False),
+                                   MaxEvaluations(207), seed=2).fun
+    assert capped.polish_evaluations > 0 and capped.nfev == p.evaluated <= 230
+    assert capped.fun < capped.fun_raw
 
-    @dataclass(frozen=True)
-    class State:
-        x: np.ndarray
-        f: float
-        n: int
-        reason: str | None = None
 
-        @property
-        def best_f(self):
-            return self.f
+def one_at_a_time(objective, bounds, rng):
+    """A plain function that evaluates uniform points one by one until stopped."""
+    lo, hi = bounds
+    while True:
+        objective(rng.uniform(lo, hi, (1, lo.size)))
 
-    class Coordinate:
-        name = "coordinate"
 
-        def init(self, problem, termination, seed):
-            lo, hi = problem.bounds
-            x = (lo + hi) / 2
-            return State(x, float(problem.evaluate(x[None])[0]), 1)
+def test_a_budget_too_small_for_the_polish_says_so():
+    res = solve(Box(sphere, n=3), CallableSolver(one_at_a_time), MaxEvaluations(20), seed=2)
+    assert res.polish_evaluations == 0 and "fewer than one poll" in res.skipped["polish"]
+    res = solve(Box(sphere, n=3), Metaheuristic(PSO(pop_size=10)), MaxEvaluations(12), seed=2)
+    assert res.polish_evaluations == 0 and "fewer than one poll" in res.skipped["polish"]
 
-        def step(self, problem, state, callback=None):
-            X = state.x + np.diag(np.full(state.x.size, 0.25))
-            f = problem.evaluate(np.vstack([X, state.x - 0.5 * np.diag(np.full(state.x.size, 0.25))]))
-            i = int(np.argmin(f))
-            x = np.vstack([X, state.x - 0.125 * np.eye(state.x.size)])[i]
-            new = replace(state, n=state.n + f.size)
-            if f[i] < state.f:
-                new = replace(new, x=x, f=float(f[i]))
-            return replace(new, reason="max_evaluations" if new.n >= 50 else None)
 
-        def result(self, state):
-            return SolverResult(x=state.x, fun=state.f, nfev=state.n, nit=1,
-                                history=np.array([state.f]), reason=state.reason, elapsed_s=0.0,
-                                algorithm=self.name, x_raw=state.x, fun_raw=state.f)
+def test_a_plain_function_is_restarted_each_run_with_the_budget():
+    p = Box(sphere, n=3, fitness_floor=1e-30)          # a floor no fit reaches
+    solver = CallableSolver(random_search, restarts=2, restart_ratio=2.0, polish=False)
+    res = solve(p, solver, MaxEvaluations(800), seed=7)
+    assert res.starts == 3 and res.nfev == p.evaluated == 3 * 800    # 16 batches a run
+    alone = [solve(Box(sphere, n=3), CallableSolver(random_search, polish=False),
+                   MaxEvaluations(800), seed=s).fun for s in (7, *restart_seeds(7, 2))]
+    assert res.fun == min(alone)
+    assert "after the 2 restart(s) allowed" in res.skipped["restarts"]
+    once = solve(Box(sphere, n=3, fitness_floor=1e-30),
+                 CallableSolver(random_search, restart_ratio=2.0), MaxEvaluations(800), seed=7)
+    assert once.starts == 1 and "no restart was allowed" in once.skipped["restarts"]
+    assert "give restarts=N" in once.skipped["restarts"]
 
-    res = solve(Box(sphere, lo=-1.0, hi=3.0), Coordinate(), None, seed=0)
-    assert res.reason == "max_evaluations" and res.fun < 1.0 and res.nfev >= 50
+
+def test_a_budget_holds_back_the_polish_of_each_run():
+    """Issue 34: PSO under a budget is polished (it used to spend the budget and skip it);
+    each restart gets the budget again, less its polish's share."""
+    pso = PSO(pop_size=10)
+    p = Box(sphere, n=3)
+    one = solve(p, Metaheuristic(pso), MaxEvaluations(500), seed=1)
+    assert one.polish_evaluations > 0 and one.nfev == p.evaluated <= 500 + 10
+    assert one.run_evaluations - one.polish_evaluations <= 450 + 10 and one.skipped == {}
+    p = Box(sphere, n=3, fitness_floor=1e-30)
+    three = solve(p, Metaheuristic(pso, restarts=2, restart_ratio=2.0), MaxEvaluations(500),
+                  seed=1)
+    assert three.starts == 3 and three.nfev == p.evaluated <= 3 * (500 + 10)
+    assert three.polish_evaluations > 0
+    w = solve(Box(sphere, n=3), Metaheuristic(pso), WallClock(0.5), seed=1)
+    assert w.polish_evaluations > 0 and w.elapsed_s < 1.0

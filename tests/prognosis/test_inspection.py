@@ -369,6 +369,8 @@ def test_prognose_risk_json_gains_the_next_inspection_and_keeps_the_rest(history
     assert main(["prognose", "EMA-7", "--db", history, "--json", "--risk", "0.05"]) == 0
     out = json.loads(capsys.readouterr().out)
     nxt = out.pop("next_inspection")
+    # the options say n_samples where the plan asked for it (4000 by default too)
+    assert out.pop("options") == {**plain.pop("options"), "n_samples": 4000}
     assert out == plain                         # 4000 draws either way: the same RUL
     assert {"at", "risk", "indicator", "reason"} <= set(nxt)
     assert nxt["indicator"] == "friction" and nxt["rule"] in ("risk", "max interval")

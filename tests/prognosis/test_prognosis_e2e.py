@@ -18,8 +18,9 @@ from support import assert_png_of
 from emaphm.cli import main
 from emaphm.fitness import Eq4Objective
 from emaphm.identify import IdentificationConfig
-from emaphm.prognosis import (HealthHistory, degradation_scenario, identify_with_spread, inspect,
+from emaphm.prognosis import (HealthHistory, degradation_scenario, identify_with_spread,
                               inspection_times, prognose, simulate_degradation)
+from emaphm.prognosis import record_inspection as inspect
 from emaphm.problem import IdentificationProblem
 from emaphm.traces import write_trace
 

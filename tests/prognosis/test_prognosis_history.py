@@ -28,7 +28,7 @@ from emaphm.faults import K_NOMINAL
 from emaphm.prognosis import history as hist
 from emaphm.prognosis.history import (DuplicateInspectionError, HealthHistory, HistoryError,
                                       TimeOrderError, UnknownActuatorError, trace_fingerprint)
-from emaphm.prognosis.workflow import inspect
+from emaphm.prognosis.workflow import record_inspection as inspect
 from emaphm.simulate import simulate
 from emaphm.traces import Trace, TraceError, write_trace
 
@@ -701,7 +701,7 @@ def test_history_add_quiet_prints_the_record_in_one_line(tmp_path, capsys, mm_tr
         interval = KInterval(k=K1, lo=K1, hi=K1, method="population", level=0.9, n=1)
         return ins, type("A", (), {"interval": interval, "evaluations": 7, "elapsed_s": 0.1})()
 
-    monkeypatch.setattr(wf, "inspect", fake_inspect)
+    monkeypatch.setattr(wf, "record_inspection", fake_inspect)
     db = str(_history(tmp_path / "h.sqlite"))
     trace = str(write_trace(mm_trace, tmp_path / "t.csv"))
     rc, out, err = _run(["history", "add", "EMA-R", trace, "--at", "50", "--quiet", "--db", db],

@@ -82,7 +82,8 @@ class AssessmentSpec:
     ==================  ==================================================================
     field               meaning
     ==================  ==================================================================
-    params              the actuator's data sheet (:meth:`ActuatorParams.to_dict`)
+    params              the actuator's data sheet: an :class:`ActuatorParams`, its
+                        :meth:`~ActuatorParams.to_dict` or a TOML path (held as the dict)
     tolerances          the production tolerances units are drawn within (a dict of
                         :class:`emaphm.units.Tolerances`)
     units               reported production units (default 20)
@@ -115,13 +116,17 @@ class AssessmentSpec:
     algorithm: str = "lsq"
 
     def __post_init__(self) -> None:
-        from ..params import ActuatorParams
+        from ..params import ActuatorParams, as_params
         from ..units import Tolerances
 
         try:
-            params = ActuatorParams.from_dict(dict(self.params), source="--params")
+            params = (ActuatorParams.from_dict(dict(self.params), source="--params")
+                      if isinstance(self.params, Mapping) else as_params(self.params))
         except ValueError as exc:
             raise AssessmentError(str(exc)) from None
+        if params is None:
+            raise TypeError("AssessmentSpec needs the actuator's params: an ActuatorParams, a "
+                            "dict of its sections or the path of a TOML parameter file")
         object.__setattr__(self, "params", params.to_dict())
         try:
             tol = Tolerances.from_dict(dict(self.tolerances), source="--tolerances")

@@ -174,16 +174,53 @@ class LocalExecutor:
 
     Workers ignore SIGINT: Ctrl-C reaches the parent, which stops submitting and cancels
     the pending runs; runs already executing finish in the background and are discarded.
+
+    ``keep=True`` keeps the pool (its warm workers) from one :meth:`map_unordered` to the
+    next, until :meth:`close` (or the end of a ``with`` block); by default each call starts
+    a pool of at most as many workers as it has items and shuts it down at its end.
     """
 
-    def __init__(self, workers: int | None = None, *, mp_context: str = "spawn") -> None:
+    def __init__(self, workers: int | None = None, *, mp_context: str = "spawn",
+                 keep: bool = False) -> None:
         if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
             raise ValueError(f"workers must be a positive integer, got {workers!r}")
         self.workers = workers or os.cpu_count() or 1
         self.mp_context = mp_context
+        self.keep = bool(keep)
+        self._pool: ProcessPoolExecutor | None = None
 
     def describe(self) -> str:
         return f"local pool of {self.workers} process{'es' if self.workers != 1 else ''}"
+
+    def close(self) -> None:
+        """Shut a kept pool down (its workers end); the next call starts a new one."""
+        pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    def __enter__(self) -> "LocalExecutor":
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def _new_pool(self, n_items: int) -> ProcessPoolExecutor:
+        if self.keep and self._pool is not None:
+            return self._pool
+        pool = ProcessPoolExecutor(max_workers=self.workers if self.keep else min(self.workers, n_items),
+                                   mp_context=multiprocessing.get_context(self.mp_context),
+                                   initializer=_init_worker, initargs=(os.getpid(),))
+        if self.keep:
+            self._pool = pool
+        return pool
+
+    def _drop(self, pool: ProcessPoolExecutor, wait: bool) -> None:
+        """Shut ``pool`` down (a kept one only when it broke: ``wait`` False)."""
+        if pool is self._pool:
+            if wait:
+                return
+            self._pool = None
+        pool.shutdown(wait=wait, cancel_futures=True)
 
     def map_unordered(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
         items = list(items)
@@ -191,9 +228,7 @@ class LocalExecutor:
             return
 
         def new_pool() -> ProcessPoolExecutor:
-            return ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
-                                       mp_context=multiprocessing.get_context(self.mp_context),
-                                       initializer=_init_worker, initargs=(os.getpid(),))
+            return self._new_pool(len(items))
 
         pool = new_pool()
         # Keep at most two runs per worker queued: pending work stays in the parent,
@@ -211,7 +246,7 @@ class LocalExecutor:
                         break
                     todo.pop()
                 if not running:                   # the pool broke with nothing in flight
-                    pool.shutdown(wait=False, cancel_futures=True)
+                    self._drop(pool, wait=False)
                     pool = new_pool()
                     continue
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
@@ -232,11 +267,15 @@ class LocalExecutor:
                         yield item, BrokenProcessPool("a worker of the local pool died while "
                                                       "this run was in flight")
                     running.clear()
-                    pool.shutdown(wait=False, cancel_futures=True)
+                    self._drop(pool, wait=False)
                     pool = new_pool()
             clean = True
         finally:
-            pool.shutdown(wait=clean, cancel_futures=True)
+            if not clean and pool is self._pool:    # interrupted: pending work cancelled,
+                for fut in running:                 # the kept workers stay
+                    fut.cancel()
+            else:
+                self._drop(pool, wait=clean)
 
 
 class DaskExecutor:

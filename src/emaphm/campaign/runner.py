@@ -14,6 +14,7 @@ uninterrupted one, whatever the executor and the number of workers.
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 import traceback
@@ -26,6 +27,7 @@ from .spec import CampaignSpec, Run
 from .store import CampaignStore, RunResult
 
 __all__ = ["CampaignInterrupted", "CampaignSummary", "ProgressLine", "execute_run",
+           "execute_registered",
            "replay", "run_campaign"]
 
 
@@ -57,6 +59,26 @@ def execute_run(run: Run) -> RunResult:
     except Exception as exc:                    # noqa: BLE001 - a failure is a value
         text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__, limit=-6))
         return RunResult.failure(run, text.strip())
+
+
+def execute_registered(plugins: dict[str, Any], run: Run) -> RunResult:
+    """:func:`execute_run` in a process that may not know the spec's registered algorithms:
+    ``plugins`` (name -> object, :func:`emaphm.optim.register`) are registered first."""
+    from emaphm.optim import register
+
+    for name, obj in plugins.items():
+        register(name, obj, replace=True)
+    return execute_run(run)
+
+
+def _task(spec: CampaignSpec) -> Any:
+    """What each run executes: :func:`execute_run`, with the registered algorithms the spec
+    names sent along (the workers' registries are their own)."""
+    from emaphm.optim import registered
+
+    own = registered()
+    plugins = {a.name: own[a.name] for a in spec.algorithms if a.name in own}
+    return functools.partial(execute_registered, plugins) if plugins else execute_run
 
 
 # ----------------------------------------------------------------------------- progress
@@ -151,7 +173,7 @@ def run_campaign(spec: CampaignSpec | None, store: str | os.PathLike[str] | Camp
         if progress is not None:
             progress.start(len(runs), len(runs) - len(todo), len(todo))
         executor = executor if executor is not None else make_executor()
-        stream = executor.map_unordered(execute_run, todo) if todo else iter(())
+        stream = executor.map_unordered(_task(spec), todo) if todo else iter(())
         interrupted = False
         try:
             for run, value in stream:

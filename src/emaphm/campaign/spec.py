@@ -102,11 +102,22 @@ class SpecError(ValueError):
 
 def available_algorithms() -> dict[str, type | None]:
     """Algorithms a spec may name: the default least-squares pipeline (``"lsq"``, which
-    takes no options: ``None``), the paper's three and the baselines (their classes)."""
+    takes no options: ``None``), the paper's three and the baselines (their classes), and
+    those registered in this process (:func:`emaphm.optim.register`: an optimizer class,
+    or None for what takes no options)."""
     from emaphm.identify import DEFAULT_ALGORITHM
-    from emaphm.optim import ALL_ALGORITHMS
+    from emaphm.optim import ALL_ALGORITHMS, registered, registered_kind
 
-    return {DEFAULT_ALGORITHM: None, **ALL_ALGORITHMS}
+    own = {n: (obj if registered_kind(n) == "optimizer class" else None)
+           for n, obj in registered().items()}
+    return {DEFAULT_ALGORITHM: None, **ALL_ALGORITHMS, **own}
+
+
+def _algorithm_name(algorithm: Any) -> str:
+    """A name, or a registered object's name (a TypeError that says how to register it)."""
+    from emaphm.identify import algorithm_name
+
+    return algorithm_name(algorithm)
 
 
 def _check_name(what: str, name: Any) -> str:
@@ -289,8 +300,9 @@ class CampaignSpec:
                                                        the fault model's default
     n_sub         int >= 1            1                monitoring-model sub-steps
     fitness_mode  str                 "phases"         Eq. 4 on the three phases or "equivalent"
-    params        dict or None        None             healthy actuator (ActuatorParams.to_dict);
-                                                       None: the default preset
+    params        ActuatorParams,     None             healthy actuator (an ActuatorParams, its
+                  dict, path or None                   to_dict or a TOML path; held as the
+                                                       dict); None: the default preset
     fault_model   str or None         None             mapping of k3..k5 for every scenario
                                                        ("paper" or "physical"); None: each
                                                        scenario's own (a named scenario's, or
@@ -337,7 +349,8 @@ class CampaignSpec:
         object.__setattr__(self, "scenarios", scen)
 
         algos = tuple(self.algorithms) or tuple(AlgorithmSpec(n) for n in PAPER_ALGORITHMS)
-        algos = tuple(AlgorithmSpec(a) if isinstance(a, str) else a for a in algos)
+        algos = tuple(a if isinstance(a, AlgorithmSpec) else AlgorithmSpec(_algorithm_name(a))
+                      for a in algos)
         registry = available_algorithms()
         checked = []
         for a in algos:
@@ -345,7 +358,8 @@ class CampaignSpec:
                 raise SpecError(f"algorithms must be names or AlgorithmSpec, got {a!r}")
             if a.name not in registry:
                 raise SpecError(f"unknown algorithm {a.name!r}; choose one of "
-                                f"{', '.join(sorted(registry))}")
+                                f"{', '.join(sorted(registry))} (or register your own in this "
+                                "process: emaphm.optim.register(name, obj))")
             _check_name("algorithm label", a.label)
             if not isinstance(a.options, Mapping):
                 raise SpecError(f"algorithm {a.label!r}: options must be a table, got {a.options!r}")
@@ -392,10 +406,10 @@ class CampaignSpec:
             raise SpecError(f"unknown fitness_mode {self.fitness_mode!r}; choose one of "
                             f"{', '.join(FITNESS_MODES)}")
         if self.params is not None:
-            from emaphm.params import ActuatorParams, ParameterError
+            from emaphm.params import ParameterError, as_params
 
             try:
-                p = ActuatorParams.from_dict(dict(self.params), source="spec params")
+                p = as_params(self.params, what="spec params")
             except ParameterError as exc:
                 raise SpecError(str(exc)) from None
             object.__setattr__(self, "params", _canonical(p.to_dict()))

@@ -188,7 +188,7 @@ def _record(task: _Task, history: Any = None) -> dict:
 
     from ..identify import IdentificationConfig
     from ..prognosis.history import HealthHistory
-    from ..prognosis.workflow import inspect
+    from ..prognosis.workflow import record_inspection as inspect
 
     unit = task.unit
     t0 = time.process_time()

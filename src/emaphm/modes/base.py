@@ -44,6 +44,14 @@ class Fault:
         d.update(self.details)
         return d
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Fault":
+        """The fault :meth:`to_dict` wrote (the keys beyond the six fields are its
+        ``details``)."""
+        own = ("mode", "component", "k", "severity", "reading", "phase")
+        return cls(**{n: data[n] for n in own if n in data},
+                   details={n: v for n, v in data.items() if n not in own})
+
 
 @dataclass(frozen=True)
 class Reading:
@@ -69,6 +77,15 @@ class Injection:
     k: Mapping[int, float] = field(default_factory=dict)
     plant: Callable[[ActuatorParams], ActuatorParams] | None = None
     sensor: tuple[int, float, float] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """As data (what a trace's metadata keeps): the components of k set (``"k1"``..),
+        whether the plant changes, the faulty sensor (phase, gain, offset [A])."""
+        return {"k": {f"k{j + 1}": float(v) for j, v in sorted(self.k.items())},
+                "plant": self.plant is not None,
+                "sensor": None if self.sensor is None else {
+                    "phase": PHASES[self.sensor[0]], "gain": float(self.sensor[1]),
+                    "offset_a": float(self.sensor[2])}}
 
 
 @dataclass(frozen=True)

@@ -38,6 +38,7 @@ from .baselines import BASELINES, CMAES, ScipyDE
 from .de import DE
 from .gwo import GWO
 from .pso import PSO
+from .registry import lookup, register, registered, registered_kind, unregister
 
 __all__ = [
     "ALGORITHMS",
@@ -61,6 +62,11 @@ __all__ = [
     "get_optimizer",
     "minimize",
     "resume",
+    "register",
+    "unregister",
+    "registered",
+    "registered_kind",
+    "lookup",
 ]
 
 #: The paper's three optimizers by short name (the conformance suite runs on these).
@@ -77,7 +83,9 @@ def get_optimizer(name: str, **kw: Any) -> Optimizer:
     Parameters
     ----------
     name : str
-        One of ``ALL_ALGORITHMS`` ("de", "gwo", "pso", "scipy-de", "cmaes").
+        One of ``ALL_ALGORITHMS`` ("de", "gwo", "pso", "scipy-de", "cmaes"), or a name
+        :func:`register` gave an optimizer class (built with ``kw``) or an optimizer
+        (returned as it is; it takes no options).
     **kw
         Passed to the optimizer's constructor (e.g. ``pop_size=30``).
 
@@ -87,10 +95,21 @@ def get_optimizer(name: str, **kw: Any) -> Optimizer:
         ``unknown algorithm 'x'; choose one of cmaes, de, gwo, pso, scipy-de`` for an unknown name, or
         the optimizer's own message for an invalid option.
     """
+    kind = registered_kind(name)
+    if kind == "optimizer class":
+        return lookup(name)(**kw)
+    if kind == "optimizer":
+        if kw:
+            raise ValueError(f"{name!r} is a registered optimizer and takes no options, got "
+                             f"{kw}; register its class to build it with options")
+        return lookup(name)
     try:
         cls = ALL_ALGORITHMS[name]
     except (KeyError, TypeError):
+        own = [n for n, _ in sorted(registered().items())
+               if registered_kind(n) in ("optimizer class", "optimizer")]
         raise ValueError(
-            f"unknown algorithm {name!r}; choose one of {', '.join(sorted(ALL_ALGORITHMS))}"
+            f"unknown algorithm {name!r}; choose one of {', '.join(sorted(ALL_ALGORITHMS) + own)}"
+            + ("" if kind is None else f" ({name!r} is a registered {kind}, not an optimizer)")
         ) from None
     return cls(**kw)

@@ -30,7 +30,7 @@ import numpy as np
 
 from .base import OptimizeResult, as_bounds, remaining
 from .local import compass_search
-from .solvers import SolverResult
+from .solvers import SolverResult, _skipped_polish
 
 __all__ = ["least_squares_batched", "multistart_least_squares", "MultistartLeastSquares",
            "LeastSquaresState", "LSQState", "DIFF_STEPS"]
@@ -231,6 +231,7 @@ class LeastSquaresState:
     polish_evaluations: int = 0
     polish_s: float = 0.0
     reason: str | None = None
+    skipped: dict | None = None
 
     @property
     def best_x(self) -> np.ndarray | None:
@@ -261,7 +262,9 @@ class MultistartLeastSquares:
        box down to 1e-3, at most ``polish_evaluations`` points; 0: none): derivative-free,
        so it settles what the differences could not resolve.
 
-    An evaluation or wall-clock termination caps everything (each pass gets what is left).
+    An evaluation or wall-clock termination caps everything (each pass gets what is left;
+    the polish follows passes that converged); a polish not made is said, with the reason,
+    in the result's ``skipped``.
     The callback is called before each Jacobian with a :class:`LSQState`. Deterministic:
     the only random numbers are the problem's sample, drawn from the seed.
     """
@@ -373,8 +376,13 @@ class MultistartLeastSquares:
         best = state.best
         state = replace(state, x_raw=best.x, f_raw=best.fun)
         evals, seconds = self._left(state)
-        if state.stop == "converged" and np.isfinite(best.fun) and self.polish_evaluations > 0 \
-                and evals >= 2 * b.n_var and seconds > 0:
+        why = "" if self.polish_evaluations == 0 else (
+            _skipped_polish(best.fun, state.stop, evals, seconds, b.n_var)
+            or ("" if state.stop == "converged" else
+                f"the budget stopped the least-squares passes ({state.stop}); its polish is "
+                "made only after they converge: give a larger budget"))
+        state = replace(state, skipped={"polish": why} if why else {})
+        if self.polish_evaluations > 0 and not why:
             pol = compass_search(problem.evaluate, best.x, b, f0=best.fun, step=0.02, tol=1e-3,
                                  max_evals=int(min(self.polish_evaluations, evals)),
                                  max_seconds=seconds)
@@ -393,7 +401,7 @@ class MultistartLeastSquares:
             reason=state.reason, elapsed_s=time.perf_counter() - state.t0, algorithm=self.name,
             x_raw=state.x_raw, fun_raw=float(state.f_raw), starts=state.n_run,
             polish_evaluations=state.polish_evaluations, polish_s=state.polish_s,
-            run_evaluations=state.nfev)
+            run_evaluations=state.nfev, skipped=dict(state.skipped or {}))
 
 
 @dataclass(frozen=True)

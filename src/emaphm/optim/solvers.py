@@ -47,13 +47,90 @@ from typing import Any, Callable, Protocol, runtime_checkable
 
 import numpy as np
 
-from .base import (OptimizeResult, Optimizer, Termination, as_bounds, check_int, remaining,
-                   sanitize_fitness, _as_generator, _check_optimizer)
+from .base import (AnyOf, MaxEvaluations, OptimizeResult, Optimizer, Termination, WallClock,
+                   as_bounds, check_int, remaining, sanitize_fitness, _as_generator,
+                   _check_optimizer)
 from .local import compass_search
 from ..seeds import check_seed
 
 __all__ = ["Solver", "SolverResult", "solve", "Metaheuristic", "MetaheuristicState",
-           "CallableSolver", "restart_seeds", "optimizer_options"]
+           "CallableSolver", "restart_seeds", "optimizer_options", "BudgetPlan", "plan_budget",
+           "POLISH_SHARE"]
+
+#: Share of each run's budget (evaluations or seconds) a budgeted run holds back for its
+#: polish (at most the solver's ``polish_evaluations``): the compass search needs 150-500
+#: evaluations where a metaheuristic's run takes thousands. A tenth: on a budget of 3000
+#: that is 300 evaluations, about 19 polls of the 16 points of k's eight components.
+POLISH_SHARE = 0.1
+
+
+@dataclass(frozen=True)
+class BudgetPlan:
+    """How a termination's budget is spent by each run of a solver: ``evals`` evaluations
+    and ``seconds`` of wall clock a run (``inf``: no such limit), of which ``polish_evals``
+    and ``polish_seconds`` are held back for its polish. Built by :func:`plan_budget`."""
+
+    evals: float
+    seconds: float
+    polish_evals: int
+    polish_seconds: float
+
+    @property
+    def limited(self) -> bool:
+        return math.isfinite(self.evals) or math.isfinite(self.seconds)
+
+    def run_termination(self, termination: Termination) -> Termination:
+        """``termination`` less the polish's share (itself where it sets no budget of
+        evaluations or seconds, or no polish is made)."""
+        terms = [termination]
+        if self.polish_evals:
+            terms.append(MaxEvaluations(max(1, int(self.evals) - self.polish_evals)))
+        if self.polish_seconds:
+            terms.append(WallClock(max(1e-3, self.seconds - self.polish_seconds)))
+        return terms[0] if len(terms) == 1 else AnyOf(*terms)
+
+    def polish_left(self, run_evals: int, run_s: float) -> tuple[float, float]:
+        """``(evaluations, seconds)`` the polish of a run that spent ``run_evals`` and
+        ``run_s`` may spend: the rest of the run's budget."""
+        return self.evals - run_evals, self.seconds - run_s
+
+
+def plan_budget(termination: Any, polish: bool, polish_evaluations: int) -> BudgetPlan:
+    """The :class:`BudgetPlan` of each run under ``termination``: its evaluations and
+    seconds (:func:`~emaphm.optim.base.remaining`), of which :data:`POLISH_SHARE` (at most
+    ``polish_evaluations``) is held back for the polish."""
+    e, sec = remaining(termination, 0, 0.0)
+    pe = int(min(polish_evaluations, math.floor(POLISH_SHARE * e))) if polish and math.isfinite(e) else 0
+    ps = POLISH_SHARE * sec if polish and math.isfinite(sec) else 0.0
+    return BudgetPlan(e, sec, pe, ps)
+
+
+def _skipped_polish(fun: float, reason: str, evals: float, seconds: float, n_var: int) -> str:
+    """Why a polish was not made ("" where nothing stood in its way)."""
+    if reason == "callback":
+        return "the callback stopped the search"
+    if not np.isfinite(fun):
+        return "every candidate diverged"
+    if evals < 2 * n_var:
+        return (f"the budget left {max(int(evals), 0)} evaluations, fewer than one poll "
+                f"({2 * n_var}); give a larger budget")
+    if seconds <= 0:
+        return "the wall-clock budget was spent; give a longer one"
+    return ""
+
+
+def _skipped_restarts(fun: float, floor: float, ratio: float, restarts: int, limited: bool) -> str:
+    """Why no further run was made although the fit stayed far above the noise floor."""
+    if not (floor > 0 and fun > ratio * floor):
+        return ""
+    if restarts == 0:
+        return (f"the best fit is {fun / floor:.1f}x the noise floor (a restart is due above "
+                f"{ratio:.3g}x) and no restart was allowed"
+                + ("; under a budget the restarts default to 0 (a budget caps the search): "
+                   "give restarts=N for up to N further runs, each with the whole budget"
+                   if limited else ""))
+    return (f"the best fit is {fun / floor:.1f}x the noise floor after the {restarts} restart(s) "
+            "allowed")
 
 
 def restart_seeds(seed: int, n: int) -> list[int]:
@@ -113,7 +190,8 @@ class SolverResult:
     ``starts``: runs or starts made; ``polish_evaluations``: the best run's polish;
     ``polish_s``: seconds of every polish; ``run_evaluations``: the best run's
     evaluations with its polish (for the least-squares solver: every pass and the
-    polish, without the screened sample).
+    polish, without the screened sample); ``skipped``: what the solver promises and did
+    not do, with the reason (``{"polish": ..., "restarts": ...}``).
     """
 
     x: np.ndarray
@@ -130,6 +208,7 @@ class SolverResult:
     polish_evaluations: int = 0
     polish_s: float = 0.0
     run_evaluations: int = 0
+    skipped: dict = dataclasses.field(default_factory=dict)
 
 
 def solve(problem: Any, solver: Any, termination: Termination | None = None, *, seed: int,
@@ -159,6 +238,7 @@ class _Run:
     history: np.ndarray
     polish_evaluations: int
     polish_s: float
+    polish_skipped: str = ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -174,6 +254,9 @@ class MetaheuristicState:
     runs: tuple[_Run, ...] = ()
     best: int = -1
     reason: str | None = None
+    plan: BudgetPlan | None = None
+    run_termination: Termination | None = None
+    floor: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -185,20 +268,24 @@ class Metaheuristic:
     ==================  =================================================================
     optimizer           an :class:`~emaphm.optim.base.Optimizer` (``DE()``, ``PSO()``, ...)
     polish              refine the run's best point by :func:`~emaphm.optim.local.compass_search`
-                        (step 0.05 down to 1e-4), charged to an evaluation or wall-clock
-                        termination and skipped when too little is left or a callback
-                        stopped the run
+                        (step 0.05 down to 1e-4); skipped when a callback stopped the run
+                        (the result's ``skipped`` says why)
     polish_evaluations  most evaluations one polish may spend
     restarts            further runs, with seeds spawned from the seed (:func:`restart_seeds`),
                         made while the best fit exceeds ``restart_ratio`` times the
-                        problem's ``fitness_floor`` (a wrong basin); each run gets the
-                        whole termination
+                        problem's ``fitness_floor`` (a wrong basin)
     restart_ratio       see ``restarts`` (``inf``: never)
+    label               the name the solver goes by (default the optimizer's ``name``): a
+                        registered optimizer's name (:func:`emaphm.optim.register`)
     ==================  =================================================================
 
     Each :meth:`step` is one ask/tell iteration; the one that ends a run also polishes it
     and starts the next. The termination (default: the optimizer's own) applies to each
-    run, as to :func:`emaphm.optim.minimize`.
+    run, as to :func:`emaphm.optim.minimize`; a budget of evaluations or seconds holds
+    :data:`POLISH_SHARE` of it (at most ``polish_evaluations``) back for the run's polish
+    (:func:`plan_budget`), so that a budget is never spent before the polish. Where the
+    fit stays far above the floor with no restart left, or the polish could not be made,
+    the result's ``skipped`` says why.
     """
 
     optimizer: Optimizer
@@ -206,6 +293,7 @@ class Metaheuristic:
     restarts: int = 0
     restart_ratio: float = math.inf
     polish_evaluations: int = 2000
+    label: str = ""
     kind = "population"
 
     def __post_init__(self) -> None:
@@ -220,20 +308,24 @@ class Metaheuristic:
 
     @property
     def name(self) -> str:
-        return self.optimizer.name
+        return self.label or self.optimizer.name
 
-    def _start(self, problem: Any, termination: Termination, seed: int, t0: float,
-               seeds: tuple[int, ...], runs: tuple = (), best: int = -1) -> MetaheuristicState:
+    def _start(self, problem: Any, state: MetaheuristicState, seed: int) -> MetaheuristicState:
         opt = self.optimizer.init(as_bounds(problem.bounds), _as_generator(seed))
-        state = MetaheuristicState(termination, seeds, opt, time.perf_counter(), t0, runs, best)
-        reason = termination.check(opt, 0.0)     # as resume(): a finished budget stops at once
+        state = replace(state, opt=opt, run_t0=time.perf_counter())
+        reason = state.run_termination.check(opt, 0.0)  # as resume(): a spent budget stops at once
         return self._finish_run(problem, state, reason) if reason is not None else state
 
     def init(self, problem: Any, termination: Termination | None, seed: int) -> MetaheuristicState:
         if termination is None:
             termination = self.optimizer.default_termination()
         seeds = (seed, *restart_seeds(seed, self.restarts))
-        return self._start(problem, termination, seed, time.perf_counter(), seeds)
+        plan = plan_budget(termination, self.polish, self.polish_evaluations)
+        t0 = time.perf_counter()
+        state = MetaheuristicState(termination, seeds, None, t0, t0, plan=plan,
+                                   run_termination=plan.run_termination(termination),
+                                   floor=float(getattr(problem, "fitness_floor", 0.0) or 0.0))
+        return self._start(problem, state, seed)
 
     def step(self, problem: Any, state: MetaheuristicState,
              callback: Callable[[Any], Any] | None = None) -> MetaheuristicState:
@@ -243,7 +335,7 @@ class Metaheuristic:
         state = replace(state, opt=opt)
         if callback is not None and callback(opt):
             return self._finish_run(problem, state, "callback")
-        reason = state.termination.check(opt, time.perf_counter() - state.run_t0)
+        reason = state.run_termination.check(opt, time.perf_counter() - state.run_t0)
         return state if reason is None else self._finish_run(problem, state, reason)
 
     def _finish_run(self, problem: Any, state: MetaheuristicState, reason: str) -> MetaheuristicState:
@@ -259,21 +351,23 @@ class Metaheuristic:
         floor = float(getattr(problem, "fitness_floor", 0.0) or 0.0)
         limit = self.restart_ratio * floor if floor > 0 else math.inf
         if len(runs) < len(state.seeds) and runs[best].fun > limit and reason != "callback":
-            return self._start(problem, state.termination, state.seeds[len(runs)], state.t0,
-                               state.seeds, runs, best)
+            return self._start(problem, replace(state, runs=runs, best=best),
+                               state.seeds[len(runs)])
         return replace(state, runs=runs, best=best, opt=None, reason=runs[best].res.reason)
 
     def _polish(self, problem: Any, res: OptimizeResult, state: MetaheuristicState) -> _Run:
         history = np.asarray(res.history, dtype=float)
-        evals, seconds = remaining(state.termination, res.nfev, time.perf_counter() - state.t0)
+        evals, seconds = state.plan.polish_left(res.nfev, time.perf_counter() - state.run_t0)
         evals = min(self.polish_evaluations, evals)
-        if self.polish and np.isfinite(res.fun) and res.reason != "callback" \
-                and evals >= 2 * res.x.size and seconds > 0:
+        if not self.polish:
+            return _Run(res, res.x, float(res.fun), history, 0, 0.0)
+        why = _skipped_polish(res.fun, res.reason, evals, seconds, res.x.size)
+        if not why:
             pol = compass_search(problem.evaluate, res.x, problem.bounds, f0=res.fun,
                                  max_evals=int(evals), max_seconds=seconds)
             return _Run(res, pol.x, float(pol.fun), np.concatenate([history, pol.history[1:]]),
                         pol.nfev, pol.elapsed_s)
-        return _Run(res, res.x, float(res.fun), history, 0, 0.0)
+        return _Run(res, res.x, float(res.fun), history, 0, 0.0, why)
 
     def result(self, state: MetaheuristicState) -> SolverResult:
         b = state.runs[state.best]
@@ -284,7 +378,15 @@ class Metaheuristic:
             fun_raw=float(b.res.fun), starts=len(state.runs),
             polish_evaluations=b.polish_evaluations,
             polish_s=sum(r.polish_s for r in state.runs),
-            run_evaluations=int(b.res.nfev) + b.polish_evaluations)
+            run_evaluations=int(b.res.nfev) + b.polish_evaluations,
+            skipped=self._skipped(state))
+
+    def _skipped(self, state: MetaheuristicState) -> dict[str, str]:
+        b = state.runs[state.best]
+        out = {"polish": b.polish_skipped} if b.polish_skipped else {}
+        why = "" if b.res.reason == "callback" else _skipped_restarts(
+            b.fun, state.floor, self.restart_ratio, self.restarts, state.plan.limited)
+        return {**out, "restarts": why} if why else out
 
 
 # ----------------------------------------------------------------------------- a function
@@ -296,76 +398,147 @@ class _Spent(Exception):
 
 @dataclass(frozen=True, eq=False)
 class CallableState:
-    """Progress of a :class:`CallableSolver`: nothing until its one step has run."""
+    """Progress of a :class:`CallableSolver`: the runs made so far (each a :class:`_Run`)."""
 
     termination: Termination | None
     seed: int
     t0: float
+    seeds: tuple[int, ...] = ()
+    plan: BudgetPlan | None = None
+    runs: tuple[_Run, ...] = ()
+    best: int = -1
+    floor: float = 0.0
     result: SolverResult | None = None
     reason: str | None = None
 
 
 @dataclass(frozen=True)
 class CallableSolver:
-    """A plain function as a solver: ``fn(objective, bounds, rng) -> x``.
+    """A plain function as a solver: ``fn(objective, bounds, rng) -> x``, polished and
+    restarted as :class:`Metaheuristic` polishes and restarts an optimizer.
 
     ``objective(X) -> y`` is the problem's batch fitness ((n, n_var) -> (n,)), ``bounds``
     the pair ``(lo, hi)`` and ``rng`` a :class:`numpy.random.Generator` seeded from the
-    seed. One :meth:`step` runs the function. The result is the best point it evaluated
-    or returned (whichever fits better). An evaluation or wall-clock termination is
-    enforced: once spent, the objective stops the function, and the best point so far is
-    the result (reason ``"max_evaluations"`` or ``"wall_clock"``); otherwise the reason
-    is ``"returned"``. ``name`` defaults to the function's name.
+    seed (a restart's from :func:`restart_seeds`). One :meth:`step` is one run of the
+    function and its polish. A run's result is the best point the function evaluated or
+    returned (whichever fits better). An evaluation or wall-clock termination is enforced:
+    once a run's share is spent, the objective stops the function and the best point so
+    far is the run's result (reason ``"max_evaluations"`` or ``"wall_clock"``; otherwise
+    ``"returned"``); each run gets the whole budget, less the polish's share
+    (:func:`plan_budget`). ``polish``, ``polish_evaluations``, ``restarts`` and
+    ``restart_ratio`` as in :class:`Metaheuristic` (default: polished, no restart);
+    ``name`` defaults to the function's name.
     """
 
     fn: Callable[..., Any]
     name: str = ""
+    polish: bool = True
+    restarts: int = 0
+    restart_ratio: float = math.inf
+    polish_evaluations: int = 2000
     kind = "population"
 
     def __post_init__(self) -> None:
         if not callable(self.fn):
             raise ValueError(f"CallableSolver needs a function fn(objective, bounds, rng) -> x, "
                              f"got {type(self.fn).__name__}")
+        check_int("CallableSolver", "restarts", self.restarts, 0)
+        check_int("CallableSolver", "polish_evaluations", self.polish_evaluations, 1)
+        if not isinstance(self.polish, bool):
+            raise ValueError(f"CallableSolver: polish must be True or False, got {self.polish!r}")
+        if not (isinstance(self.restart_ratio, (int, float)) and self.restart_ratio > 1):
+            raise ValueError(f"CallableSolver: restart_ratio must be a number > 1, got "
+                             f"{self.restart_ratio!r}")
         object.__setattr__(self, "name", self.name or getattr(self.fn, "__name__", "callable"))
 
     def init(self, problem: Any, termination: Termination | None, seed: int) -> CallableState:
-        return CallableState(termination, seed, time.perf_counter())
+        seeds = (seed, *restart_seeds(seed, self.restarts))
+        return CallableState(termination, seed, time.perf_counter(), seeds,
+                             plan_budget(termination, self.polish, self.polish_evaluations),
+                             floor=float(getattr(problem, "fitness_floor", 0.0) or 0.0))
 
     def step(self, problem: Any, state: CallableState,
              callback: Callable[[Any], Any] | None = None) -> CallableState:
-        st, termination = state, state.termination
+        i = len(state.runs)
+        res = self._call(problem, state, state.seeds[i], callback)
+        run = self._polish(problem, res, state)
+        runs = state.runs + (run,)
+        best = i if state.best < 0 or run.fun < runs[state.best].fun else state.best
+        limit = self.restart_ratio * state.floor if state.floor > 0 else math.inf
+        state = replace(state, runs=runs, best=best)
+        if len(runs) < len(state.seeds) and run.res.reason != "callback" and runs[best].fun > limit:
+            return state
+        return replace(state, result=self._result(state), reason=runs[best].res.reason)
+
+    def _call(self, problem: Any, state: CallableState, seed: int,
+              callback: Callable[[Any], Any] | None) -> OptimizeResult:
+        """One run of the function, stopped when its share of the budget is spent."""
         b = as_bounds(problem.bounds)
+        plan, t_run = state.plan, time.perf_counter()
+        done = sum(r.res.nfev + r.polish_evaluations for r in state.runs)
+        share = plan.evals - plan.polish_evals
+        seconds = plan.seconds - plan.polish_seconds
         best = {"x": b.from_normalized(np.full(b.n_var, 0.5)), "f": math.inf, "nfev": 0}
 
         def objective(X: Any) -> np.ndarray:
             X = np.atleast_2d(np.asarray(X, dtype=float))
             if X.ndim != 2 or X.shape[1] != b.n_var:
                 raise ValueError(f"the objective takes points of shape (n, {b.n_var}), got {X.shape}")
-            evals, seconds = remaining(termination, best["nfev"], time.perf_counter() - st.t0)
-            if X.shape[0] > evals or seconds <= 0:
-                raise _Spent("max_evaluations" if seconds > 0 else "wall_clock")
+            evals = share - best["nfev"]
+            left = seconds - (time.perf_counter() - t_run)
+            if X.shape[0] > evals or left <= 0:
+                raise _Spent("max_evaluations" if left > 0 else "wall_clock")
             y = sanitize_fitness(problem.evaluate(np.clip(X, b.lo, b.hi)), X.shape[0])
             best["nfev"] += X.shape[0]
             i = int(np.argmin(y))
             if y[i] < best["f"]:
                 best["x"], best["f"] = np.clip(X[i], b.lo, b.hi), float(y[i])
-            if callback is not None and callback(_Progress(best["f"], best["nfev"])):
+            if callback is not None and callback(_Progress(best["f"], done + best["nfev"])):
                 raise _Spent("callback")
             return y
 
         reason = "returned"
         try:
-            x = self.fn(objective, (b.lo.copy(), b.hi.copy()), np.random.default_rng(st.seed))
+            x = self.fn(objective, (b.lo.copy(), b.hi.copy()), np.random.default_rng(seed))
             x = np.clip(np.asarray(x, dtype=float).reshape(b.n_var), b.lo, b.hi)
             objective(x[None, :])
         except _Spent as exc:
             reason = str(exc)
-        res = SolverResult(x=np.asarray(best["x"]), fun=best["f"], nfev=best["nfev"],
-                           nit=1, history=np.array([best["f"]]), reason=reason,
-                           elapsed_s=time.perf_counter() - st.t0, algorithm=self.name,
-                           x_raw=np.asarray(best["x"]), fun_raw=best["f"],
-                           run_evaluations=best["nfev"])
-        return replace(st, result=res, reason=reason)
+        return OptimizeResult(x=np.asarray(best["x"]), fun=best["f"], nfev=best["nfev"], nit=1,
+                              history=np.array([best["f"]]), reason=reason,
+                              elapsed_s=time.perf_counter() - t_run, algorithm=self.name)
+
+    def _polish(self, problem: Any, res: OptimizeResult, state: CallableState) -> _Run:
+        """The run's polish (:func:`~emaphm.optim.local.compass_search`), as a
+        :class:`Metaheuristic` polishes its runs."""
+        history = np.asarray(res.history, dtype=float)
+        if not self.polish:
+            return _Run(res, res.x, float(res.fun), history, 0, 0.0)
+        evals, seconds = state.plan.polish_left(res.nfev, res.elapsed_s)
+        evals = min(self.polish_evaluations, evals)
+        why = _skipped_polish(res.fun, res.reason, evals, seconds, res.x.size)
+        if why:
+            return _Run(res, res.x, float(res.fun), history, 0, 0.0, why)
+        pol = compass_search(problem.evaluate, res.x, problem.bounds, f0=res.fun,
+                             max_evals=int(evals), max_seconds=seconds)
+        return _Run(res, pol.x, float(pol.fun), np.concatenate([history, pol.history[1:]]),
+                    pol.nfev, pol.elapsed_s)
+
+    def _result(self, state: CallableState) -> SolverResult:
+        b = state.runs[state.best]
+        skipped = {"polish": b.polish_skipped} if b.polish_skipped else {}
+        why = "" if b.res.reason == "callback" else _skipped_restarts(
+            b.fun, state.floor, self.restart_ratio, self.restarts, state.plan.limited)
+        if why:
+            skipped["restarts"] = why
+        return SolverResult(
+            x=np.asarray(b.x), fun=float(b.fun),
+            nfev=sum(r.res.nfev + r.polish_evaluations for r in state.runs), nit=len(state.runs),
+            history=b.history, reason=b.res.reason, elapsed_s=time.perf_counter() - state.t0,
+            algorithm=self.name, x_raw=np.asarray(b.res.x), fun_raw=float(b.res.fun),
+            starts=len(state.runs), polish_evaluations=b.polish_evaluations,
+            polish_s=sum(r.polish_s for r in state.runs),
+            run_evaluations=int(b.res.nfev) + b.polish_evaluations, skipped=skipped)
 
     def result(self, state: CallableState) -> SolverResult:
         return state.result

@@ -6,7 +6,9 @@ during maintenance, at intervals in flight) and predicts when it will reach its
 failure threshold:
 
 * :mod:`.history`: the SQLite store of inspections (:class:`HealthHistory`);
-* :mod:`.workflow`: :func:`inspect`, diagnose a trace and record it;
+* :mod:`.workflow`: :func:`record_inspection`, diagnose a trace and record it (``inspect``
+  before 0.5, a name that shadowed the standard library's: kept for one release with a
+  DeprecationWarning, as ``Assessment`` for :class:`IdentificationSpread`);
 * :mod:`.uncertainty`: the interval of each identified component
   (:func:`identify_with_spread`);
 * :mod:`.thresholds`: health indicators and failure thresholds per fault mode;
@@ -36,6 +38,7 @@ _EXPORTS = {
     "TimeOrderError": "history",
     "UnknownActuatorError": "history",
     "inspect": "workflow",
+    "record_inspection": "workflow",
     "trace_fingerprint": "history",
     "alpha_lambda": "metrics",
     "coverage": "metrics",
@@ -66,6 +69,7 @@ _EXPORTS = {
     "next_inspection": "inspection",
     "plan_inspection": "inspection",
     "Assessment": "uncertainty",
+    "IdentificationSpread": "uncertainty",
     "KInterval": "uncertainty",
     "identify_with_spread": "uncertainty",
 }
@@ -74,10 +78,11 @@ _EXPORTS = {
 __getattr__, __dir__ = lazy_exports(__name__, globals(), _EXPORTS)
 
 __all__ = [
-    "HealthHistory", "HistoryData", "Inspection", "Actuator", "CalibrationRecord", "inspect",
+    "HealthHistory", "HistoryData", "Inspection", "Actuator", "CalibrationRecord",
+    "record_inspection",
     "trace_fingerprint",
     "HistoryError", "UnknownActuatorError", "TimeOrderError", "DuplicateInspectionError",
-    "identify_with_spread", "Assessment", "KInterval",
+    "identify_with_spread", "IdentificationSpread", "KInterval",
     "FailureThresholds", "DEFAULT_FAILURE_THRESHOLDS", "INDICATORS",
     "TrendFit", "fit_trend", "predict_rul", "RULPrediction", "prognose", "Prognosis",
     "rul_track", "RULTrack",

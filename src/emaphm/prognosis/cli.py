@@ -38,6 +38,14 @@ MAX_SPREAD_RUNS = 100
 MAX_INSPECTIONS = 200
 
 
+def _algorithm_choices() -> tuple[str, ...]:
+    """The names --algorithm takes: the built-in ones and those registered in this process
+    (:func:`emaphm.optim.register`; read without importing NumPy when none can be)."""
+    reg = sys.modules.get("emaphm.optim.registry")
+    own = tuple(sorted(reg.registered())) if reg is not None else ()
+    return ("lsq", "pso", "de", "gwo", "scipy-de", "cmaes") + own
+
+
 def _usage(msg: str) -> Exception:
     return UsageError(msg)
 
@@ -100,15 +108,16 @@ def cmd_register(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from .._cli_common import calibration_seconds
     from ..calibration import CalibrationError, calibrate
-    from ..params import load_params, siemens_1fk7060
+    from ..params import load_params, resolve_params
     from ..progress import CountProgress, compile_notice
     from ..traces import read_trace
     from .history import HealthHistory
 
-    base = load_params(args.params, partial=True) if args.params else siemens_1fk7060()
+    given = load_params(args.params, partial=True) if args.params else None
     with HealthHistory(db_path(args), create=False) as h:
         h.check_time(args.actuator, args.at, "calibration time")   # cheap checks before the fit
         traces = [read_trace(_trace_path(name)) for name in args.traces]
+        base = resolve_params(given, traces, warn=False)[0]       # else the traces' own
         progress = CountProgress("calibrating:", enabled=not args.quiet, noun=" model runs")
         if not args.quiet:
             warn_if_long("emaphm history calibrate",
@@ -117,7 +126,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
                          "diagnostic profile each is enough)")
         try:
             with compile_notice(progress, enabled=not args.quiet):
-                res = calibrate(traces, base, sources=[Path(n).name for n in args.traces],
+                res = calibrate(traces, given, sources=[Path(n).name for n in args.traces],
                                 progress=progress.update)
         except CalibrationError as exc:
             raise _usage(str(exc)) from None
@@ -155,7 +164,7 @@ def cmd_add(args: argparse.Namespace) -> int:
     from ..traces import TraceError, read_trace
     from ..identify import IdentificationConfig
     from .history import HealthHistory
-    from .workflow import inspect
+    from .workflow import record_inspection as inspect
 
     budget = budget_option(args.budget)
     params = None
@@ -173,10 +182,10 @@ def cmd_add(args: argparse.Namespace) -> int:
         trace = read_trace(_trace_path(args.trace))
         if not args.quiet:
             if params is None:
-                from ..params import siemens_1fk7060
+                from ..params import resolve_params
 
                 cal = h.calibration(args.actuator, args.at)
-                est_params = cal[1] if cal is not None else siemens_1fk7060()
+                est_params = cal[1] if cal is not None else resolve_params(None, trace)[0]
             else:
                 est_params = params
             warn_if_long("emaphm history add",
@@ -560,7 +569,8 @@ def _register_history(subparsers: Any) -> None:
     c.add_argument("actuator", type=actuator_id)
     c.add_argument("traces", nargs="+", help="healthy traces (.csv or .parquet)")
     c.add_argument("--at", type=_time, required=True, help="time of the calibration")
-    c.add_argument("--params", help="data-sheet parameters TOML (default: the preset)")
+    c.add_argument("--params", help="data-sheet parameters TOML (default: the traces' own "
+                   "actuator, from their metadata, else the preset)")
     c.add_argument("--json", action="store_true")
     c.add_argument("--quiet", action="store_true", help="no progress line")
     _db_arg(c)
@@ -602,7 +612,7 @@ def _register_add(hs: Any) -> None:
     a.add_argument("--at", type=_time, required=True,
                    help="time of the inspection (flight hours, 0 to 1e6, or cycles, 0 to 1e9), "
                         "after the last one")
-    a.add_argument("--algorithm", default="lsq", choices=("lsq", "pso", "de", "gwo", "scipy-de", "cmaes"),
+    a.add_argument("--algorithm", default="lsq", choices=_algorithm_choices(),
                    help="lsq (default: least squares, warm-started from the last inspection), "
                         "the paper's pso, de, gwo, or the baselines")
     a.add_argument("--fault-model", choices=("physical", "paper"), default=None,
@@ -615,7 +625,8 @@ def _register_add(hs: Any) -> None:
     a.add_argument("--runs", type=_spread_runs, default=5,
                    help="identifications for seeds/bootstrap (default 5)")
     a.add_argument("--params", help="actuator parameters TOML (default: the actuator's latest "
-                                    "calibration at that time, else the preset)")
+                                    "calibration at that time, else the trace's own actuator, "
+                                    "else the preset)")
     a.add_argument("--json", action="store_true")
     a.add_argument("--quiet", action="store_true",
                    help="no progress and no table: the record in one line")

@@ -235,6 +235,15 @@ class Inspection:
             d[name] = [float(x) for x in d[name]]
         return d
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Inspection":
+        """The record :meth:`to_dict` wrote (``fault_model`` is read from ``extra``)."""
+        d = {k: v for k, v in data.items() if k != "fault_model"}
+        for name in ("k", "k_lo", "k_hi"):
+            d[name] = np.asarray(d[name], dtype=float)
+        d["extra"] = dict(d.get("extra") or {})
+        return cls(**d)
+
 
 @dataclass(frozen=True)
 class SkippedInspection:
@@ -942,10 +951,11 @@ def __getattr__(name: str):
     if name == "inspect":
         import warnings
 
-        from .workflow import inspect
+        from .workflow import record_inspection as inspect
 
-        warnings.warn("emaphm.prognosis.history.inspect moved to emaphm.prognosis.workflow.inspect "
-                      "(also emaphm.prognosis.inspect); the old name goes in the next release",
+        warnings.warn("emaphm.prognosis.history.inspect moved to emaphm.prognosis.workflow."
+                      "record_inspection (also emaphm.prognosis.record_inspection); the old name "
+                      "goes in the next release",
                       DeprecationWarning, stacklevel=2)
         return inspect
     raise AttributeError(f"module 'emaphm.prognosis.history' has no attribute {name!r}")

@@ -204,6 +204,10 @@ class InspectionPolicy:
         return {"risk": self.risk, "max_interval": self.max_interval,
                 "min_interval": self.min_interval, "default_interval": self.default_interval}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "InspectionPolicy":
+        return cls(**dict(data))
+
 
 def n_samples_for(risk: float, base: int = 4000) -> int:
     """Monte Carlo draws per indicator for a plan at ``risk``: at least ``base`` and at
@@ -337,7 +341,21 @@ class NextInspection:
                               "source": iv.source},
                 "p_indicator": dict(self.p_indicator),
                 "t_star": (None if self.t_star is None
-                           else self.t_star if math.isfinite(self.t_star) else None)}
+                           else self.t_star if math.isfinite(self.t_star) else None),
+                "t_star_never": self.t_star is not None and not math.isfinite(self.t_star)}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "NextInspection":
+        """The plan :meth:`to_dict` wrote."""
+        iv = data["intervals"]
+        t_star = math.inf if data.get("t_star_never") else data.get("t_star")
+        return cls(at=data["at"], risk=data["risk"], indicator=data["indicator"],
+                   reason=data["reason"], rule=data["rule"], target=data["target"],
+                   t_now=data["t_now"], t_last=data["t_last"],
+                   intervals=IntervalDefaults(default=iv["default"], min=iv["min"], max=iv["max"],
+                                              source=iv["source"]),
+                   time_unit=data.get("time_unit", "h"),
+                   p_indicator=dict(data.get("p_indicator") or {}), t_star=t_star)
 
 
 def _t(x: float, unit: str) -> str:

@@ -130,6 +130,15 @@ class AlphaLambda:
                 "mass": self.mass.tolist(), "passed": [bool(x) for x in self.passed],
                 "score": self.score}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "AlphaLambda":
+        arr = (lambda v: np.asarray(v, dtype=float))
+        return cls(alpha=data["alpha"], beta=data["beta"], lambdas=arr(data["lambdas"]),
+                   t_lambda=arr(data["t_lambda"]), rul_true=arr(data["rul_true"]),
+                   rul_pred=np.array([math.inf if x is None else x for x in data["rul_pred"]],
+                                     dtype=float),
+                   mass=arr(data["mass"]), passed=np.asarray(data["passed"], dtype=bool))
+
 
 def alpha_lambda(times: Any, predictions: Any, eol: float, *, alpha: float = 0.2,
                  lambdas: Sequence[float] = (0.5, 0.6, 0.7, 0.8, 0.9), beta: float = 0.5,

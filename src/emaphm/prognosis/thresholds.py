@@ -119,6 +119,10 @@ class FailureThresholds:
     def to_dict(self) -> dict[str, float]:
         return asdict(self)
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, float]) -> "FailureThresholds":
+        return cls(**dict(data))
+
 
 DEFAULT_FAILURE_THRESHOLDS = FailureThresholds()
 

@@ -62,6 +62,7 @@ failure threshold, moved by the model discrepancy, lies beyond it) says so in
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
@@ -238,6 +239,13 @@ class TrendFit:
         return {"model": self.model, "theta": self.theta.tolist(), "cov": self.cov.tolist(),
                 "t_ref": self.t_ref, "sigma": self.sigma, "rss": self.rss, "n": self.n,
                 "aicc": self.aicc}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "TrendFit":
+        p = len(data["theta"])
+        return cls(model=data["model"], theta=np.asarray(data["theta"], dtype=float),
+                   cov=np.asarray(data["cov"], dtype=float).reshape(p, p), t_ref=data["t_ref"],
+                   sigma=data["sigma"], rss=data["rss"], n=data["n"], aicc=data["aicc"])
 
 
 def _chol(cov: np.ndarray) -> np.ndarray:
@@ -506,6 +514,9 @@ class RULPrediction:
     discrepancy: float = 0.0
     bounds: tuple = (-math.inf, math.inf)
     extrapolated: str = ""
+    #: the share of draws that reach the threshold, kept where the draws are not (a
+    #: prediction read back from :meth:`to_dict` without ``samples``)
+    reach: float | None = field(default=None, repr=False)
 
     @property
     def top_fit(self) -> TrendFit:
@@ -515,6 +526,8 @@ class RULPrediction:
     @property
     def p_reach(self) -> float:
         """Share of draws whose trend ever reaches the threshold."""
+        if self.samples.size == 0 and self.reach is not None:
+            return float(self.reach)
         return float(np.mean(np.isfinite(self.samples)))
 
     def no_growth(self, span: float) -> bool:
@@ -564,7 +577,30 @@ class RULPrediction:
              "extrapolated": self.extrapolated or None}
         if samples:
             d["samples"] = [_json_float(x) for x in self.samples]
+            d["theta"] = {m: np.asarray(th, dtype=float).tolist() for m, th in self.theta.items()}
         return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "RULPrediction":
+        """The prediction :meth:`to_dict` wrote; with ``samples=True`` it holds the draws
+        (for plots and :meth:`p_fail_within`), else ``p_reach`` stands in for them."""
+        inf = (lambda x, sign=1.0: sign * math.inf if x is None else float(x))
+        samples = data.get("samples")
+        lo, hi = data.get("bounds") or (None, None)
+        return cls(indicator=data["indicator"], threshold=data["threshold"], t_now=data["t_now"],
+                   model=data["model"], weights=dict(data["weights"]),
+                   fits={m: TrendFit.from_dict(f) for m, f in data["fits"].items()},
+                   median=inf(data["rul_median"]), lo=inf(data["rul_lo"]),
+                   hi=inf(data["rul_hi"]), level=data["level"], p_failed=data["p_failed"],
+                   samples=np.array([inf(x) for x in samples] if samples is not None else [],
+                                    dtype=float),
+                   theta={m: np.asarray(th, dtype=float)
+                          for m, th in (data.get("theta") or {}).items()},
+                   current=data.get("current", math.nan), seed=data.get("seed"),
+                   excluded=tuple(data.get("excluded") or ()),
+                   discrepancy=data.get("discrepancy", 0.0), bounds=(inf(lo, -1.0), inf(hi)),
+                   extrapolated=data.get("extrapolated") or "",
+                   reach=None if samples is not None else data.get("p_reach"))
 
 
 def _json_float(x: float) -> float | None:
@@ -945,14 +981,43 @@ class Prognosis:
                 if indicator_state(p, span)[0] != "no growth"]
         return min(live, key=lambda p: (p.median, p.lo)) if live else None
 
-    def to_dict(self) -> dict[str, Any]:
+    def to_dict(self, samples: bool = False) -> dict[str, Any]:
         """As data; each prediction with its ``state`` (:func:`indicator_state`: past
-        threshold, predicted or no growth), as the table reads it."""
+        threshold, predicted or no growth), as the table reads it; the history it was
+        made from (``times``, ``K``) and its ``options``. ``samples``: with each
+        prediction's draws (:meth:`RULPrediction.to_dict`)."""
         span = float(self.times[-1] - self.times[0]) if self.times.size else 0.0
         return {"actuator": self.actuator, "t_now": self.t_now, "time_unit": self.time_unit,
                 "thresholds": self.thresholds.to_dict(), "n_inspections": int(self.times.size),
-                "predictions": {n: {**p.to_dict(), "state": indicator_state(p, span)[0]}
-                                for n, p in self.predictions.items()}}
+                "predictions": {n: {**p.to_dict(samples), "state": indicator_state(p, span)[0]}
+                                for n, p in self.predictions.items()},
+                "times": self.times.tolist(), "K": self.K.tolist(),
+                "options": json.loads(json.dumps(dict(self.options), default=str))}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Prognosis":
+        """The prognosis :meth:`to_dict` wrote (each prediction's draws where it kept
+        them)."""
+        return cls(actuator=data["actuator"], t_now=data["t_now"], time_unit=data["time_unit"],
+                   predictions={n: RULPrediction.from_dict(p)
+                                for n, p in data["predictions"].items()},
+                   thresholds=FailureThresholds.from_dict(data["thresholds"]),
+                   times=np.asarray(data.get("times", []), dtype=float),
+                   K=np.asarray(data.get("K", []), dtype=float).reshape(-1, 8),
+                   options=dict(data.get("options") or {}))
+
+    def to_frame(self) -> Any:
+        """One row per health indicator: its threshold, state, median RUL and interval,
+        the trend model (pandas)."""
+        from ..frames import require_pandas
+
+        pd = require_pandas("Prognosis.to_frame")
+        span = float(self.times[-1] - self.times[0]) if self.times.size else 0.0
+        return pd.DataFrame([{"indicator": n, "threshold": p.threshold,
+                              "state": indicator_state(p, span)[0], "rul_median": p.median,
+                              "rul_lo": p.lo, "rul_hi": p.hi, "level": p.level,
+                              "p_failed": p.p_failed, "current": p.current, "model": p.model}
+                             for n, p in self.predictions.items()])
 
 
 def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
@@ -1029,6 +1094,25 @@ class RULTrack:
                 "median": [_json_float(x) for x in self.median],
                 "lo": [_json_float(x) for x in self.lo], "hi": [_json_float(x) for x in self.hi],
                 "models": list(self.models)}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "RULTrack":
+        """The track :meth:`to_dict` wrote (without its draws: ``samples`` is empty)."""
+        arr = (lambda v: np.array([math.inf if x is None else x for x in v], dtype=float))
+        return cls(indicator=data["indicator"], threshold=data["threshold"],
+                   level=data["level"], times=np.asarray(data["times"], dtype=float),
+                   n_used=np.asarray(data["n_used"], dtype=int), median=arr(data["median"]),
+                   lo=arr(data["lo"]), hi=arr(data["hi"]), samples=np.zeros((0, 0)),
+                   models=tuple(data.get("models") or ()))
+
+    def to_frame(self) -> Any:
+        """One row per prediction along the history (pandas)."""
+        from ..frames import require_pandas
+
+        pd = require_pandas("RULTrack.to_frame")
+        return pd.DataFrame({"time": self.times, "n_used": self.n_used, "median": self.median,
+                             "lo": self.lo, "hi": self.hi,
+                             "model": list(self.models) or [None] * len(self.times)})
 
 
 def rul_track(t: Any, y: Any, threshold: float, *, seed: int, start: int = MIN_INSPECTIONS,

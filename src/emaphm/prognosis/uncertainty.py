@@ -64,7 +64,7 @@ from ..faults import K_NAMES
 from ..seeds import check_seed
 from ..fitness import eq4_weights, effective_samples
 
-__all__ = ["SPREAD_METHODS", "KInterval", "Assessment", "identify_with_spread",
+__all__ = ["SPREAD_METHODS", "KInterval", "IdentificationSpread", "identify_with_spread",
            "population_interval", "effective_samples",
            "IDENTIFICATION_ERROR_P90"]
 
@@ -105,6 +105,20 @@ class KInterval:
                 "method": self.method, "level": self.level, "n": self.n,
                 "details": self.details}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "KInterval":
+        return cls(k=np.asarray(data["k"], dtype=float), lo=np.asarray(data["lo"], dtype=float),
+                   hi=np.asarray(data["hi"], dtype=float), method=data["method"],
+                   level=data["level"], n=data["n"], details=dict(data.get("details") or {}))
+
+    def to_frame(self) -> Any:
+        """One row per component of k: its name, value and interval (pandas)."""
+        from ..frames import require_pandas
+
+        pd = require_pandas("KInterval.to_frame")
+        return pd.DataFrame({"component": [f"k{i + 1}" for i in range(len(self.k))],
+                             "name": list(K_NAMES), "k": self.k, "lo": self.lo, "hi": self.hi})
+
     def table(self) -> str:
         lines = [f"{'k':4s} {'component':14s} {'value':>8s} {'interval (' + format(self.level, '.0%') + ', ' + self.method + ')':>34s}"]
         for i, name in enumerate(K_NAMES):
@@ -113,8 +127,10 @@ class KInterval:
 
 
 @dataclass(frozen=True)
-class Assessment:
-    """An identification with the interval of its k (results as data).
+class IdentificationSpread:
+    """An identification with the interval of its k (results as data); named
+    ``Assessment`` before 0.5 (that name, kept for one release with a DeprecationWarning,
+    is taken by :mod:`emaphm.assessment`, the assessment of the diagnosis itself).
 
     ``identification`` is the run whose k is reported (the first run; for
     ``"seeds"`` the run of best fitness); ``runs`` all identifications made;
@@ -130,6 +146,26 @@ class Assessment:
     @property
     def k(self) -> np.ndarray:
         return self.interval.k
+
+    def to_dict(self) -> dict[str, Any]:
+        """As data: the identification reported, the interval, every run, the cost."""
+        return {"identification": self.identification.to_dict(),
+                "interval": self.interval.to_dict(),
+                "runs": [r.to_dict() for r in self.runs],
+                "evaluations": int(self.evaluations), "elapsed_s": float(self.elapsed_s)}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "IdentificationSpread":
+        from ..identify import Identification
+
+        return cls(identification=Identification.from_dict(data["identification"]),
+                   interval=KInterval.from_dict(data["interval"]),
+                   runs=tuple(Identification.from_dict(r) for r in data["runs"]),
+                   evaluations=int(data["evaluations"]), elapsed_s=float(data["elapsed_s"]))
+
+    def to_frame(self) -> Any:
+        """The interval of each component (:meth:`KInterval.to_frame`)."""
+        return self.interval.to_frame()
 
 
 class _Recorder:
@@ -210,7 +246,7 @@ def _check(method: str, level: float, n_runs: int, seed: Any) -> None:
 def identify_with_spread(trace: Any, config: Any = None, *, seed: int,
                          method: str = "population", level: float = 0.9, n_runs: int = 5,
                          params: Any = None, start: Any = None, error_floor: Any = None,
-                         retries: int = 2, callback: Any = None, **deprecated: Any) -> Assessment:
+                         retries: int = 2, callback: Any = None, **deprecated: Any) -> IdentificationSpread:
     """Identify ``k`` of ``trace`` and the interval of each component.
 
     ``config`` (an :class:`emaphm.identify.IdentificationConfig`, default the
@@ -298,7 +334,7 @@ def identify_with_spread(trace: Any, config: Any = None, *, seed: int,
         details.update(k_runs=kb.tolist(), block=ks[0])
         interval = KInterval(first.k.copy(), lo, hi, method, float(level), kb.shape[0], details)
         ident = first
-    return Assessment(identification=ident, interval=_with_floor(interval, floor), runs=tuple(runs),
+    return IdentificationSpread(identification=ident, interval=_with_floor(interval, floor), runs=tuple(runs),
                       evaluations=spent + (0 if method != "bootstrap" else
                                            int(sum(r.evaluations for r in runs[1:]))),
                       elapsed_s=time.perf_counter() - t0)
@@ -373,3 +409,17 @@ def _old_keywords(config: Any, trace: Any, params: Any, kw: dict[str, Any]) -> t
         trace = IdentificationProblem(trace, params=params, objective=kw["objective"],
                                       n_sub=config.n_sub, mode=config.mode)
     return config, trace
+
+
+def __getattr__(name: str) -> Any:
+    """``Assessment``, the name of :class:`IdentificationSpread` before 0.5, kept for one
+    release with a DeprecationWarning."""
+    if name == "Assessment":
+        import warnings
+
+        warnings.warn("emaphm.prognosis.Assessment is now IdentificationSpread (an "
+                      "identification with the interval of its k; emaphm.assessment is "
+                      "another thing); the old name goes in the next release",
+                      DeprecationWarning, stacklevel=2)
+        return IdentificationSpread
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

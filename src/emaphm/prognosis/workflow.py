@@ -1,6 +1,6 @@
 """The workflows of prognosis: diagnose a trace and record it; a whole degradation demo.
 
-:func:`inspect` is what ``emaphm history add``, the fleet demo and the degradation demo
+:func:`record_inspection` is what ``emaphm history add``, the fleet demo and the degradation demo
 do for each inspection: the cheap checks, the identification with the interval of each
 component (:func:`emaphm.prognosis.uncertainty.identify_with_spread`), the verdict
 (:func:`emaphm.verdict.diagnose_identification`) and the record
@@ -21,7 +21,7 @@ import numpy as np
 
 from .history import HealthHistory, Inspection, trace_fingerprint
 
-__all__ = ["inspect", "run_demo"]
+__all__ = ["record_inspection", "inspect", "run_demo"]
 
 #: inspect()'s keywords of version 0.3 that are identification settings now
 #: (:class:`emaphm.identify.IdentificationConfig`).
@@ -29,7 +29,7 @@ _OLD_CONFIG = ("algorithm", "budget", "options", "polish", "suspect_ratio", "fau
                "n_sub", "mode", "nuisance")
 
 
-def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, seed: int,
+def record_inspection(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, seed: int,
             config: Any = None, method: str = "population", n_runs: int = 5,
             level: float = 0.9, source: str | None = None, params: Any = None,
             thresholds: Any = None, start: Any = None, callback: Any = None,
@@ -42,17 +42,21 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     default the least-squares pipeline's) holds the identification's settings; ``method``,
     ``n_runs`` and ``level`` the interval's
     (:func:`emaphm.prognosis.uncertainty.identify_with_spread`); ``params`` the healthy
-    actuator (default: the actuator's own calibration at ``at``, else the preset). With
+    actuator (an :class:`~emaphm.params.ActuatorParams`, a dict or a TOML path; default:
+    the actuator's own calibration at ``at``, else the trace's own actuator, else the
+    preset: :func:`emaphm.params.resolve_params`; the identification's ``params_source``
+    says which). With
     the least-squares pipeline the search starts first from ``start``, by default the k
     of the actuator's last inspection under the same fault model (a warm start: faults
     grow slowly between inspections). Returns ``(inspection, assessment)``
-    (:class:`emaphm.prognosis.uncertainty.Assessment`). The keywords of version 0.3
+    (:class:`emaphm.prognosis.uncertainty.IdentificationSpread`). The keywords of version 0.3
     (``algorithm``, ``budget``, ``options``, ``fault_model``, ...) still work for one
     release, with a DeprecationWarning.
     """
     from ..fitness import trace_fault_model
     from ..identify import DEFAULT_ALGORITHM, IdentificationConfig
     from ..modes.current_sensor import UNOBSERVABLE_NOTE
+    from ..params import as_params
     from ..traces import validate
     from ..verdict import diagnose_identification, screen_sensors
     from .uncertainty import identify_with_spread
@@ -64,6 +68,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     history.check_next(actuator_id, at, fp)
     validate(trace, min_rotation=config.min_rotation)
     calibrated_at = None
+    params = as_params(params)
     if params is None:                 # the actuator's own calibration, where it has one
         cal = history.calibration(actuator_id, at)
         if cal is not None:
@@ -80,6 +85,9 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
     a = identify_with_spread(work, config, seed=seed, method=method, level=level, n_runs=n_runs,
                              params=params, start=start, callback=callback)
     ident = a.identification
+    if calibrated_at is not None:       # given here, from the history: say so
+        ident = replace(ident, params_source="calibration")
+        a = replace(a, identification=ident)
     diag = diagnose_identification(work, ident, params=params, thresholds=thresholds, k=a.k,
                                    findings={"current_sensor": finding})
     if not finding.observable:
@@ -92,6 +100,7 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
              "calibrated_at": calibrated_at,
              "nuisance": dict(ident.nuisance),
              "parameters": None if params is None else params.to_dict(),
+             "params_source": ident.params_source,
              "k_true": None if ident.k_true is None else ident.k_true.tolist(),
              "interval_details": {k: v for k, v in a.interval.details.items()
                                   if isinstance(v, (int, float, str))},
@@ -104,6 +113,15 @@ def inspect(history: HealthHistory, actuator_id: str, trace: Any, at: float, *, 
                       seed=int(seed), fitness=ident.fitness, evaluations=a.evaluations,
                       source=source, extra=extra)
     return ins, a
+
+
+def inspect(*args: Any, **kw: Any) -> tuple[Inspection, Any]:
+    """:func:`record_inspection` under its name before 0.5 (which shadowed the standard
+    library's ``inspect``), kept for one release with a DeprecationWarning."""
+    warnings.warn("emaphm.prognosis.inspect is now record_inspection (the old name shadows the "
+                  "standard library's inspect); it goes in the next release",
+                  DeprecationWarning, stacklevel=2)
+    return record_inspection(*args, **kw)
 
 
 def _old_keywords(config: Any, kw: dict[str, Any]) -> Any:
@@ -144,7 +162,7 @@ def _record_demo(h: HealthHistory, actuator: str, sc: Any, times: np.ndarray, *,
     for j, (t, tr) in enumerate(zip(times, run.traces)):
         if progress is not None:
             progress.restart(f"{sc.name}: inspection {j + 1}/{len(times)}: ")
-        inspect(h, actuator, tr, float(t), seed=seed, config=config, callback=progress)
+        record_inspection(h, actuator, tr, float(t), seed=seed, config=config, callback=progress)
     if progress is not None:
         progress.close()
 

@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from .derive import DERIVABLE, derive_missing, derived_meta
+
 __all__ = ["COLUMNS", "OPTIONAL_COLUMNS", "DRIVE_COLUMNS", "DRIVE_GROUPS", "UNITS", "TraceError",
            "Trace", "resample", "fingerprint"]
 
@@ -289,10 +291,23 @@ class Trace:
     def from_columns(cls, columns: Mapping[str, Any], meta: Mapping | None = None) -> Trace:
         """Build a trace from a mapping of column name -> 1-D array.
 
-        Needs every name of :data:`COLUMNS`; ``torque`` and the drive's signals
+        Needs every name of :data:`COLUMNS` but those a recording may leave out: the speed
+        ``omega_m`` and the third current ``i_c`` are derived where missing, as ``emaphm
+        import`` derives them (:func:`emaphm.traces.derive.derive_missing`; the metadata
+        says so: ``derived``, ``currents_measured: 2``). ``torque`` and the drive's signals
         (:data:`DRIVE_COLUMNS`) are used when present; other keys are ignored.
         """
-        _require_columns(columns.keys())
+        _require_columns(columns.keys(), derivable=True)
+        if any(c not in columns for c in DERIVABLE):
+            try:
+                columns, notes = derive_missing(
+                    {k: np.asarray(v, dtype=np.float64) for k, v in columns.items()},
+                    np.asarray(columns["t"], dtype=np.float64))
+            except (TypeError, ValueError) as exc:
+                raise TraceError(f"the columns cannot be read as float64 arrays of one length "
+                                 f"to derive {', '.join(c for c in DERIVABLE if c not in columns)} "
+                                 f"({exc}); pass one array of shape (n,) per column") from None
+            meta = derived_meta(meta or {}, notes)
         try:
             phases = [np.asarray(columns[p], dtype=np.float64) for p in ("i_a", "i_b", "i_c")]
         except (TypeError, ValueError) as exc:
@@ -334,11 +349,12 @@ class Trace:
     @classmethod
     def from_pandas(cls, df: Any, meta: Mapping | None = None) -> Trace:
         """A trace from a DataFrame with the columns of :data:`COLUMNS` (SI units; others are
-        ignored), its metadata ``meta`` or else ``df.attrs["emaphm"]``."""
+        ignored; ``omega_m`` and ``i_c`` derived where missing, as :meth:`from_columns`
+        says), its metadata ``meta`` or else ``df.attrs["emaphm"]``."""
         if not hasattr(df, "columns") or not hasattr(df, "to_numpy"):
             raise TraceError(f"Trace.from_pandas() needs a pandas DataFrame, got {type(df).__name__}")
         names = [str(c) for c in df.columns]
-        _require_columns(names, "DataFrame")
+        _require_columns(names, "DataFrame", derivable=True)
         if meta is None:
             meta = getattr(df, "attrs", {}).get("emaphm", {})
         try:
@@ -421,15 +437,21 @@ def _bitwise_equal(a: np.ndarray, b: np.ndarray) -> bool:
     return bool(np.array_equal(a[keep].view(np.uint64), b[keep].view(np.uint64)))
 
 
-def _require_columns(found: Any, source: str = "") -> None:
+def _require_columns(found: Any, source: str = "", *, derivable: bool = False) -> None:
+    """A TraceError naming the columns of :data:`COLUMNS` missing from ``found`` (with
+    ``derivable``, those :func:`~emaphm.traces.derive.derive_missing` can make are not
+    missing where what they are made from is there)."""
     found = list(found)
-    missing = [c for c in COLUMNS if c not in found]
+    missing = [c for c in COLUMNS if c not in found and not (
+        derivable and c in DERIVABLE and all(s in found for s in DERIVABLE[c]))]
     if missing:
         prefix = f"{source}: " if source else ""
         raise TraceError(
             f"{prefix}missing column(s) {missing}; found {found}. A trace needs the "
             f"columns {_expected_columns()}; rename the columns of the export to these "
             "names (units as given in brackets)"
+            + ("; omega_m and i_c may be left out (derived from theta_m and t, and from i_a "
+               "and i_b)" if derivable else "")
         )
 
 

@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ..container import DRIVE_COLUMNS, Trace, TraceError, TraceWarning
+from ..derive import derive_missing, derived_meta
 from ..limits import MAX_SAMPLES, too_many_samples
 from ..timebase import warn_if_shorter_than_profile
 from ..validation import validate
@@ -327,14 +328,7 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
         _nan_runs(chans[target].label, target, x, t, where)
     if not np.all(np.isfinite(t)):
         _nan_runs(chans["t"].label if "t" in chans else "t", "t", t, t, where)
-    notes = {}
-    if "omega_m" not in cols:
-        cols["omega_m"] = np.gradient(cols["theta_m"], t) if t.size > 1 else np.zeros_like(t)
-        notes["omega_m"] = "derived from theta_m (central differences)"
-    measured = 3
-    if "i_c" not in cols:
-        cols["i_c"] = -(cols["i_a"] + cols["i_b"])
-        measured = 2
+    cols, notes = derive_missing(cols, t)
     t0 = float(t[0])
     t = t - t0
     resampled = _uniform(t, where, t0)
@@ -344,13 +338,9 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
                    "time": _time_text(base, cmap, chans),
                    "channels": {k: v.label for k, v in chans.items()},
                    "map": cmap.to_dict()},
-        "currents_measured": measured,
+        "currents_measured": 3,
     }
-    if notes:
-        meta["derived"] = notes
-    if measured == 2:
-        meta["derived"] = {**meta.get("derived", {}),
-                           "i_c": "-(i_a + i_b): current sensor faults are not observable"}
+    meta = derived_meta(meta, notes)
     if cmap.source.voltage_delay_periods is not None:
         meta["voltage_delay_periods"] = cmap.source.voltage_delay_periods
     if cmap.profile:
