@@ -30,13 +30,18 @@ A. **Recorded voltages, [controller] NOT describing the drive**: each unit calib
 B. **The drive described in [controller], no voltages recorded** (the modelled-controller
    path), for the firmwares [controller] can describe: the same, with the firmware in the
    parameters' ``[controller]`` and the inverter's dead time and drop in their ``[inverter]``.
+D. **Recorded current references, [controller] NOT describing the drive's outer loops**: as
+   A, with the drive's current references ``i_d_ref, i_q_ref`` and no voltages in the
+   traces, for the firmwares whose current loop is the data sheet's (emaphm's cascade with
+   its options outside the current loop): the current loop modelled, the speed and position
+   loops not.
 C. **On the data sheet, a drive neither described nor recorded**: healthy units on
    firmwares with a speed filter of 0.1, 0.25 and 1 ms, a period of delay, both
    feed-forwards, a position integrator: the verdicts (``faulty`` must never be one).
 
 Unit seeds 70000+ (no figure is tuned on them), noise seeds 1-5 per trace as listed.
 
-Run: ``python benchmarks/bench_drives.py [--units 20] [--workers 2] [--parts ABC]
+Run: ``python benchmarks/bench_drives.py [--units 20] [--workers 2] [--parts ABCD]
 [--firmwares F,...] [--tag TAG]`` -> ``benchmarks/results/drives[-TAG].md`` and ``.json``.
 """
 
@@ -125,17 +130,24 @@ def run_unit(task: tuple[str, str, str, int]) -> dict:
     name, firmware, part, unit_seed = task
     datasheet = _datasheet(name)
     plant, drive = _firmware(datasheet, firmware)
-    recorded = part == "A"
+    recorded = part in "AD"
     # A: the parameters state emaphm's plain cascade and no dead time; B: the drive as it
     # is, its firmware ([controller]) and its inverter's dead time and drops ([inverter])
     params = datasheet if recorded else replace(datasheet, controller=plant.controller,
                                                 inverter=plant.inverter)
     kw = dict(params=plant, sensors=_sensors(), unit_seed=unit_seed, drive=drive,
               drive_signals=recorded)
+
+    def record(seed, faults=()):
+        tr = simulate(seed=seed, faults=list(faults), **kw)
+        if part == "D":                # the current references, no voltages
+            tr = replace(tr, drive={n: tr.drive[n] for n in ("i_d_ref", "i_q_ref")})
+        return tr
+
     out = {"actuator": name, "firmware": firmware, "part": part, "unit_seed": unit_seed}
     t0 = time.process_time()
     try:
-        cal = calibrate([simulate(seed=1, **kw), simulate(seed=2, **kw)], params)
+        cal = calibrate([record(1), record(2)], params)
     except CalibrationError as exc:
         out.update(calibrated=False, error=str(exc), cpu_s=time.process_time() - t0)
         return out
@@ -143,7 +155,7 @@ def run_unit(task: tuple[str, str, str, int]) -> dict:
                estimates={n: e["value"] for n, e in cal.estimates.items()})
     cases = {}
     for j, (case, faults) in enumerate(FAULTS.items()):
-        tr = simulate(seed=3 + j, faults=list(faults), **kw)
+        tr = record(3 + j, faults)
         t1 = time.process_time()
         ex = examine(tr, params=cal.params, seed=0)
         d = ex.diagnosis
@@ -206,7 +218,9 @@ def report(units: list[dict], undescribed: list[dict], args, wall: float) -> str
     for part, title in (("A", "A. Recorded voltages, `[controller]` not describing the drive "
                               "(calibrated units)"),
                         ("B", "B. The drive described in `[controller]`, no voltages recorded "
-                              "(calibrated units)")):
+                              "(calibrated units)"),
+                        ("D", "D. Recorded current references, `[controller]` not describing "
+                              "the outer loops (calibrated units)")):
         rows = [u for u in units if u["part"] == part]
         if not rows:
             continue
@@ -263,16 +277,20 @@ def report(units: list[dict], undescribed: list[dict], args, wall: float) -> str
 
 
 def tune(args) -> None:
-    """Part A on tuning units: the lognormal of the fit ratios the verdicts read where they
-    named the unit's faults right (emaphm.fitness.MISFIT_RECORDED)."""
+    """Part A (or D) on tuning units: the lognormal of the fit ratios the verdicts read where
+    they named the unit's faults right (emaphm.fitness.MISFIT_RECORDED, and the current
+    references' with ``--parts D``)."""
     import numpy as np
 
-    tasks = [(a, f, "A", TUNE_SEED0 + u) for a in args.actuators.split(",")
-             for f in args.firmwares.split(",") for u in range(args.units)]
+    part = "D" if args.parts == "D" else "A"
+    tasks = [(a, f, part, TUNE_SEED0 + u) for a in args.actuators.split(",")
+             for f in args.firmwares.split(",") if part == "A" or f in DESCRIBABLE
+             for u in range(args.units)]
     with ProcessPoolExecutor(args.workers) as pool:
         units = list(pool.map(run_unit, tasks, chunksize=1))
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "drives_tuning.json").write_text(json.dumps({"units": units}, indent=1) + "\n")
+    stem = "drives_tuning" + ("_current_references" if part == "D" else "")
+    (RESULTS / f"{stem}.json").write_text(json.dumps({"units": units}, indent=1) + "\n")
     # the fits that found the unit's faults (named, or suspected under a misfit): what the
     # model reaches on an actuator it explains, whatever the constants now in use say
     ratios = [c["verdict_ratio"] for u in units if u["calibrated"]
@@ -299,14 +317,15 @@ def main() -> None:
     ap.add_argument("--tag", default="", help="name the outputs drives-TAG.json/.md (a run of some "
                                                "firmwares beside another's)")
     ap.add_argument("--tune", action="store_true",
-                    help="units 80000+, part A: the recorded-voltage path's misfit constants "
-                         "(the lognormal of the verdicts' fit ratios where they were right)")
+                    help="units 80000+, part A (--parts D: part D): the recorded-voltage (the "
+                         "current references') path's misfit constants (the lognormal of the "
+                         "verdicts' fit ratios where they were right)")
     args = ap.parse_args()
     if args.tune:
         return tune(args)
     names = args.actuators.split(",")
     fws = args.firmwares.split(",")
-    tasks = [(a, f, part, UNIT_SEED0 + u) for part in "AB" if part in args.parts
+    tasks = [(a, f, part, UNIT_SEED0 + u) for part in "ABD" if part in args.parts
              for a in names for f in fws if part == "A" or f in DESCRIBABLE
              for u in range(args.units)]
     c_tasks = [(a, label, UNIT_SEED0 + u) for a in names for label in UNDESCRIBED

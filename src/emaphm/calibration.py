@@ -225,20 +225,22 @@ def _target(trace: Trace, params: ActuatorParams, source: str) -> _Target:
 
 
 class _DrivenTarget:
-    """One healthy trace with the drive's voltage commands, on the recorded-voltage path
+    """One healthy trace with the drive's voltage commands (or current or speed references),
+    on its path that models no position loop
     (:class:`emaphm.recorded.RecordedVoltageObjective`): its residuals (currents and
     mechanics, each over the currents' white noise) at a unit's parameters."""
 
     columns = 4
 
-    def __init__(self, trace: Trace, params: ActuatorParams, source: str) -> None:
+    def __init__(self, trace: Trace, params: ActuatorParams, source: str,
+                 drive_model: str = "recorded voltages") -> None:
         from .recorded import DRIVE_NUISANCE, RecordedVoltageObjective
 
         validate(trace)
         try:
             obj = RecordedVoltageObjective.from_trace(
                 trace, replace(params, sensors=CurrentSensors()), fault_model="physical",
-                nuisance=DRIVE_NUISANCE)
+                nuisance=DRIVE_NUISANCE, drive_model=drive_model)
         except TraceError as exc:
             raise CalibrationError(f"{source}: {exc}") from None
         sigma = np.asarray(obj.noise_sigma)
@@ -255,9 +257,9 @@ class _DrivenTarget:
         self.size = self.w.size
 
     def run(self, params: ActuatorParams, dev: dict[str, float], **outputs: bool):
-        """The recorded-voltage model at a unit's ``params`` (its sensors' gains and offsets
-        undone on the measured currents) and the inverter's and encoder's values in
-        ``dev``."""
+        """The trace's driven model (its recorded voltages, or references through the
+        drive's loops) at a unit's ``params`` (its sensors' gains and offsets undone on the
+        measured currents) and the inverter's and encoder's values in ``dev``."""
         from .recorded import DrivenModel
 
         s = params.sensors
@@ -265,7 +267,7 @@ class _DrivenTarget:
         m = self.model
         names = tuple(DRIVE_PARAMETERS)
         model = DrivenModel(replace(params, sensors=CurrentSensors()), "physical", names, m.t,
-                            m.u, m.theta, m.omega, m.theta_ref, i, m.T_load)
+                            m.u, m.theta, m.omega, m.theta_ref, i, m.T_load, i_ref=m.i_ref)
         K = np.concatenate([K_NOMINAL, [dev.get(n, 0.0) for n in names]])[None]
         return model.run(K, self.w[:, :3], self.w[:, 3], **outputs)
 
@@ -619,10 +621,11 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     if unknown:
         raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from "
                          + ", ".join(_NAMES))
-    from .recorded import drive_model_of, RECORDED_VOLTAGES
+    from .recorded import DRIVEN, drive_model_of
 
-    targets = [_DrivenTarget(tr, base, src) if drive_model_of(tr) == RECORDED_VOLTAGES
-               else _target(tr, base, src) for tr, src in zip(traces, sources)]
+    drives = [drive_model_of(tr) for tr in traces]
+    targets = [_DrivenTarget(tr, base, src, d) if d in DRIVEN else _target(tr, base, src)
+               for tr, src, d in zip(traces, sources, drives)]
     if any(isinstance(tg, _DrivenTarget) for tg in targets):
         free += [n for n in DRIVE_PARAMETERS if n not in free]
         # the currents' common gain scales what the recorded voltages drive (R, L, the

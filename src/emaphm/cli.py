@@ -270,7 +270,7 @@ def _table(ident, diag) -> str:
     noiseless = NOISELESS_NOTE in diag.notes
     if noiseless:
         ratio = float("nan")              # a floor of round-off: no ratio worth printing
-    recorded = getattr(ident, "drive_model", "") == "recorded voltages"
+    recorded = getattr(ident, "drive_model", "modelled controller") != "modelled controller"
     lines.append(f"fitness ({'Eq. 4 of the currents and the mechanical residual' if recorded else 'Eq. 4'}) "
                  f"{ident.fitness:.4e}"
                  + (f", {ratio:.1f}x the noise floor of the trace" if ratio == ratio else "")
@@ -489,9 +489,11 @@ def _drive_arguments(p: argparse.ArgumentParser, diagnose: bool = False) -> None
     stands in for it (diagnose)."""
     if diagnose:
         p.add_argument("--drive-model", choices=DRIVE_MODELS, default=None,
-                       help="what stands in for the drive's controller: 'recorded voltages' (the "
-                            "default for a trace with voltage commands: no controller is "
-                            "modelled) or 'modelled controller' ([controller] of the parameters)")
+                       help="what stands in for the drive's controller: 'recorded voltages' (no "
+                            "controller modelled), 'recorded current references' (the current "
+                            "loop of [controller] modelled), 'recorded speed reference' (the "
+                            "speed and current loops modelled) or 'modelled controller' (the "
+                            "whole [controller]); default the first the trace has the signals for")
         return
     p.add_argument("--drive-signals", action="store_true",
                    help="also record what the plant's drive logs: the phase voltages it applied "

@@ -5,13 +5,15 @@ without loading the models.
 * :data:`FOREIGN_DRIVES`: firmwares that are not emaphm's cascade
   (:mod:`emaphm.models.drives`), by name, with what they are;
 * :data:`DRIVE_MODELS`: what stands in for a drive's controller when a trace is identified
-  (:mod:`emaphm.recorded`): the controller as ``[controller]`` describes it, or the voltage
-  commands the drive recorded.
+  (:mod:`emaphm.recorded`): the controller as ``[controller]`` describes it, the voltage
+  commands the drive recorded, its recorded current references (the current loop
+  modelled), or its recorded speed reference (the speed and current loops modelled).
 """
 
 from __future__ import annotations
 
-__all__ = ["FOREIGN_DRIVES", "MODELLED", "RECORDED_VOLTAGES", "DRIVE_MODELS"]
+__all__ = ["FOREIGN_DRIVES", "MODELLED", "RECORDED_VOLTAGES", "RECORDED_CURRENT_REFERENCES",
+           "RECORDED_SPEED_REFERENCE", "DRIVE_MODELS", "DRIVEN"]
 
 #: Firmwares that are not emaphm's, by name, with what they are.
 FOREIGN_DRIVES = {
@@ -28,5 +30,15 @@ FOREIGN_DRIVES = {
 MODELLED = "modelled controller"
 #: No controller: the winding driven by the voltage commands the drive recorded.
 RECORDED_VOLTAGES = "recorded voltages"
+#: The current loop as ``[controller]`` describes it, on the current references the drive
+#: recorded: no position or speed loop.
+RECORDED_CURRENT_REFERENCES = "recorded current references"
+#: The speed and current loops as ``[controller]`` describes them, on the speed reference
+#: the drive recorded: no position loop.
+RECORDED_SPEED_REFERENCE = "recorded speed reference"
 #: What stands in for a drive's controller when a trace is identified.
-DRIVE_MODELS = (MODELLED, RECORDED_VOLTAGES)
+DRIVE_MODELS = (MODELLED, RECORDED_VOLTAGES, RECORDED_CURRENT_REFERENCES,
+                RECORDED_SPEED_REFERENCE)
+#: The paths that model no position loop: the winding driven by what the drive recorded,
+#: the mechanics an observer of the measured angle (:mod:`emaphm.models.driven`).
+DRIVEN = (RECORDED_VOLTAGES, RECORDED_CURRENT_REFERENCES, RECORDED_SPEED_REFERENCE)

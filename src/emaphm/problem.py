@@ -32,7 +32,7 @@ from .faults import K_NOMINAL, N_K, as_k, error_pct, loop_report, shorted_fracti
 from .fitness import Eq4Objective
 from .logs import announce_compiles
 from .params import PARAMS_SOURCES, ActuatorParams, resolve_params
-from .recorded import (DRIVE_NUISANCE, NOT_OBSERVABLE, RECORDED_VOLTAGES, RecordedVoltageObjective,
+from .recorded import (DRIVE_NUISANCE, DRIVEN, NOT_OBSERVABLE, RecordedVoltageObjective,
                        drive_model_of)
 from .search import (NUISANCE_RANGE, SEARCH_SPACES, default_search, from_k, nuisance_from_box, nuisance_start,
                      nuisance_to_box, to_k)
@@ -196,13 +196,13 @@ class IdentificationProblem:
         if obj is None:
             nuisance = default_nuisance(self.params) if self.nuisance is None else tuple(self.nuisance)
             validate(self.trace, min_rotation=self.min_rotation)
-            if drive == RECORDED_VOLTAGES:
+            if drive in DRIVEN:
                 if self.mode != "phases" or self.n_sub != 1:
-                    raise ValueError("the recorded-voltage path compares the phase currents at "
+                    raise ValueError(f"the drive model {drive!r} compares the phase currents at "
                                      "the drive's control instants: mode 'phases', n_sub 1")
                 obj = RecordedVoltageObjective.from_trace(self.trace, self.params,
                                                           fault_model=self.fault_model,
-                                                          nuisance=nuisance)
+                                                          nuisance=nuisance, drive_model=drive)
             else:
                 obj = Eq4Objective.from_trace(self.trace, self.params, n_sub=self.n_sub,
                                               mode=self.mode, fault_model=self.fault_model,
@@ -333,7 +333,7 @@ class IdentificationProblem:
             return {"fault_current_a_rms": [0.0] * 3, "fault_power_w": [0.0] * 3,
                     "fault_mmf_a_rms": [0.0] * 3, "R_f_ohm": list(params.motor.R_f)}
         model = self.objective.model
-        if self.drive_model == RECORDED_VOLTAGES:
+        if self.drive_model in DRIVEN:
             # the inverter's and the encoder's values as searched, the actuator's as given
             drive = {n: float(v) for n, v in zip(self.nuisance, np.zeros(len(self.nuisance))
                                                  if nu is None else nu) if n in DRIVE_NUISANCE}

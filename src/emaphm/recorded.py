@@ -15,13 +15,26 @@ drive model                    what the monitoring model runs
                                measured angle, the mechanics by its torque as an observer
                                of the measured angle (:mod:`emaphm.models.driven`):
                                :class:`RecordedVoltageObjective`, two residuals
+``"recorded current            the same, each candidate's voltages from the drive's current
+references"``                  loop as ``[controller]`` and ``[inverter]`` describe it
+                               (gains ``Kp_i, Ki_i``, ``decoupling``, ``emf_feedforward``,
+                               ``delay_periods``, the DC link) on the candidate's own
+                               currents towards the logged ``i_d_ref, i_q_ref``
+``"recorded speed reference"`` the same, the q-current references from the drive's speed
+                               loop as ``[controller]`` describes it (``Kp_w, Ki_w``, the
+                               2-DOF weight, the speed filter, the torque feed-forward, the
+                               limits) on the measured speed towards the logged
+                               ``omega_ref``
 =============================  ==========================================================
 
-By default a trace with voltage commands (:func:`emaphm.traces.drive_signals.voltage_form`)
-takes the recorded voltages, any other the modelled controller (:func:`drive_model_of`;
-``--drive-model`` forces one).
+By default a trace takes the path of the most the drive recorded: its voltage commands
+(:func:`emaphm.traces.drive_signals.voltage_form`), else its current references, else its
+speed reference, else the modelled controller (:func:`drive_model_of`; ``--drive-model``
+forces one). Every path but the modelled controller (:data:`DRIVEN`) models no position
+loop; the current loop's integrals start at rest with the trace (a trace that begins with
+the drive at rest, as a test profile does).
 
-On the recorded-voltage path the drive's own proportional gain (k8, ``gain_drift``) is not
+On those paths the drive's own proportional gain (k8, ``gain_drift``) is not
 observable: no position loop is modelled (:data:`NOT_OBSERVABLE`). The inverter's dead
 time and device drops (``"V_dt"``), the encoder's offset (``"angle"``) and the dry
 friction's Stribeck speed (``"stribeck"``) are searched beside k there
@@ -36,20 +49,23 @@ from typing import Any
 import numpy as np
 
 from .faults import as_k, check_fault_model
-from .firmware import DRIVE_MODELS, MODELLED, RECORDED_VOLTAGES
+from .firmware import (DRIVE_MODELS, DRIVEN, MODELLED, RECORDED_CURRENT_REFERENCES,
+                       RECORDED_SPEED_REFERENCE, RECORDED_VOLTAGES)
 from .fitness import (check_diagnosable, check_load, eq4_weights, on_model_grid,
                       trace_fault_model, white_noise_sigma)
 from .models import driven
 from .models.driven_simd import run as run_driven
+from .models.controller import CTL_I_MAX, CTL_OMEGA_MAX, speed_loop_references
 from .models.inverter import dead_time_width
-from .models.layout import PopulationPacker
+from .models.layout import PopulationPacker, drive_settings
 from .models.monitoring import STATUS_DIVERGED, PopulationResult
 from .params import ActuatorParams, siemens_1fk7060
 from .traces import Trace, TraceError, validate
 from .traces.drive_signals import (applied_voltages, check_commands, control_samples,
-                                   voltage_form)
+                                   current_references, speed_reference, voltage_form)
 
-__all__ = ["DRIVE_MODELS", "MODELLED", "RECORDED_VOLTAGES", "DRIVE_NUISANCE", "NOT_OBSERVABLE",
+__all__ = ["DRIVE_MODELS", "MODELLED", "RECORDED_VOLTAGES", "RECORDED_CURRENT_REFERENCES",
+           "RECORDED_SPEED_REFERENCE", "DRIVEN", "DRIVE_NUISANCE", "NOT_OBSERVABLE",
            "drive_model_of", "DrivenModel", "RecordedVoltageObjective"]
 
 
@@ -61,36 +77,55 @@ DRIVE_NUISANCE = ("V_dt", "angle", "stribeck")
 
 #: The fault modes a path cannot see, by drive model: the drive's own position gain (k8)
 #: where no position loop is modelled.
-NOT_OBSERVABLE = {MODELLED: (), RECORDED_VOLTAGES: ("gain_drift",)}
+NOT_OBSERVABLE = {MODELLED: (), **{d: ("gain_drift",) for d in DRIVEN}}
+
+#: What each path needs of the trace: the drive's signals it reads, as the sentence that
+#: names them.
+_NEEDS = {RECORDED_VOLTAGES: "the drive's voltage commands (v_a, v_b, v_c; or v_d, v_q; or "
+                             "d_a, d_b, d_c with v_dc)",
+          RECORDED_CURRENT_REFERENCES: "the drive's current reference i_q_ref (and i_d_ref)",
+          RECORDED_SPEED_REFERENCE: "the drive's speed reference omega_ref"}
+
+
+def _has(trace: Trace, drive: str) -> bool:
+    if drive == RECORDED_VOLTAGES:
+        return voltage_form(trace) is not None
+    if drive == RECORDED_CURRENT_REFERENCES:
+        return "i_q_ref" in trace.drive
+    if drive == RECORDED_SPEED_REFERENCE:
+        return "omega_ref" in trace.drive
+    return True
 
 
 def drive_model_of(trace: Trace, forced: str | None = None) -> str:
     """The drive path for ``trace``: ``forced`` where given (checked against what the trace
-    carries), else the recorded voltages where it has voltage commands, else the modelled
-    controller."""
+    carries), else the first of the recorded voltages, current references and speed
+    reference that the trace has, else the modelled controller."""
     if forced is None:
-        return RECORDED_VOLTAGES if voltage_form(trace) is not None else MODELLED
+        return next((d for d in DRIVEN if _has(trace, d)), MODELLED)
     if forced not in DRIVE_MODELS:
         raise ValueError(f"unknown drive model {forced!r}; choose one of "
                          + ", ".join(repr(d) for d in DRIVE_MODELS))
-    if forced == RECORDED_VOLTAGES and voltage_form(trace) is None:
-        raise TraceError("the drive model 'recorded voltages' needs the drive's voltage commands "
-                         "in the trace (v_a, v_b, v_c; or v_d, v_q; or d_a, d_b, d_c with v_dc); "
-                         "this trace has none: identify it with the modelled controller")
+    if not _has(trace, forced):
+        has = [d for d in DRIVEN if _has(trace, d)] + [MODELLED]
+        raise TraceError(f"the drive model {forced!r} needs {_NEEDS[forced]} in the trace; this "
+                         f"trace has none: identify it with {has[0]!r}")
     return forced
 
 
 @dataclass(frozen=True, eq=False)
 class DrivenModel:
-    """The monitoring model on the recorded-voltage path, for one trace: what
-    :class:`~emaphm.models.monitoring.MonitoringModel` is to the modelled controller (its
-    ``params``, ``fault_model``, ``nuisance``, ``pack``, ``simulate``,
+    """The monitoring model on the paths that model no position loop (:data:`DRIVEN`), for
+    one trace: what :class:`~emaphm.models.monitoring.MonitoringModel` is to the modelled
+    controller (its ``params``, ``fault_model``, ``nuisance``, ``pack``, ``simulate``,
     ``simulate_population``), over the trace's own samples.
 
-    ``u (n, 3)`` the applied phase voltages, ``theta (n,)`` the measured angle, ``omega0``
-    the first measured speed, ``i_meas (n, 3)`` the measured currents (corrected for the
+    ``u (n, 3)`` the applied phase voltages, or ``i_ref (n, 2)`` the current references
+    that the drive's current loop (``params``' ``[controller]`` and ``[inverter]``) turns
+    into each candidate's voltages; ``theta (n,)`` the measured angle, ``omega (n,)`` the
+    measured speed, ``i_meas (n, 3)`` the measured currents (corrected for the
     sensors), ``T_load (n,)`` the profile's load on the control grid ``t`` (from 0), with
-    the command ``theta_ref`` and the measured speed ``omega`` for the traces it returns.
+    the command ``theta_ref`` for the traces it returns.
     """
 
     params: ActuatorParams
@@ -105,6 +140,7 @@ class DrivenModel:
     T_load: np.ndarray
     n_sub: int = 1
     kernel: str = "simd"
+    i_ref: np.ndarray | None = None
     _packer: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -139,7 +175,7 @@ class DrivenModel:
         return run_driven(P, CP, self._observer, self.u, self.theta, self._trig,
                           float(self.omega[0]),
                           self.i_meas, self.T_load, w_e, w_m, self._i_0, kernel=self.kernel,
-                          **outputs)
+                          i_ref=self.i_ref, omega=self.omega, **outputs)
 
     def simulate_population(self, K) -> PopulationResult:
         K = np.atleast_2d(np.asarray(K, dtype=float))
@@ -160,8 +196,9 @@ class DrivenModel:
 
 @dataclass(frozen=True)
 class RecordedVoltageObjective:
-    """The recorded-voltage path's objective: two residuals of one pass of
-    :mod:`emaphm.models.driven`, each weighted and summed as Eq. 4 is.
+    """The objective of the paths that model no position loop (:data:`DRIVEN`; named for
+    the first of them): two residuals of one pass of :mod:`emaphm.models.driven`, each
+    weighted and summed as Eq. 4 is.
 
     ``weights (n, 3)``: Eq. 4's weights on the electrical residual (the model's currents
     less the measured ones); ``mech_weights (n,)``: ``T_s`` on the mechanical residual (the
@@ -181,9 +218,14 @@ class RecordedVoltageObjective:
     @classmethod
     def from_trace(cls, trace: Trace, params: ActuatorParams | None = None, *,
                    fault_model: str | None = None,
-                   nuisance: tuple[str, ...] = ()) -> "RecordedVoltageObjective":
-        """The objective of ``trace``'s recorded voltage commands; ``nuisance`` always
-        includes :data:`DRIVE_NUISANCE`."""
+                   nuisance: tuple[str, ...] = (),
+                   drive_model: str = RECORDED_VOLTAGES) -> "RecordedVoltageObjective":
+        """The objective of what ``trace``'s drive recorded, on the path ``drive_model``
+        (:data:`DRIVEN`: its voltage commands, current references or speed reference);
+        ``nuisance`` always includes :data:`DRIVE_NUISANCE`."""
+        if drive_model not in DRIVEN:
+            raise ValueError(f"drive model {drive_model!r} models no drive's recording; choose "
+                             "one of " + ", ".join(repr(d) for d in DRIVEN))
         fault_model = check_fault_model(fault_model if fault_model is not None
                                         else trace_fault_model(trace))
         params = params if params is not None else siemens_1fk7060()
@@ -194,8 +236,23 @@ class RecordedVoltageObjective:
         if idx.size < 16:
             raise TraceError(f"trace lasts {trace.duration:.3g} s, fewer than 16 control periods "
                              f"of {T_s:g} s; record at least one full diagnostic profile (0.5 s)")
-        u = applied_voltages(trace, idx, params.motor.p)
-        check_commands(trace, u, params.inverter.V_dc)
+        drive_model_of(trace, drive_model)          # the trace has what the path reads
+        omega = np.ascontiguousarray(np.asarray(trace.omega_m)[idx])
+        i_ref = None
+        if drive_model == RECORDED_VOLTAGES:
+            u = applied_voltages(trace, idx, params.motor.p)
+            check_commands(trace, u, params.inverter.V_dc)
+        else:
+            ctl = drive_settings(params)
+            u = np.zeros((idx.size, 3))
+            if drive_model == RECORDED_CURRENT_REFERENCES:
+                i_ref = current_references(trace, idx, float(ctl[CTL_I_MAX]))
+            else:
+                w_ref = speed_reference(trace, idx, float(ctl[CTL_OMEGA_MAX]))
+                i_q = np.empty(idx.size)
+                speed_loop_references(w_ref, omega, np.ascontiguousarray(
+                    np.asarray(trace.theta_ref, dtype=float)[idx]), ctl, i_q)
+                i_ref = np.ascontiguousarray(np.column_stack([np.zeros(idx.size), i_q]))
         t_model = np.asarray(trace.t)[idx] - float(trace.t[0])
         _, _, load = on_model_grid(trace, T_s)
         load = np.resize(load, idx.size) if load.size != idx.size else load
@@ -205,10 +262,9 @@ class RecordedVoltageObjective:
             i = params.sensors.correct(i)
         nuisance = tuple(nuisance) + tuple(n for n in DRIVE_NUISANCE if n not in nuisance)
         model = DrivenModel(params, fault_model, nuisance, t_model, u,
-                            np.ascontiguousarray(np.asarray(trace.theta_m)[idx]),
-                            np.ascontiguousarray(np.asarray(trace.omega_m)[idx]),
+                            np.ascontiguousarray(np.asarray(trace.theta_m)[idx]), omega,
                             np.ascontiguousarray(np.asarray(trace.theta_ref)[idx]),
-                            np.ascontiguousarray(i), np.ascontiguousarray(load))
+                            np.ascontiguousarray(i), np.ascontiguousarray(load), i_ref=i_ref)
         w_e = np.ascontiguousarray(eq4_weights(i, T_s))
         w_m = np.full(idx.size, T_s)
         return cls(model, np.ascontiguousarray(i), w_e, w_m, white_noise_sigma(i))

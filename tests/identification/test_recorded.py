@@ -16,7 +16,8 @@ import pytest
 from emaphm.identify import IdentificationConfig, identify
 from emaphm.params import siemens_1fk7060
 from emaphm.problem import IdentificationProblem
-from emaphm.recorded import MODELLED, RECORDED_VOLTAGES, drive_model_of
+from emaphm.recorded import (MODELLED, RECORDED_CURRENT_REFERENCES, RECORDED_SPEED_REFERENCE,
+                             RECORDED_VOLTAGES, drive_model_of)
 from emaphm.simulate import DEFAULT_SENSORS, simulate
 from emaphm.traces import TraceError
 from emaphm.verdict import examine
@@ -51,6 +52,15 @@ def test_the_drive_model_follows_what_the_trace_carries():
         drive_model_of(bare, RECORDED_VOLTAGES)
     with pytest.raises(ValueError, match="unknown drive model"):
         drive_model_of(bare, "telepathy")
+    # the most the drive recorded: voltages, else current references, else speed reference
+    refs = replace(with_v, drive={n: with_v.drive[n] for n in ("i_q_ref", "omega_ref")})
+    speed = replace(with_v, drive={"omega_ref": with_v.drive["omega_ref"]})
+    assert drive_model_of(refs) == RECORDED_CURRENT_REFERENCES
+    assert drive_model_of(speed) == RECORDED_SPEED_REFERENCE
+    assert drive_model_of(refs, RECORDED_SPEED_REFERENCE) == RECORDED_SPEED_REFERENCE
+    with pytest.raises(TraceError, match="needs the drive's current reference i_q_ref.*"
+                                         "'recorded speed reference'"):
+        drive_model_of(speed, RECORDED_CURRENT_REFERENCES)
 
 
 def test_the_drives_own_gain_is_not_observable_without_its_controller():
@@ -94,6 +104,66 @@ def test_the_problem_refuses_what_the_path_cannot_do():
     thin = tr.with_meta(voltage_delay_periods=3)
     with pytest.raises(TraceError, match="voltage_delay_periods = 3"):
         IdentificationProblem(thin)
+
+
+# ------------------------------------------------- the drive's references, its inner loops modelled
+
+#: emaphm's cascade with options the data sheet's ``[controller]`` does not describe, outside
+#: the current loop (whose gains the data sheet's are).
+OUTER = ("feed-forwards", "speed filter 1 ms")
+
+
+def _references(trace, names):
+    return replace(trace, drive={n: trace.drive[n] for n in names})
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("firmware", OUTER)
+def test_drives_are_diagnosed_from_their_current_references(firmware):
+    """The current references alone (no voltages): the current loop is modelled from
+    ``[controller]``, the position and speed loops are not, so options outside the current
+    loop that the parameters do not describe change nothing. Healthy reads healthy; the
+    four faults are named right and alone."""
+    cases = {(): set(), ("friction:2",): {("friction", None)},
+             ("short_circuit:a:0.1:0.15",): {("short_circuit", "A")},
+             ("demagnetization:0.15",): {("demagnetization", None)},
+             ("current_sensor:b:gain:0.9",): {("current_sensor", "B")}}
+    for faults, named in cases.items():
+        tr = _references(_trace(firmware, faults), ("i_d_ref", "i_q_ref"))
+        ex = examine(tr, params=DATASHEET, seed=0)
+        assert ex.identification.drive_model == RECORDED_CURRENT_REFERENCES
+        assert ex.identification.not_observable == ("gain_drift",)
+        got = {(f.mode, f.phase) for f in ex.diagnosis.faults}
+        assert ex.diagnosis.verdict == ("faulty" if named else "healthy"), (faults, ex.diagnosis)
+        assert got == named, (faults, got)
+
+
+@pytest.mark.slow
+def test_a_described_speed_loop_is_diagnosed_from_its_speed_reference():
+    """The speed reference alone: the speed loop as ``[controller]`` describes it (here a
+    1 ms speed filter and a 2-DOF weight, described) rebuilds the current references.
+    Healthy reads healthy, friction x2 and the short are named."""
+    ctl = replace(DATASHEET.controller, speed_filter_s=1e-3, speed_reference_weight=0.8)
+    described = replace(DATASHEET, controller=ctl)
+    plant = replace(PLANT, controller=ctl)
+    for faults, named in {(): set(), ("friction:2",): {("friction", None)},
+                          ("short_circuit:a:0.1:0.15",): {("short_circuit", "A")}}.items():
+        tr = _references(simulate(params=plant, sensors=SENSORS, seed=6, drive_signals=True,
+                                  faults=list(faults)), ("omega_ref",))
+        ex = examine(tr, params=described, seed=0)
+        assert ex.identification.drive_model == RECORDED_SPEED_REFERENCE
+        assert {(f.mode, f.phase) for f in ex.diagnosis.faults} == named, (faults, ex.diagnosis)
+        assert ex.diagnosis.verdict == ("faulty" if named else "healthy")
+
+
+def test_references_in_other_units_are_refused():
+    tr = _trace("deadbeat", seed=5)
+    milli = replace(tr, drive={"i_q_ref": tr.drive["i_q_ref"] * 1000.0})
+    with pytest.raises(TraceError, match="current references reach .* A.*not mA"):
+        IdentificationProblem(milli, params=DATASHEET)
+    rpm = replace(tr, drive={"omega_ref": tr.drive["omega_ref"] * 60 / (2 * np.pi)})
+    with pytest.raises(TraceError, match="speed reference reaches .*not rpm"):
+        IdentificationProblem(rpm, params=DATASHEET)
 
 
 # ------------------------------------------------------------------ a drive not described

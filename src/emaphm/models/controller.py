@@ -173,6 +173,47 @@ def feedforward(ref, ref1, ref2, ctl):
 
 
 @jit
+def speed_loop(w_ref, w_f, T_ff, int_w, iq_f, ctl):
+    """The speed PI (2-DOF) on the (filtered) speed ``w_f`` [rad/s] towards ``w_ref``, the
+    torque feed-forward ``T_ff`` [N m] added outside its anti-windup, the torque limit, the
+    q-current reference (at ``I_max``, then its filter). Returns ``(T_ref, i_q_ref, int_w)``:
+    the torque reference [N m], the filtered q-current reference [A] (the state ``i_q_f``
+    too) and the speed integral."""
+    T_max = ctl[CTL_T_MAX]
+    T_ref, int_w = pi2_step(_weighted(ctl[CTL_B_W], w_ref) - w_f, w_ref - w_f, int_w, ctl[CTL_KP_W],
+                            ctl[CTL_KI_W], T_max, ctl[CTL_T_S])
+    T_ref = _sat(T_ref + T_ff, T_max)
+    iq_f = _lowpass(iq_f, _sat(T_ref / ctl[CTL_K_T], ctl[CTL_I_MAX]), ctl[CTL_A_I])
+    return T_ref, iq_f, int_w
+
+
+@jit
+def current_loop(i_d_ref, i_q_ref, i_a, i_b, i_c, omega_m, sin_e, cos_e, int_d, int_q, ctl):
+    """The dq current PI at the electrical angle (``sin_e, cos_e``) towards ``(i_d_ref,
+    i_q_ref)`` [A] from the phase currents, with the decoupling and the back-EMF
+    feed-forward on the speed ``omega_m`` [rad/s], the voltage vector kept in the linear
+    modulation range. Returns ``(v_a, v_b, v_c, int_d, int_q)``: the phase voltage references
+    computed now [V] (applied now or, under a delay, in the next period) and the integrals.
+    The drive's current loop, once: the cascade's (:func:`control_step`) and, where a trace
+    records the current references, the monitoring model's (:mod:`emaphm.models.driven`)."""
+    i_al, i_be = clarke(i_a, i_b, i_c)
+    i_d, i_q = park(i_al, i_be, sin_e, cos_e)
+    T_s = ctl[CTL_T_S]
+    v_lim = ctl[CTL_V_DC] / math.sqrt(3.0)
+    v_d, int_d = pi_step(i_d_ref - i_d, int_d, ctl[CTL_KP_I], ctl[CTL_KI_I], v_lim, T_s)
+    v_q, int_q = pi_step(i_q_ref - i_q, int_q, ctl[CTL_KP_I], ctl[CTL_KI_I], v_lim, T_s)
+    v_d, v_q = _dq_feedforward(v_d, v_q, i_d, i_q, omega_m, ctl)
+    # keep the voltage vector inside the linear modulation range
+    mag = math.sqrt(v_d * v_d + v_q * v_q)
+    if mag > v_lim:
+        v_d *= v_lim / mag
+        v_q *= v_lim / mag
+    v_al, v_be = inv_park(v_d, v_q, sin_e, cos_e)
+    v_a, v_b, v_c = inv_clarke(v_al, v_be)
+    return v_a, v_b, v_c, int_d, int_q
+
+
+@jit
 def control_step(refs, theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e, state, Kp, ctl):
     """One control period from sampled measurements.
 
@@ -184,37 +225,41 @@ def control_step(refs, theta_m, omega_m, i_a, i_b, i_c, sin_e, cos_e, state, Kp,
     references applied in this period [V], the references ``(omega_ref, T_ref, i_q_ref)``
     [rad/s, N m, A] (the speed reference into the speed PI, the torque reference, the
     q-current reference into the current loop: what a drive logs) and the new state.
+    The speed loop (:func:`speed_loop`) and the current loop (:func:`current_loop`) are
+    their own functions, which the identification from a drive's recorded references runs.
     """
     int_e, int_w, int_d, int_q, w_f, iq_f, va1, vb1, vc1 = state
     ref, w_ff, T_ff = refs
-    T_s = ctl[CTL_T_S]
     omega_max = ctl[CTL_OMEGA_MAX]
-    T_max = ctl[CTL_T_MAX]
     w_f = _lowpass(w_f, omega_m, ctl[CTL_A_W])
     # position PID (derivative on the measurement) -> speed reference, + velocity feed-forward
     e = ref - theta_m
-    w_ref, int_e = pi_step(e, int_e, Kp, ctl[CTL_KI], omega_max, T_s)
+    w_ref, int_e = pi_step(e, int_e, Kp, ctl[CTL_KI], omega_max, ctl[CTL_T_S])
     w_ref = _sat(w_ref - ctl[CTL_KD] * w_f + w_ff, omega_max)
     # speed PI (2-DOF) -> torque reference, + torque feed-forward outside the anti-windup
-    T_ref, int_w = pi2_step(_weighted(ctl[CTL_B_W], w_ref) - w_f, w_ref - w_f, int_w, ctl[CTL_KP_W],
-                            ctl[CTL_KI_W], T_max, T_s)
-    T_ref = _sat(T_ref + T_ff, T_max)
-    iq_f = _lowpass(iq_f, _sat(T_ref / ctl[CTL_K_T], ctl[CTL_I_MAX]), ctl[CTL_A_I])
+    T_ref, iq_f, int_w = speed_loop(w_ref, w_f, T_ff, int_w, iq_f, ctl)
     # dq current PI at the electrical angle
-    i_al, i_be = clarke(i_a, i_b, i_c)
-    i_d, i_q = park(i_al, i_be, sin_e, cos_e)
-    V_dc = ctl[CTL_V_DC]
-    v_lim = V_dc / math.sqrt(3.0)
-    v_d, int_d = pi_step(-i_d, int_d, ctl[CTL_KP_I], ctl[CTL_KI_I], v_lim, T_s)
-    v_q, int_q = pi_step(iq_f - i_q, int_q, ctl[CTL_KP_I], ctl[CTL_KI_I], v_lim, T_s)
-    v_d, v_q = _dq_feedforward(v_d, v_q, i_d, i_q, omega_m, ctl)
-    # keep the voltage vector inside the linear modulation range
-    mag = math.sqrt(v_d * v_d + v_q * v_q)
-    if mag > v_lim:
-        v_d *= v_lim / mag
-        v_q *= v_lim / mag
-    v_al, v_be = inv_park(v_d, v_q, sin_e, cos_e)
-    v_a, v_b, v_c = inv_clarke(v_al, v_be)
+    v_a, v_b, v_c, int_d, int_q = current_loop(0.0, iq_f, i_a, i_b, i_c, omega_m, sin_e, cos_e,
+                                               int_d, int_q, ctl)
     delay = ctl[CTL_DELAY]
     return (_applied(v_a, va1, delay), _applied(v_b, vb1, delay), _applied(v_c, vc1, delay),
             (w_ref, T_ref, iq_f), (int_e, int_w, int_d, int_q, w_f, iq_f, v_a, v_b, v_c))
+
+
+@jit
+def speed_loop_references(omega_ref, omega_m, theta_ref, ctl, out):
+    """The drive's q-current references from its recorded speed reference: the speed loop
+    (:func:`speed_loop`, from rest: its integral, filters and the reference's history as
+    :func:`control_step` starts them) on the measured speed ``omega_m`` (filtered as the
+    drive filters it), the torque feed-forward from the position command ``theta_ref``,
+    sample by sample. Writes ``out (n,)`` [A]."""
+    int_w = 0.0
+    w_f = 0.0
+    iq_f = 0.0
+    n = omega_ref.shape[0]
+    for k in range(n):
+        w_f = _lowpass(w_f, omega_m[k], ctl[CTL_A_W])
+        _, _, T_ff = feedforward(theta_ref[k], theta_ref[max(k - 1, 0)],
+                                 theta_ref[max(k - 2, 0)], ctl)
+        _, iq_f, int_w = speed_loop(omega_ref[k], w_f, T_ff, int_w, iq_f, ctl)
+        out[k] = iq_f

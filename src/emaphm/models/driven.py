@@ -48,14 +48,15 @@ import numpy as np
 
 from ._jit import jit
 from ._monitoring_common import I_DIVERGED
+from .controller import CTL_DELAY, N_CTL, current_loop
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_DELTA, C_ECC, C_ECC_PHASE, C_FDJ,
                      C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_OMEGA_S, C_PHI,
-                     C_PHI_END, C_T0, C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S)
+                     C_PHI_END, C_T0, C_V_DT, N_CP, P_CTL, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C, P_POLES, P_T_S)
 from .inverter import dead_time_drop
 from .mechanics import stribeck_factor, transmission_step
 from .pmsm import (COS_2PI_3, SIN_2PI_3, phase_currents, torque_loops, winding_input,
                    winding_step)
-from .step import inlined, row_reader, select
+from .step import inlined, row_reader, select, vector_reader
 from .windings import Q
 
 __all__ = ["OBSERVER_HZ", "MECH_SUBSTEPS", "observer_gains", "flux_coefficients", "rotate",
@@ -79,6 +80,7 @@ MECH_SUBSTEPS = 4
 N_RES = 4
 
 _read_c = row_reader(N_CP, "read_c")
+_read_ctl = vector_reader(N_CTL, "read_ctl_driven")
 
 
 def observer_gains(T_s: float, hz: float = OBSERVER_HZ) -> tuple[float, float]:
@@ -208,12 +210,17 @@ def _period(c, u, theta1, trig1, rot, i_meas1, T_l, z, i, tq, lam, mech_state, p
 
 
 @jit
-def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i_0,
-            sse, residuals, out_i, out_f, out_theta, out_torque, status):
+def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_load, w_e, w_m,
+            i_0, sse, residuals, out_i, out_f, out_theta, out_torque, status):
     """Drive ``CP.shape[0]`` candidates through the ``n = theta.shape[0]`` samples of a
     trace, one candidate after another. ``P (N_P,)``, ``CP (n_pop, N_CP)`` packed for one sub-step per period; ``observer =
     (l_1, l_2, scale)`` (:func:`observer_gains`, :func:`mechanical_scale`); ``u (n, 3)``
-    the phase voltages [V] applied over each period (the last unused); ``theta (n,)``
+    the phase voltages [V] applied over each period (the last unused), or, where ``i_ref
+    (n, 2)`` has a row per sample, the drive's recorded current references ``(i_d_ref,
+    i_q_ref)`` [A] instead: each candidate's voltages are then the drive's current loop
+    (:func:`emaphm.models.controller.current_loop`, its settings ``P``'s, its delay) on its
+    own currents at the measured angle, with the measured speed ``omega (n,)`` [rad/s] in
+    its feed-forwards (``i_ref`` and ``omega`` of no rows: the voltages ``u``); ``theta (n,)``
     the measured motor angle [rad] and ``trig (n, 4)`` its sines (:func:`sample_sines`),
     ``omega0`` the speed at the first sample [rad/s];
     ``i_meas (n, 3)`` the measured currents [A]; ``T_load (n,)`` [N m]; ``w_e (n, 3)`` and
@@ -234,8 +241,14 @@ def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i
     J_m, C_m, J_l, C_l = P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L]
     K_c, D_c = P[P_K_C], P[P_D_C]
     l_1, l_2, scale = observer[0], observer[1], observer[2]
+    closed = i_ref.shape[0] == n and n > 0
+    ctl = _read_ctl(P, P_CTL)
+    delay = P[P_CTL + CTL_DELAY]
     for j in range(n_pop):
         c = _read_c(CP, 0, j)
+        # the drive's current loop at rest (its integrals, the voltages of the period before)
+        int_d = int_q = 0.0
+        va1 = vb1 = vc1 = 0.0
         c0_a, c0_b, c0_c = c[C_C0_A], c[C_C0_B], c[C_C0_C]
         ecc, ecc_ph = c[C_ECC], c[C_ECC_PHASE]
         delta = c[C_DELTA]
@@ -288,8 +301,16 @@ def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i
             e = theta[k] - thm
             thm += l_1 * e
             wm += l_2 * e
+            if closed:
+                va, vb, vc, int_d, int_q = current_loop(i_ref[k, 0], i_ref[k, 1], ia, ib, ic,
+                                                        omega[k], trig[k, 0], trig[k, 1], int_d,
+                                                        int_q, ctl)
+                u_k = (va1, vb1, vc1) if delay != 0.0 else (va, vb, vc)
+                va1, vb1, vc1 = va, vb, vc
+            else:
+                u_k = (u[k, 0], u[k, 1], u[k, 2])
             (z0, z1, z2, z3, z4, ia, ib, ic, tq, la, lb, lc, thm, wm, thl, wl) = _period(
-                c, (u[k, 0], u[k, 1], u[k, 2]), theta[k + 1],
+                c, u_k, theta[k + 1],
                 (trig[k + 1, 0], trig[k + 1, 1], trig[k + 1, 2], trig[k + 1, 3]), rot,
                 (i_meas[k + 1, 0], i_meas[k + 1, 1], i_meas[k + 1, 2]), T_load[k],
                 (z0, z1, z2, z3, z4),

@@ -23,15 +23,17 @@ import numpy as np
 
 from ._jit import cached_njit
 from ._monitoring_common import I_DIVERGED
+from .controller import CTL_DELAY, N_CTL
 from .driven import MECH_SUBSTEPS, N_RES, flux_coefficients, rotate
 from .driven import _kernel as scalar_kernel
 from .inverter import dead_time_drop
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_DELTA, C_ECC, C_ECC_PHASE, C_FDJ,
                      C_FSJ, C_GAMMA, C_GAMMA_END, C_MU_A, C_MU_B, C_MU_C, C_OMEGA_S, C_PHI,
-                     C_PHI_END, C_T0, C_V_DT, N_CP, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C,
+                     C_PHI_END, C_T0, C_V_DT, N_CP, P_CTL, P_C_L, P_C_M, P_D_C, P_J_L, P_J_M, P_K_C,
                      P_POLES, P_T_S)
 from .pmsm import phase_currents, torque_loops
-from .step import (inline, inlined, lane_reader, llvm_select as select,
+from .step import (current_loop_inline, inline, inlined, lane_reader, llvm_select as select,
+                   vector_reader,
                    phase_currents_inline, torque_loops_inline, transmission_step_inline,
                    winding_input_inline, winding_step_inline)
 from .mechanics import stribeck_factor
@@ -48,10 +50,12 @@ LANES = 8
 R_C = 0
 (R_Z0, R_Z1, R_Z2, R_Z3, R_Z4, R_IA, R_IB, R_IC, R_THM, R_WM, R_THL, R_WL, R_TQ, R_LA, R_LB,
  R_LC, R_SE, R_SM, R_ALIVE, R_NA, R_NB, R_NC, R_CA, R_CB, R_CC, R_TQ1, R_FD,
- R_SPD, R_CPD, R_SGD, R_CGD) = range(N_CP, N_CP + 31)
-N_ROWS = R_CGD + 1
+ R_SPD, R_CPD, R_SGD, R_CGD, R_UA, R_UB, R_UC, R_INT_D, R_INT_Q, R_VA1, R_VB1,
+ R_VC1) = range(N_CP, N_CP + 39)
+N_ROWS = R_VC1 + 1
 
 _lane_c = lane_reader(N_CP, "lane_c_driven")
+_read_ctl = vector_reader(N_CTL, "read_ctl_driven_simd")
 
 _dead_time_drop = inlined(dead_time_drop)
 _flux = inlined(flux_coefficients)
@@ -96,17 +100,48 @@ def _flux_stage(B, theta1, trig1, p):
 
 
 @inline
-def _winding_stage(B, u, i_meas1, T_s, inv_i_0):
-    """Each lane's winding over the period and the torque at its end."""
+def _command_stage(B, u):
+    """Each lane's voltages of the period: the recorded ones ``u``."""
+    for b in range(B.shape[0]):
+        for l in range(LANES):
+            B[b, R_UA, l] = u[0]
+            B[b, R_UB, l] = u[1]
+            B[b, R_UC, l] = u[2]
+
+
+@inline
+def _current_loop_stage(B, i_ref, omega, s_e, c_e, ctl, delayed):
+    """Each lane's voltages of the period from the drive's current loop on its own currents
+    towards the recorded references ``i_ref`` (at the measured angle's ``s_e, c_e`` and
+    speed ``omega``): those computed now, or under a delay those of the period before."""
+    for b in range(B.shape[0]):
+        for l in range(LANES):
+            va, vb, vc, int_d, int_q = current_loop_inline(
+                i_ref[0], i_ref[1], B[b, R_IA, l], B[b, R_IB, l], B[b, R_IC, l], omega, s_e,
+                c_e, B[b, R_INT_D, l], B[b, R_INT_Q, l], ctl)
+            B[b, R_INT_D, l] = int_d
+            B[b, R_INT_Q, l] = int_q
+            B[b, R_UA, l] = select(delayed, B[b, R_VA1, l], va)
+            B[b, R_UB, l] = select(delayed, B[b, R_VB1, l], vb)
+            B[b, R_UC, l] = select(delayed, B[b, R_VC1, l], vc)
+            B[b, R_VA1, l] = va
+            B[b, R_VB1, l] = vb
+            B[b, R_VC1, l] = vc
+
+
+@inline
+def _winding_stage(B, i_meas1, T_s, inv_i_0):
+    """Each lane's winding over the period (driven by its voltages of the period) and the
+    torque at its end."""
     for b in range(B.shape[0]):
         for l in range(LANES):
             c = _lane_c(B, R_C, b, l)
             V = max(c[C_V_DT], 0.0)
             mu_a, mu_b, mu_c = c[C_MU_A], c[C_MU_B], c[C_MU_C]
             w0, w1, w2, w3, w4 = winding_input_inline(
-                u[0] - _dead_time_drop(B[b, R_IA, l], V, inv_i_0),
-                u[1] - _dead_time_drop(B[b, R_IB, l], V, inv_i_0),
-                u[2] - _dead_time_drop(B[b, R_IC, l], V, inv_i_0),
+                B[b, R_UA, l] - _dead_time_drop(B[b, R_IA, l], V, inv_i_0),
+                B[b, R_UB, l] - _dead_time_drop(B[b, R_IB, l], V, inv_i_0),
+                B[b, R_UC, l] - _dead_time_drop(B[b, R_IC, l], V, inv_i_0),
                 (B[b, R_NA, l] - B[b, R_LA, l]) / T_s, (B[b, R_NB, l] - B[b, R_LB, l]) / T_s,
                 (B[b, R_NC, l] - B[b, R_LC, l]) / T_s, mu_a, mu_b, mu_c)
             z0, z1, z2, z3, z4 = winding_step_inline(
@@ -173,8 +208,8 @@ def _commit_stage(B):
 
 
 @kernel_jit
-def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i_0,
-            sse, residuals, out_i, out_f, out_theta, out_torque, status):
+def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_load, w_e, w_m,
+            i_0, sse, residuals, out_i, out_f, out_theta, out_torque, status):
     """Drop-in for :func:`emaphm.models.driven._kernel` (same arguments, same results to
     round-off)."""
     n_pop = CP.shape[0]
@@ -192,6 +227,9 @@ def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i
     mech = (P[P_J_M], P[P_C_M], P[P_J_L], P[P_C_L], P[P_K_C], P[P_D_C], T_s / MECH_SUBSTEPS)
     l_1, l_2, scale = observer[0], observer[1], observer[2]
     inv_i_0 = 1.0 / i_0
+    closed = i_ref.shape[0] == n
+    ctl = _read_ctl(P, P_CTL)
+    delayed = P[P_CTL + CTL_DELAY] != 0.0
     n_blk = (n_pop + LANES - 1) // LANES
     B = np.zeros((n_blk, N_ROWS, LANES))
     # the winding from the first measured currents, the observer at the first angle and speed
@@ -255,8 +293,12 @@ def _kernel(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i
             break
         _flux_stage(B, theta[k + 1], (trig[k + 1, 0], trig[k + 1, 1], trig[k + 1, 2],
                                       trig[k + 1, 3]), p)
-        _winding_stage(B, (u[k, 0], u[k, 1], u[k, 2]),
-                       (i_meas[k + 1, 0], i_meas[k + 1, 1], i_meas[k + 1, 2]), T_s, inv_i_0)
+        if closed:
+            _current_loop_stage(B, (i_ref[k, 0], i_ref[k, 1]), omega[k], trig[k, 0], trig[k, 1],
+                                ctl, delayed)
+        else:
+            _command_stage(B, (u[k, 0], u[k, 1], u[k, 2]))
+        _winding_stage(B, (i_meas[k + 1, 0], i_meas[k + 1, 1], i_meas[k + 1, 2]), T_s, inv_i_0)
         _friction_stage(B)
         for s in range(MECH_SUBSTEPS):
             _mech_stage(B, (s + 0.5) / MECH_SUBSTEPS, T_load[k], mech)
@@ -278,13 +320,17 @@ SCALAR_TAIL = 1
 
 
 def run(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i_0, *,
-        residuals=False, traces=False, kernel="simd"):
+        i_ref=None, omega=None, residuals=False, traces=False, kernel="simd"):
     """The kernels with the outputs allocated: ``(sse (n_pop, 2), status, extra)`` where
     ``extra`` holds ``"residuals"`` and/or ``"i_abc", "f_abc", "theta_m", "torque"`` as
     asked. ``kernel``: ``"simd"`` (:func:`_kernel`, full blocks of lanes, a lone remainder in
     the scalar kernel) or ``"scalar"`` (:func:`emaphm.models.driven._kernel`, one candidate
-    after another: the readable reference the lanes are tested against)."""
+    after another: the readable reference the lanes are tested against). ``i_ref (n, 2)``
+    and ``omega (n,)``: the drive's recorded current references and the measured speed,
+    which its current loop turns into each candidate's voltages instead of ``u``."""
     n_pop, n = CP.shape[0], theta.shape[0]
+    if i_ref is None:
+        i_ref, omega = np.zeros((0, 2)), np.zeros(0)
     sse = np.zeros((n_pop, 2))
     status = np.zeros(n_pop, dtype=np.int64)
     r = np.empty((n_pop, n, N_RES) if residuals else (0, 0, N_RES))
@@ -298,7 +344,8 @@ def run(P, CP, observer, u, theta, trig, omega0, i_meas, T_load, w_e, w_m, i_0, 
         parts = [(slice(0, split), _kernel), (slice(split, n_pop), scalar_kernel)]
     for rows, kern in parts:
         if rows.stop > rows.start:
-            kern(P, CP[rows], observer, u, theta, trig, float(omega0), i_meas, T_load, w_e, w_m,
+            kern(P, CP[rows], observer, u, i_ref, omega, theta, trig, float(omega0), i_meas,
+                 T_load, w_e, w_m,
                  float(i_0), sse[rows], r[rows] if residuals else r, out_i[rows] if traces else out_i,
                  out_f[rows] if traces else out_f, out_th[rows] if traces else out_th,
                  out_tq[rows] if traces else out_tq, status[rows])

@@ -105,13 +105,20 @@ _pi2_step = inlined(_controller.pi2_step, _sat=_sat)
 _lowpass = inlined(_controller._lowpass)
 _control_parts = dict(_sat=_sat, pi_step=_pi_step, pi2_step=_pi2_step, clarke=_clarke,
                       park=_park, inv_park=_inv_park, inv_clarke=_inv_clarke)
-control_step_inline = inlined(_controller.control_step, **_control_parts,
-                              **{name: inlined(getattr(_controller, name))
-                                 for name in _controller.PLAIN})
+_option_parts = {name: inlined(getattr(_controller, name)) for name in _controller.PLAIN}
+_plain_parts = {name: inline(f) for name, f in _controller.PLAIN.items()}
+#: The drive's speed and current loops (:func:`~emaphm.models.controller.speed_loop`,
+#: :func:`~emaphm.models.controller.current_loop`), inlined
+speed_loop_inline = inlined(_controller.speed_loop, **_control_parts, **_option_parts)
+current_loop_inline = inlined(_controller.current_loop, **_control_parts, **_option_parts)
+control_step_inline = inlined(_controller.control_step, **_control_parts, **_option_parts,
+                              speed_loop=speed_loop_inline, current_loop=current_loop_inline)
 #: :func:`~emaphm.models.controller.control_step` of a drive without options
 #: (:func:`~emaphm.models.controller.plain`): the same numbers, none of the options' work
-control_step_plain_inline = inlined(_controller.control_step, **_control_parts,
-                                    **{name: inline(f) for name, f in _controller.PLAIN.items()})
+control_step_plain_inline = inlined(
+    _controller.control_step, **_control_parts, **_plain_parts,
+    speed_loop=inlined(_controller.speed_loop, **_control_parts, **_plain_parts),
+    current_loop=inlined(_controller.current_loop, **_control_parts, **_plain_parts))
 modulate_inline = inlined(_inverter.modulate)
 winding_input_inline = inlined(_pmsm.winding_input)
 winding_step_inline = inlined(_pmsm.winding_step)

@@ -27,6 +27,9 @@ controller (:mod:`emaphm.models.driven`):
   ``voltage_delay_periods`` says when a logged command was applied, for this path: a drive
   with a computation delay that logs its commands as it applies them has
   ``delay_periods = 1`` and ``voltage_delay_periods = 0``;
+* :func:`current_references`, :func:`speed_reference`: the recorded references on the
+  control grid, each the one the drive's loop used in the period it was logged in (a
+  drive's log of a reference it computed), with ``i_d_ref`` 0 where left out;
 * :func:`control_samples`: the samples at the control instants. Commands are held over a
   period, not interpolated, so they must come one sample per control period, or an
   integer number of samples per period (each period's command read at its first); a log
@@ -42,7 +45,7 @@ import numpy as np
 from .container import Trace, TraceError
 
 __all__ = ["VOLTAGE_FORMS", "voltage_form", "control_samples", "applied_voltages",
-           "delay_periods", "check_commands"]
+           "delay_periods", "check_commands", "current_references", "speed_reference"]
 
 #: The forms of voltage command a trace may carry, in the order they are read.
 VOLTAGE_FORMS = ("phase voltages", "dq voltages", "duty cycles")
@@ -163,3 +166,49 @@ def check_commands(trace: Trace, v: np.ndarray, V_dc: float, where: str = "") ->
                          "their unit (V), that they are phase and not line voltages, or the "
                          "DC link ([inverter] V_dc or the trace's v_dc)")
 
+
+
+#: How far a recorded current reference may exceed the drive's current limit [share]
+#: before it is refused as in other units (a drive clamps its reference at the limit).
+BEYOND_CURRENT_LIMIT = 1.5
+
+
+def current_references(trace: Trace, samples: np.ndarray, I_max: float) -> np.ndarray:
+    """``(n, 2)`` [A]: the recorded ``(i_d_ref, i_q_ref)`` at ``samples`` (``i_d_ref`` 0
+    where the trace has none). TraceError where the trace has no ``i_q_ref``, or where a
+    reference exceeds the drive's current limit ``I_max`` [A] by half (amperes in another
+    unit, or not this drive's)."""
+    d = trace.drive
+    if "i_q_ref" not in d:
+        raise TraceError("the trace carries no current reference i_q_ref; identify it from its "
+                         "voltage commands or with the drive's model (--drive-model)")
+    i_q = np.asarray(d["i_q_ref"], dtype=float)[samples]
+    i_d = (np.asarray(d["i_d_ref"], dtype=float)[samples] if "i_d_ref" in d
+           else np.zeros_like(i_q))
+    ref = np.column_stack([i_d, i_q])
+    peak = float(np.max(np.abs(ref))) if ref.size else 0.0
+    if peak > BEYOND_CURRENT_LIMIT * I_max:
+        row = int(np.argmax(np.max(np.abs(ref), axis=1)))
+        raise TraceError(f"the current references reach {peak:.4g} A (period {row}), "
+                         f"{peak / I_max:.1f}x the drive's current limit of {I_max:.4g} A, which "
+                         "a drive clamps its reference at: check their unit (A, not mA or "
+                         "percent) and the limit ([controller] I_max)")
+    return np.ascontiguousarray(ref)
+
+
+def speed_reference(trace: Trace, samples: np.ndarray, omega_max: float) -> np.ndarray:
+    """``(n,)`` [rad/s]: the recorded ``omega_ref`` at ``samples``. TraceError where the
+    trace has none, or where it exceeds the drive's speed limit ``omega_max`` by half
+    (rpm logged as rad/s, or not this drive's)."""
+    d = trace.drive
+    if "omega_ref" not in d:
+        raise TraceError("the trace carries no speed reference omega_ref; identify it from its "
+                         "voltage commands or current references, or with the drive's model "
+                         "(--drive-model)")
+    w = np.ascontiguousarray(np.asarray(d["omega_ref"], dtype=float)[samples])
+    peak = float(np.max(np.abs(w))) if w.size else 0.0
+    if peak > BEYOND_CURRENT_LIMIT * omega_max:
+        raise TraceError(f"the speed reference reaches {peak:.4g} rad/s, {peak / omega_max:.1f}x "
+                         f"the drive's speed limit of {omega_max:.4g} rad/s: check its unit "
+                         "(rad/s of the motor, not rpm) and the limit ([controller] omega_max)")
+    return w
