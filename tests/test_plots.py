@@ -22,6 +22,7 @@ from emaphm.simulate import simulate  # noqa: E402
 # the modules themselves (a package attribute of the same name could shadow them)
 monitoring = importlib.import_module("emaphm.models.monitoring")
 simulate_mod = importlib.import_module("emaphm.simulate")
+reference_mod = importlib.import_module("emaphm.models.reference")
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +56,8 @@ def _no_simulation(monkeypatch):
     monkeypatch.setattr(monitoring.MonitoringModel, "simulate", boom)
     monkeypatch.setattr(monitoring.MonitoringModel, "weighted_sse", boom)
     monkeypatch.setattr(simulate_mod, "simulate", boom)
-    monkeypatch.setattr(simulate_mod, "run_reference", boom)
+    # simulate imports the reference plant on first use: patched where it lives
+    monkeypatch.setattr(reference_mod, "run_reference", boom)
 
 
 # ----------------------------------------------------------------------------- plot_trace

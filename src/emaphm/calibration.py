@@ -603,19 +603,7 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     base, params_source = resolve_params(params, traces)
     if not traces:
         raise CalibrationError("calibration needs at least one trace of the healthy unit")
-    sources = list(sources) if sources is not None else [f"trace {i + 1}" for i in range(len(traces))]
-    if len(sources) != len(traces):
-        raise ValueError("give one source name per trace")
-    from .traces.container import fingerprint
-
-    seen: dict[str, str] = {}
-    for tr, src in zip(traces, sources):     # one recording twice weighs it twice and
-        fp = fingerprint(tr)                 # narrows the intervals it has not earned
-        if fp in seen:
-            raise CalibrationError(f"{src} is the same recording as {seen[fp]}; give each "
-                                   "trace of the healthy unit once (other recordings of it "
-                                   "narrow the intervals, a copy does not)")
-        seen[fp] = src
+    sources = _sources(traces, sources)
     free = list(free) if free is not None else list(_NAMES)
     unknown = [n for n in free if n not in PARAMETERS]
     if unknown:
@@ -649,17 +637,7 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     res, names = sel["res"], sel["names"]
     dev = dict(zip(names, (float(v) for v in res.x)))
     unit = apply_deviations(base, dev)
-    # the fit of each trace against its own noise floor
-    fits = []
-    ratios: dict[str, float] = {}
-    for tg in targets:
-        if isinstance(tg, _DrivenTarget):
-            fit, ratios[tg.source] = tg.fit(unit, dev)
-            fits.append(fit)
-            continue
-        i = _model_currents(unit, tg)
-        fits.append((np.arange(i.shape[0]) * base.inverter.T_s, tg.i_meas, i))
-        ratios[tg.source] = float(np.sum(tg.w * (i - tg.i_meas) ** 2) / tg.floor)
+    fits, ratios = _trace_fits(targets, unit, dev, base.inverter.T_s)
     elapsed = time.perf_counter() - t0
     bad = {s: r for s, r in ratios.items() if not r <= fit_limit}
     if bad:
@@ -678,6 +656,42 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
                              weak=tuple(sel["weak"]), fit_ratio=ratios,
                              evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits),
                              params_source=params_source)
+
+
+def _sources(traces: list[Trace], sources: Sequence[str] | None) -> list[str]:
+    """A name per trace (``trace 1``, ... where none are given); a recording given twice
+    refused (it would weigh twice and narrow the intervals it has not earned)."""
+    from .traces.container import fingerprint
+
+    sources = list(sources) if sources is not None else [f"trace {i + 1}" for i in range(len(traces))]
+    if len(sources) != len(traces):
+        raise ValueError("give one source name per trace")
+    seen: dict[str, str] = {}
+    for tr, src in zip(traces, sources):
+        fp = fingerprint(tr)
+        if fp in seen:
+            raise CalibrationError(f"{src} is the same recording as {seen[fp]}; give each "
+                                   "trace of the healthy unit once (other recordings of it "
+                                   "narrow the intervals, a copy does not)")
+        seen[fp] = src
+    return sources
+
+
+def _trace_fits(targets: list, unit: ActuatorParams, dev: dict[str, float], T_s: float
+                ) -> tuple[list, dict[str, float]]:
+    """Each trace's ``(t, measured, model)`` currents at the calibrated ``unit`` and its fit
+    against its own noise floor, by source."""
+    fits = []
+    ratios: dict[str, float] = {}
+    for tg in targets:
+        if isinstance(tg, _DrivenTarget):
+            fit, ratios[tg.source] = tg.fit(unit, dev)
+            fits.append(fit)
+            continue
+        i = _model_currents(unit, tg)
+        fits.append((np.arange(i.shape[0]) * T_s, tg.i_meas, i))
+        ratios[tg.source] = float(np.sum(tg.w * (i - tg.i_meas) ** 2) / tg.floor)
+    return fits, ratios
 
 
 def _provenance(unit: ActuatorParams, traces: Sequence[Trace], sources: Sequence[str],

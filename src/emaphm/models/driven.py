@@ -210,6 +210,56 @@ def _period(c, u, theta1, trig1, rot, i_meas1, T_l, z, i, tq, lam, mech_state, p
 
 
 @jit
+def _start(c, theta0, trig, i_meas, p):
+    """A candidate at the first sample: the rotation of its angles (the sines of ``p
+    delta`` and ``delta + ecc_phase``: its own angles are the measured ones rotated), its
+    winding from the measured currents (fault loops at rest) and those currents, its flux
+    linkages and its torque."""
+    delta, ecc_ph = c[C_DELTA], c[C_ECC_PHASE]
+    rot = (math.sin(p * delta), math.cos(p * delta), math.sin(delta + ecc_ph),
+           math.cos(delta + ecc_ph))
+    z0 = Q[0, 0] * i_meas[0, 0] + Q[1, 0] * i_meas[0, 1] + Q[2, 0] * i_meas[0, 2]
+    z1 = Q[1, 1] * i_meas[0, 1] + Q[2, 1] * i_meas[0, 2]
+    s, co = rotate(trig[0, 0], trig[0, 1], rot[0], rot[1])
+    sg, cg = rotate(trig[0, 2], trig[0, 3], rot[2], rot[3])
+    la, lb, lc, ca, cb, cc = _flux_coefficients(s, co, sg, cg, theta0 + delta, p, c[C_C0_A],
+                                                c[C_C0_B], c[C_C0_C], c[C_ECC])
+    tq = torque_loops(i_meas[0, 0], i_meas[0, 1], i_meas[0, 2], 0.0, 0.0, 0.0, ca, cb, cc,
+                      c[C_MU_A], c[C_MU_B], c[C_MU_C])
+    return rot, (z0, z1, 0.0, 0.0, 0.0), phase_currents(z0, z1), (la, lb, lc), tq
+
+
+@jit
+def _loop_voltages(i_d_ref, i_q_ref, ia, ib, ic, omega, s_e, c_e, loop, ctl, delay):
+    """The voltages of the period from the drive's current loop
+    (:func:`~emaphm.models.controller.current_loop`) on the candidate's currents, and the
+    loop's new state ``(int_d, int_q, v_a, v_b, v_c)`` (its integrals, the voltages computed
+    now, which a delay applies in the next period)."""
+    int_d, int_q, va1, vb1, vc1 = loop
+    va, vb, vc, int_d, int_q = current_loop(i_d_ref, i_q_ref, ia, ib, ic, omega, s_e, c_e,
+                                            int_d, int_q, ctl)
+    u = (va1, vb1, vc1) if delay != 0.0 else (va, vb, vc)
+    return u, (int_d, int_q, va, vb, vc)
+
+
+@jit
+def _keep_residuals(residuals, j, k, w_e, w_m, ra, rb, rc, rm):
+    residuals[j, k, 0] = math.sqrt(w_e[k, 0]) * ra
+    residuals[j, k, 1] = math.sqrt(w_e[k, 1]) * rb
+    residuals[j, k, 2] = math.sqrt(w_e[k, 2]) * rc
+    residuals[j, k, 3] = math.sqrt(w_m[k]) * rm
+
+
+@jit
+def _keep_traces(out_i, out_f, out_theta, out_torque, j, k, i, f, thm, tq):
+    for e in range(3):
+        out_i[j, k, e] = i[e]
+        out_f[j, k, e] = f[e]
+    out_theta[j, k] = thm
+    out_torque[j, k] = tq
+
+
+@jit
 def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_load, w_e, w_m,
             i_0, sse, residuals, out_i, out_f, out_theta, out_torque, status):
     """Drive ``CP.shape[0]`` candidates through the ``n = theta.shape[0]`` samples of a
@@ -249,28 +299,11 @@ def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_loa
         # the drive's current loop at rest (its integrals, the voltages of the period before)
         int_d = int_q = 0.0
         va1 = vb1 = vc1 = 0.0
-        c0_a, c0_b, c0_c = c[C_C0_A], c[C_C0_B], c[C_C0_C]
-        ecc, ecc_ph = c[C_ECC], c[C_ECC_PHASE]
-        delta = c[C_DELTA]
-        # the candidate's own angles are the measured ones rotated: by p delta, delta + phase
-        rot = (math.sin(p * delta), math.cos(p * delta), math.sin(delta + ecc_ph),
-               math.cos(delta + ecc_ph))
-        # the winding from the measured currents (fault loops at rest)
-        z0 = Q[0, 0] * i_meas[0, 0] + Q[1, 0] * i_meas[0, 1] + Q[2, 0] * i_meas[0, 2]
-        z1 = Q[1, 1] * i_meas[0, 1] + Q[2, 1] * i_meas[0, 2]
-        z2 = z3 = z4 = 0.0
-        ia, ib, ic = phase_currents(z0, z1)
+        rot, (z0, z1, z2, z3, z4), (ia, ib, ic), (la, lb, lc), tq = _start(c, theta[0], trig,
+                                                                           i_meas, p)
         # the observer at the first measured angle and speed, the load in contact
-        thm = theta[0]
-        wm = omega0
-        thl = theta[0]
-        wl = omega0
-        s, co = rotate(trig[0, 0], trig[0, 1], rot[0], rot[1])
-        sg, cg = rotate(trig[0, 2], trig[0, 3], rot[2], rot[3])
-        la, lb, lc, ca, cb, cc = _flux_coefficients(s, co, sg, cg, theta[0] + delta, p, c0_a,
-                                                    c0_b, c0_c, ecc)
-        tq = torque_loops(i_meas[0, 0], i_meas[0, 1], i_meas[0, 2], z2, z3, z4, ca, cb, cc,
-                          c[C_MU_A], c[C_MU_B], c[C_MU_C])
+        thm = thl = theta[0]
+        wm = wl = omega0
         se = 0.0
         sm = 0.0
         ok = True
@@ -282,19 +315,10 @@ def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_loa
             se += w_e[k, 0] * ra * ra + w_e[k, 1] * rb * rb + w_e[k, 2] * rc * rc
             sm += w_m[k] * rm * rm
             if keep_r:                  # weighted, as the sums
-                residuals[j, k, 0] = math.sqrt(w_e[k, 0]) * ra
-                residuals[j, k, 1] = math.sqrt(w_e[k, 1]) * rb
-                residuals[j, k, 2] = math.sqrt(w_e[k, 2]) * rc
-                residuals[j, k, 3] = math.sqrt(w_m[k]) * rm
+                _keep_residuals(residuals, j, k, w_e, w_m, ra, rb, rc, rm)
             if keep_t:
-                out_i[j, k, 0] = ia
-                out_i[j, k, 1] = ib
-                out_i[j, k, 2] = ic
-                out_f[j, k, 0] = z2
-                out_f[j, k, 1] = z3
-                out_f[j, k, 2] = z4
-                out_theta[j, k] = thm
-                out_torque[j, k] = tq
+                _keep_traces(out_i, out_f, out_theta, out_torque, j, k, (ia, ib, ic),
+                             (z2, z3, z4), thm, tq)
             if k == n - 1:
                 break
             # correct the mechanics with the measured angle, then one period of both
@@ -302,11 +326,9 @@ def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_loa
             thm += l_1 * e
             wm += l_2 * e
             if closed:
-                va, vb, vc, int_d, int_q = current_loop(i_ref[k, 0], i_ref[k, 1], ia, ib, ic,
-                                                        omega[k], trig[k, 0], trig[k, 1], int_d,
-                                                        int_q, ctl)
-                u_k = (va1, vb1, vc1) if delay != 0.0 else (va, vb, vc)
-                va1, vb1, vc1 = va, vb, vc
+                u_k, (int_d, int_q, va1, vb1, vc1) = _loop_voltages(
+                    i_ref[k, 0], i_ref[k, 1], ia, ib, ic, omega[k], trig[k, 0], trig[k, 1],
+                    (int_d, int_q, va1, vb1, vc1), ctl, delay)
             else:
                 u_k = (u[k, 0], u[k, 1], u[k, 2])
             (z0, z1, z2, z3, z4, ia, ib, ic, tq, la, lb, lc, thm, wm, thl, wl) = _period(

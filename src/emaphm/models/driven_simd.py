@@ -207,6 +207,31 @@ def _commit_stage(B):
             B[b, R_SM, l] = select(ok, B[b, R_SM, l], np.inf)
 
 
+@inline
+def _output_stage(B, k, n_pop, keep_r, keep_t, i_meas, theta, w_e, w_m, scale, residuals,
+                  out_i, out_f, out_theta, out_torque):
+    """Each candidate's residuals at sample k (weighted, as the sums) and its traces, where
+    asked."""
+    sw = (math.sqrt(w_e[k, 0]), math.sqrt(w_e[k, 1]), math.sqrt(w_e[k, 2]), math.sqrt(w_m[k]))
+    for j in range(n_pop):
+        b = j // LANES
+        l = j - b * LANES
+        if keep_r:
+            residuals[j, k, 0] = sw[0] * (B[b, R_IA, l] - i_meas[k, 0])
+            residuals[j, k, 1] = sw[1] * (B[b, R_IB, l] - i_meas[k, 1])
+            residuals[j, k, 2] = sw[2] * (B[b, R_IC, l] - i_meas[k, 2])
+            residuals[j, k, 3] = sw[3] * (scale * (B[b, R_THM, l] - theta[k]))
+        if keep_t:
+            out_i[j, k, 0] = B[b, R_IA, l]
+            out_i[j, k, 1] = B[b, R_IB, l]
+            out_i[j, k, 2] = B[b, R_IC, l]
+            out_f[j, k, 0] = B[b, R_Z2, l]
+            out_f[j, k, 1] = B[b, R_Z3, l]
+            out_f[j, k, 2] = B[b, R_Z4, l]
+            out_theta[j, k] = B[b, R_THM, l]
+            out_torque[j, k] = B[b, R_TQ, l]
+
+
 @kernel_jit
 def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_load, w_e, w_m,
             i_0, sse, residuals, out_i, out_f, out_theta, out_torque, status):
@@ -268,25 +293,8 @@ def _kernel(P, CP, observer, u, i_ref, omega, theta, trig, omega0, i_meas, T_loa
                                          B[b, R_C + C_MU_C, l])
     for k in range(n):
         if keep_r or keep_t:
-            sw = (math.sqrt(w_e[k, 0]), math.sqrt(w_e[k, 1]), math.sqrt(w_e[k, 2]),
-                  math.sqrt(w_m[k]))
-            for j in range(n_pop):
-                b = j // LANES
-                l = j - b * LANES
-                if keep_r:                 # weighted, as the sums
-                    residuals[j, k, 0] = sw[0] * (B[b, R_IA, l] - i_meas[k, 0])
-                    residuals[j, k, 1] = sw[1] * (B[b, R_IB, l] - i_meas[k, 1])
-                    residuals[j, k, 2] = sw[2] * (B[b, R_IC, l] - i_meas[k, 2])
-                    residuals[j, k, 3] = sw[3] * (scale * (B[b, R_THM, l] - theta[k]))
-                if keep_t:
-                    out_i[j, k, 0] = B[b, R_IA, l]
-                    out_i[j, k, 1] = B[b, R_IB, l]
-                    out_i[j, k, 2] = B[b, R_IC, l]
-                    out_f[j, k, 0] = B[b, R_Z2, l]
-                    out_f[j, k, 1] = B[b, R_Z3, l]
-                    out_f[j, k, 2] = B[b, R_Z4, l]
-                    out_theta[j, k] = B[b, R_THM, l]
-                    out_torque[j, k] = B[b, R_TQ, l]
+            _output_stage(B, k, n_pop, keep_r, keep_t, i_meas, theta, w_e, w_m, scale,
+                          residuals, out_i, out_f, out_theta, out_torque)
         _residual_stage(B, k, (i_meas[k, 0], i_meas[k, 1], i_meas[k, 2]), theta[k],
                         (w_e[k, 0], w_e[k, 1], w_e[k, 2]), w_m[k], scale, l_1, l_2)
         if k == n - 1:
