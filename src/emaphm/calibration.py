@@ -64,15 +64,15 @@ from .faults import K_NOMINAL
 from .fitness import (MIN_NOISE, TRANSIENT_MISFIT, aligned_currents, check_diagnosable,
                       effective_samples, eq4_weights, noise_samples, on_model_grid,
                       transient_excess, white_noise_sigma)
-from .params import (ActuatorParams, Calibration, CurrentSensors, calibration_digest,
-                     resolve_params, siemens_1fk7060)
+from .params import (CALIBRATED_DRIVE_FIELDS, ActuatorParams, Calibration, CurrentSensors,
+                     calibration_digest, resolve_params, siemens_1fk7060)
 from .search import nuisance_start
 from .profiles import Profile
 from .traces import Trace, TraceError, fingerprint, validate
 
 __all__ = ["PARAMETERS", "CORRELATION_LIMIT", "MULTIPLE_CORRELATION_LIMIT", "HEALTHY_FIT_LIMIT",
            "CalibrationError", "CalibrationResult", "calibrate", "select_identifiable",
-           "TOLERANCE_CHECKED", "DRIVE_PARAMETERS",
+           "TOLERANCE_CHECKED", "DRIVE_PARAMETERS", "DRIVE_SETTINGS", "drive_bounds",
            "estimates", "apply_deviations", "trace_digest"]
 
 #: Calibrated parameters: name -> (lower bound, upper bound, unit) of the deviation.
@@ -98,12 +98,41 @@ DRIVE_PARAMETERS: dict[str, tuple[float, float, str]] = {
     "stribeck": (0.0, 5.0, "rad/s")}
 PARAMETERS.update(DRIVE_PARAMETERS)
 
+#: The drive's settings a calibration estimates where the user does not know them
+#: (``calibrate(drive_unknown=...)``, ``emaphm calibrate --drive-unknown``): name ->
+#: (section of the parameters, lowest value, highest value, unit, where a search starts, as
+#: a value; None: at the stated one). Values, not deviations: the deviation's bounds are
+#: these less the stated value. The gains are relative to the stated ones (their bounds
+#: too). The filters start off zero, where a filter of a microsecond does nothing and the
+#: fit cannot tell which way to go. The computation delay (0 or 1 period) is no continuous
+#: setting: describe it.
+DRIVE_SETTINGS: dict[str, tuple[str, float, float, str, float | None]] = {
+    n: (CALIBRATED_DRIVE_FIELDS[n], *spec) for n, spec in {
+        "velocity_feedforward": (0.0, 1.5, "", None),
+        "torque_feedforward": (0.0, 1.5, "", None),
+        "speed_filter_s": (0.0, 5e-3, "s", 2.5e-4),
+        "current_reference_filter_s": (0.0, 2e-3, "s", 2.5e-4),
+        "speed_reference_weight": (0.0, 1.0, "", None),
+        "Kp": (-0.5, 1.0, "relative", None), "Kp_w": (-0.5, 1.0, "relative", None),
+        "Ki_w": (-0.5, 1.0, "relative", None), "Kp_i": (-0.5, 1.0, "relative", None),
+        "Ki_i": (-0.5, 1.0, "relative", None)}.items()}
+PARAMETERS.update({n: (lo, hi, unit) for n, (_, lo, hi, unit, _) in DRIVE_SETTINGS.items()})
+
 #: A typical deviation of each parameter (the width of the production tolerance,
 #: :data:`emaphm.units.DEFAULT_TOLERANCES`), in the parameter's unit.
 TYPICAL: dict[str, float] = {"J": 0.2, "flux": 0.1, "R": 0.25, "L": 0.1, "friction": 0.4,
                              "viscous": 0.4, "gain_a": 0.06, "gain_b": 0.06, "gain_c": 0.06,
                              "offset_a": 0.04, "offset_b": 0.04, "offset_c": 0.04, "load": 0.2,
-                             "V_dt": 5.0, "angle": 0.05, "stribeck": 1.0}
+                             "V_dt": 5.0, "angle": 0.05, "stribeck": 1.0,
+                             # the drive's settings: a change a tuning would make
+                             "velocity_feedforward": 0.3, "torque_feedforward": 0.3,
+                             "speed_filter_s": 2.5e-4, "current_reference_filter_s": 2.5e-4,
+                             "speed_reference_weight": 0.2, "Kp": 0.2, "Kp_w": 0.2,
+                             "Ki_w": 0.2, "Kp_i": 0.2, "Ki_i": 0.2}
+
+#: The forward difference's step of a parameter whose unit is far below one (seconds of a
+#: filter): ``STEP[n] * max(1, |x|)`` instead of ``1e-3 * max(1, |x|)``.
+STEP: dict[str, float] = {"speed_filter_s": 1e-6, "current_reference_filter_s": 1e-6}
 
 #: A parameter whose typical deviation moves the fit ratio (Eq. 4 over the noise floor)
 #: by less than this -- or less than the fit's own excess over the floor, which is what
@@ -183,8 +212,40 @@ def apply_deviations(params: ActuatorParams, dev: dict[str, float]) -> ActuatorP
                       offset=tuple(o + d[f"offset_{p}"] for o, p in zip(s.offset, "abc")))
     # the drive's own settings stay the data sheet's (emaphm.params.Controller.resolved)
     drive = params.controller.kept_for(m, ld, motor, load)
-    return replace(params, motor=motor, transmission=trans, load=load, sensors=sensors,
-                   controller=drive)
+    out = replace(params, motor=motor, transmission=trans, load=load, sensors=sensors,
+                  controller=drive)
+    return _drive_settings(out, params, dev)
+
+
+def _drive_settings(out: ActuatorParams, stated: ActuatorParams,
+                    dev: dict[str, float]) -> ActuatorParams:
+    """``out`` with the drive settings in ``dev`` (:data:`DRIVE_SETTINGS`) set: each the
+    ``stated`` one plus its deviation (times one plus it, for a relative one)."""
+    sections: dict[str, dict[str, float]] = {}
+    for n, d in dev.items():
+        if n in DRIVE_SETTINGS:
+            sec, lo, hi, unit, _ = DRIVE_SETTINGS[n]
+            v = getattr(getattr(stated, sec), n)
+            sections.setdefault(sec, {})[n] = (v * (1.0 + float(d)) if unit == "relative"
+                                               else min(max(v + float(d), lo), hi))
+    for sec, values in sections.items():
+        out = replace(out, **{sec: replace(getattr(out, sec), **values)})
+    return out
+
+
+def drive_bounds(params: ActuatorParams, names: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """The deviations' bounds of the drive settings ``names`` (:data:`DRIVE_SETTINGS`) from
+    the values ``params`` states, and where their search starts (as deviations)."""
+    out = {}
+    for n in names:
+        sec, lo, hi, unit, start = DRIVE_SETTINGS[n]
+        if unit == "relative":
+            out[n] = (lo, hi, 0.0)
+            continue
+        v = float(getattr(getattr(params, sec), n))
+        x0 = 0.0 if start is None or v != 0.0 else start - v
+        out[n] = (lo - v, hi - v, min(max(x0, lo - v), hi - v))
+    return out
 
 
 @dataclass(frozen=True)
@@ -351,10 +412,13 @@ class CalibrationResult:
                    params_source=str(data.get("params_source", "given")))
 
     def summary(self) -> str:
-        lines = [f"{'parameter':10s} {'deviation':>10s} {'95 % interval':>22s}  unit"]
+        w = max([10] + [len(n) for n in self.estimates])
+        # a setting in seconds (a filter's) in scientific notation: four decimals hide it
+        fmt = lambda x, n, e: (f"{x:+{n}.3e}" if e["unit"] == "s" else f"{x:+{n}.4f}")  # noqa: E731
+        lines = [f"{'parameter':{w}s} {'deviation':>10s} {'95 % interval':>22s}  unit"]
         for n, e in self.estimates.items():
-            lines.append(f"{n:10s} {e['value']:+10.4f} [{e['lo95']:+9.4f}, {e['hi95']:+9.4f}]  "
-                         f"{e['unit']}")
+            lines.append(f"{n:{w}s} {fmt(e['value'], 10, e)} [{fmt(e['lo95'], 9, e)}, "
+                         f"{fmt(e['hi95'], 9, e)}]  {e['unit']}")
         if self.weak:
             lines.append("not identifiable on this profile (a typical deviation changes the fit "
                          "less than model error does), kept at the data sheet: "
@@ -383,6 +447,9 @@ class _Fitter:
         #: traces on the recorded-voltage path: every column by differences (the sensors'
         #: gains and offsets act on the measured currents the model reads, not after it)
         self.driven = any(isinstance(t, _DrivenTarget) for t in targets)
+        #: each parameter's (lower, upper) bound of the deviation: :data:`PARAMETERS`', the
+        #: drive settings' from their stated values (:func:`drive_bounds`)
+        self.bounds = {n: (lo, hi) for n, (lo, hi, _) in PARAMETERS.items()}
 
     def currents(self, x: np.ndarray, names: list[str]) -> list[np.ndarray] | None:
         """Model currents of each trace at ``x``, before the sensors' gains and offsets
@@ -453,8 +520,8 @@ class _Fitter:
                     col.append(d.ravel())
                 J[:, c] = np.concatenate(col)
                 continue
-            h = 1e-3 * max(1.0, abs(x[c]))
-            if x[c] + h > PARAMETERS[n][1]:
+            h = STEP.get(n, 1e-3) * max(1.0, abs(x[c]))
+            if x[c] + h > self.bounds[n][1]:
                 h = -h
             xh = np.array(x, dtype=float)
             xh[c] += h
@@ -469,8 +536,8 @@ class _Fitter:
         one BLAS thread)."""
         from .optim.lsq import least_squares_batched
 
-        lo = np.array([PARAMETERS[n][0] for n in names])
-        hi = np.array([PARAMETERS[n][1] for n in names])
+        lo = np.array([self.bounds[n][0] for n in names])
+        hi = np.array([self.bounds[n][1] for n in names])
         _, res = least_squares_batched(
             lambda X: np.stack([self.residual(x, names) for x in X]), np.clip(x0, lo, hi),
             (lo, hi), jac=lambda x, r0: self.jacobian(x, names),
@@ -521,7 +588,8 @@ def select_identifiable(fitter: _Fitter, names: list[str], *,
         cov, corr = _covariance(res, fitter.targets)
         if len(names) <= 1:
             break
-        drop, pair = _inseparable(names, cov, corr, correlation_limit, multiple_limit)
+        drop, pair = _inseparable(names, cov, corr, correlation_limit, multiple_limit,
+                                  fitter.bounds)
         if drop is None:
             break
         if fitter.driven:
@@ -538,7 +606,8 @@ def select_identifiable(fitter: _Fitter, names: list[str], *,
 
 
 def _inseparable(names: list[str], cov: np.ndarray, corr: np.ndarray, correlation_limit: float,
-                 multiple_limit: float) -> tuple[int | None, tuple[str, str, float] | None]:
+                 multiple_limit: float, bounds: dict[str, tuple[float, float]]
+                 ) -> tuple[int | None, tuple[str, str, float] | None]:
     """The estimate to keep at the data sheet (the less certain, relative to its range, of
     the most correlated pair past ``correlation_limit``; else the least certain of those
     the others predict past ``multiple_limit``) and why; ``(None, None)`` when none."""
@@ -548,7 +617,7 @@ def _inseparable(names: list[str], cov: np.ndarray, corr: np.ndarray, correlatio
             r = corr[a, b]
             if abs(r) > correlation_limit and (worst is None or abs(r) > abs(worst[2])):
                 worst = (a, b, float(r))
-    span = lambda j: PARAMETERS[names[j]][1] - PARAMETERS[names[j]][0]  # noqa: E731
+    span = lambda j: bounds[names[j]][1] - bounds[names[j]][0]  # noqa: E731
     doubt = lambda j: math.sqrt(cov[j, j]) / span(j)                      # noqa: E731
     if worst is not None:
         a, b, r = worst
@@ -582,7 +651,8 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
               correlation_limit: float = CORRELATION_LIMIT,
               multiple_limit: float = MULTIPLE_CORRELATION_LIMIT,
               progress: Callable[[int], Any] | None = None,
-              tolerances: Any = None) -> CalibrationResult:
+              tolerances: Any = None,
+              drive_unknown: Sequence[str] = ()) -> CalibrationResult:
     """Calibrate a healthy unit on ``traces`` around its data sheet ``params`` (an
     :class:`ActuatorParams`, a dict or a TOML path; default the traces' own actuator,
     their metadata's ``"parameters"``, else the preset: :func:`emaphm.params.resolve_params`;
@@ -598,6 +668,13 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     the production ``tolerances`` (default :data:`emaphm.units.DEFAULT_TOLERANCES`) by more
     than its own 95 % interval (:data:`TOLERANCE_CHECKED`): the model does not describe the
     unit (its drive's control, most often), and the parameters would absorb it.
+
+    ``drive_unknown``: drive settings the user does not know (:data:`DRIVE_SETTINGS`:
+    feed-forward gains, filters, the 2-DOF weight, the loops' gains), estimated beside the
+    unit's parameters with their intervals and written into the calibrated parameters
+    (``[controller]``, ``[inverter]``), which the calibration's digest then covers. They
+    act where the drive is modelled: the modelled controller's path, and on the current
+    references' the current loop's gains.
     """
     traces = list(traces)
     base, params_source = resolve_params(params, traces)
@@ -609,6 +686,12 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     if unknown:
         raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from "
                          + ", ".join(_NAMES))
+    drive_unknown = list(drive_unknown)
+    strange = [n for n in drive_unknown if n not in DRIVE_SETTINGS]
+    if strange:
+        raise ValueError(f"unknown drive setting(s) {strange}; a calibration estimates "
+                         + ", ".join(DRIVE_SETTINGS) + " (describe the others in [controller])")
+    free += [n for n in drive_unknown if n not in free]
     from .recorded import DRIVEN, drive_model_of
 
     drives = [drive_model_of(tr) for tr in traces]
@@ -622,7 +705,9 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         free = [n for n in free if n != "gain_a"]
     t0 = time.perf_counter()
     fitter = _Fitter(base, targets, progress)
-    x0 = None
+    settings = drive_bounds(base, drive_unknown)
+    fitter.bounds.update({n: (lo, hi) for n, (lo, hi, _) in settings.items()})
+    x0 = np.array([settings[n][2] if n in settings else 0.0 for n in free])
     if fitter.driven:
         # the inverter's, the encoder's and the friction's own first: the dead time moves the
         # currents by amperes where the unit's deviations move them by milliamperes, and a
@@ -631,7 +716,7 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
         # from where a diagnosis starts them (the Stribeck speed at 1 rad/s: at 0 the
         # friction does not change with it, and the fit would stay there)
         first = fitter.fit(drive, nuisance_start(tuple(drive)))
-        x0 = np.array([first.x[drive.index(n)] if n in drive else 0.0 for n in free])
+        x0 = np.array([first.x[drive.index(n)] if n in drive else x for n, x in zip(free, x0)])
     sel = select_identifiable(fitter, free, correlation_limit=correlation_limit,
                               multiple_limit=multiple_limit, x0=x0)
     res, names = sel["res"], sel["names"]

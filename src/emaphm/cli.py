@@ -403,9 +403,16 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from .calibration import CalibrationError, calibrate
+    from .calibration import DRIVE_SETTINGS, CalibrationError, calibrate
     from .params import resolve_params, save_params
     from .progress import CountProgress, compile_notice
+
+    unknown = [n.strip() for n in args.drive_unknown.split(",") if n.strip()]
+    strange = [n for n in unknown if n not in DRIVE_SETTINGS]
+    if strange:
+        raise UsageError(f"--drive-unknown {','.join(strange)}: no drive setting a calibration "
+                         f"estimates; choose from {', '.join(DRIVE_SETTINGS)} (describe the "
+                         "others, delay_periods and decoupling among them, in [controller])")
 
     out = out_path(args.out, (".toml",), "--out", inputs=[*args.traces, args.params])
     plot = plot_path(args.plot)
@@ -423,7 +430,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     try:
         with compile_notice(progress, enabled=not args.quiet):
             res = calibrate(traces, given, sources=[str(Path(n).name) for n in args.traces],
-                            progress=progress.update)
+                            progress=progress.update, drive_unknown=unknown)
     except CalibrationError as exc:
         raise UsageError(str(exc)) from None
     finally:
@@ -503,6 +510,25 @@ def _drive_arguments(p: argparse.ArgumentParser, diagnose: bool = False) -> None
                         + "; ".join(f"{k}: {v}" for k, v in FOREIGN_DRIVES.items()))
 
 
+def _calibrate_parser(sub) -> None:
+    cal = sub.add_parser("calibrate", help="estimate a healthy unit's parameters from its traces",
+                         description="Fit inertia, flux, resistance, inductance, friction, "
+                                     "current sensor gains and offsets and an unreported load "
+                                     "of a unit known to be healthy; write its parameters.")
+    cal.add_argument("traces", nargs="+", help="traces of the healthy unit (.csv or .parquet)")
+    cal.add_argument("--out", required=True, help="calibrated parameters, .toml")
+    cal.add_argument("--params", help=f"data-sheet parameters TOML {_PARAMS_DEFAULT}")
+    cal.add_argument("--json", action="store_true", help="print one JSON object on stdout")
+    cal.add_argument("--plot", help="measured vs calibrated currents of the first trace (.png)")
+    cal.add_argument("--drive-unknown", metavar="KEY,...", default="",
+                     help="drive settings you do not know, estimated beside the unit and "
+                          "written into [controller]/[inverter]: velocity_feedforward, "
+                          "torque_feedforward, speed_filter_s, current_reference_filter_s, "
+                          "speed_reference_weight, Kp, Kp_w, Ki_w, Kp_i, Ki_i")
+    cal.add_argument("--quiet", action="store_true")
+    cal.set_defaults(func=cmd_calibrate)
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = Parser(prog="emaphm", description=__doc__.split("\n")[0],
                 formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -571,17 +597,7 @@ def build_parser() -> argparse.ArgumentParser:
     _plant_arguments(d, diagnose=True)
     d.set_defaults(func=cmd_diagnose)
 
-    cal = sub.add_parser("calibrate", help="estimate a healthy unit's parameters from its traces",
-                         description="Fit inertia, flux, resistance, inductance, friction, "
-                                     "current sensor gains and offsets and an unreported load "
-                                     "of a unit known to be healthy; write its parameters.")
-    cal.add_argument("traces", nargs="+", help="traces of the healthy unit (.csv or .parquet)")
-    cal.add_argument("--out", required=True, help="calibrated parameters, .toml")
-    cal.add_argument("--params", help=f"data-sheet parameters TOML {_PARAMS_DEFAULT}")
-    cal.add_argument("--json", action="store_true", help="print one JSON object on stdout")
-    cal.add_argument("--plot", help="measured vs calibrated currents of the first trace (.png)")
-    cal.add_argument("--quiet", action="store_true")
-    cal.set_defaults(func=cmd_calibrate)
+    _calibrate_parser(sub)
 
     p = sub.add_parser("params", help="write the default actuator parameters (or a motor's, from "
                                       "its data sheet) to a TOML file")

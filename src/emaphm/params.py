@@ -95,6 +95,7 @@ __all__ = [
     "Calibration",
     "CalibrationWarning",
     "CALIBRATED_FIELDS",
+    "CALIBRATED_DRIVE_FIELDS",
     "calibration_digest",
     "check_calibration",
     "ActuatorParams",
@@ -637,6 +638,15 @@ CALIBRATED_FIELDS: tuple[tuple[str, str], ...] = (
     ("transmission", "FSJ"), ("transmission", "FDJ"), ("load", "J_l"), ("load", "T_0"),
     ("sensors", "gain"), ("sensors", "offset"))
 
+#: The drive's settings a calibration may estimate where the user does not know them
+#: (:data:`emaphm.calibration.DRIVE_SETTINGS`), by the section that holds each: the digest
+#: covers the value of each that the block's estimates name.
+CALIBRATED_DRIVE_FIELDS: dict[str, str] = {
+    "velocity_feedforward": "controller", "torque_feedforward": "controller",
+    "speed_filter_s": "controller", "current_reference_filter_s": "controller",
+    "speed_reference_weight": "controller", "Kp": "controller", "Kp_w": "controller",
+    "Ki_w": "controller", "Kp_i": "inverter", "Ki_i": "inverter"}
+
 
 def calibration_digest(params: "ActuatorParams") -> str:
     """``"sha256:..."`` of the ``[calibration]`` block of ``params`` (its digest left out)
@@ -650,6 +660,10 @@ def calibration_digest(params: "ActuatorParams") -> str:
     for sec, name in CALIBRATED_FIELDS:
         v = getattr(getattr(params, sec), name)
         values[f"{sec}.{name}"] = [float(x) for x in v] if isinstance(v, tuple) else float(v)
+    for name, _, _ in c.estimates:
+        if name in CALIBRATED_DRIVE_FIELDS:
+            sec = CALIBRATED_DRIVE_FIELDS[name]
+            values[f"{sec}.{name}"] = float(getattr(getattr(params, sec), name))
     content = {"calibration": {"date": c.date, "sources": list(c.sources),
                                "estimates": [[n, float(v), float(se)] for n, v, se in c.estimates],
                                "fixed": list(c.fixed), "emaphm_version": c.emaphm_version,

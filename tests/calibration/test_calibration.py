@@ -298,10 +298,17 @@ def test_the_command_line_says_the_warning_in_one_line(twin_result, tmp_path, ca
 def test_the_digest_covers_every_value_a_calibration_sets():
     """apply_deviations changes only CALIBRATED_FIELDS: a value the calibration sets that
     the digest missed could be edited unnoticed."""
-    from emaphm.params import CALIBRATED_FIELDS
+    from emaphm.calibration import DRIVE_SETTINGS
+    from emaphm.params import CALIBRATED_DRIVE_FIELDS, CALIBRATED_FIELDS
 
-    moved = apply_deviations(NOMINAL, {n: 0.1 for n in PARAMETERS})
-    a, b = NOMINAL.to_dict(), moved.to_dict()
-    changed = {(sec, k) for sec in a if isinstance(a[sec], dict)
-               for k in a[sec] if a[sec][k] != b[sec][k]}
-    assert changed == set(CALIBRATED_FIELDS)
+    def changed(dev):
+        a, b = NOMINAL.to_dict(), apply_deviations(NOMINAL, dev).to_dict()
+        return {(sec, k) for sec in a if isinstance(a[sec], dict)
+                for k in a[sec] if a[sec][k] != b[sec][k]}
+
+    assert changed({n: 0.1 for n in PARAMETERS if n not in DRIVE_SETTINGS}) == set(CALIBRATED_FIELDS)
+    # a drive setting it estimates (--drive-unknown): that one, which the digest covers
+    # where the block names it
+    for n in DRIVE_SETTINGS:
+        step = -0.1 if n == "speed_reference_weight" else 0.1       # 1, its upper bound
+        assert changed({n: step}) == {(CALIBRATED_DRIVE_FIELDS[n], n)}, n
