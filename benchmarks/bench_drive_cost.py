@@ -13,6 +13,9 @@ warm-up identification of another trace in each process; CPU time (``time.proces
 single-threaded. Reported: the median over the rounds of each trace's CPU time and the
 ratio now / base, and the sum over the traces.
 
+The working tree runs each trace twice: with its whole log (the recorded voltages) and
+with its current references alone (``i_d_ref, i_q_ref``: the recorded current references).
+
 Run: ``python benchmarks/bench_drive_cost.py [--base 216ed3d] [--rounds 5]`` ->
 ``benchmarks/results/drive_cost.md``.
 """
@@ -41,10 +44,14 @@ SCENARIOS = ("nominal", "friction-high", "backlash-low", "turn-short-15pct", "ga
 
 WORKLOAD = r'''
 import json, sys, time
+from dataclasses import replace
 from emaphm.identify import identify
 from emaphm.traces import read_trace
-folder, names = sys.argv[1], sys.argv[2].split(",")
+folder, names, keep = sys.argv[1], sys.argv[2].split(","), sys.argv[3]
 traces = {n: read_trace(f"{folder}/{n}.parquet") for n in names + ["warm"]}
+if keep:                                     # the drive's log reduced to these signals
+    traces = {n: replace(t, drive={c: t.drive[c] for c in keep.split(",")})
+              for n, t in traces.items()}
 identify(traces["warm"], "lsq", seed=0)
 out = {}
 for n in names:
@@ -56,10 +63,14 @@ json.dump(out, sys.stdout)
 '''
 
 
-def _run(src: Path, folder: Path) -> dict:
+#: The working tree's drive paths, by the drive signals each trace keeps ("": all of them).
+PATHS = {"now": "", "now-refs": "i_d_ref,i_q_ref"}
+
+
+def _run(src: Path, folder: Path, keep: str = "") -> dict:
     env = dict(os.environ, PYTHONPATH=str(src), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
                NUMBA_NUM_THREADS="1")
-    r = subprocess.run([sys.executable, "-c", WORKLOAD, str(folder), ",".join(SCENARIOS)],
+    r = subprocess.run([sys.executable, "-c", WORKLOAD, str(folder), ",".join(SCENARIOS), keep],
                        env=env, capture_output=True, text=True, timeout=1800, check=False)
     if r.returncode != 0:
         raise RuntimeError(f"workload on {src} failed:\n{r.stderr[-3000:]}")
@@ -85,33 +96,35 @@ def main() -> None:
         base_src = _extract(args.base, Path(tmp))
         now_src = ROOT / "src"
         _run(base_src, folder), _run(now_src, folder)          # compile both caches
-        rounds: dict[str, list[dict]] = {"base": [], "now": []}
+        rounds: dict[str, list[dict]] = {"base": [], **{p: [] for p in PATHS}}
         for i in range(args.rounds):
-            for name, src in (("base", base_src), ("now", now_src)):
-                rounds[name].append(_run(src, folder))
+            rounds["base"].append(_run(base_src, folder))
+            for name, keep in PATHS.items():
+                rounds[name].append(_run(now_src, folder, keep))
             print(f"round {i + 1}/{args.rounds}", flush=True)
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
                           text=True).stdout.strip()
-    lines = [f"## Identification from recorded voltages beside {args.base}'s of the same traces\n",
+    lines = [f"## Identification from what the drive recorded beside {args.base}'s of the same "
+             "traces\n",
              f"Machine: {machine('numba')}; load average {os.getloadavg()[0]:.2f} at the end; "
              f"{datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC; {head}. "
              f"{args.rounds} rounds, each every trace once on each version in a fresh process, "
              "alternating; medians of the rounds; CPU time, one thread "
              "(`benchmarks/bench_drive_cost.py`).\n",
              f"| trace | {args.base}: modelled controller | now: recorded voltages | now / base "
-             "| evaluations (base, now) |", "|---|---|---|---|---|"]
-    total_b = total_n = 0.0
+             "| now: recorded current references | now / base | evaluations (base, voltages, "
+             "references) |", "|---|---|---|---|---|---|---|"]
+    med = {p: {n: float(np.median([r[n] for r in rounds[p]])) for n in SCENARIOS} for p in rounds}
     for name in SCENARIOS:
-        b = float(np.median([r[name] for r in rounds["base"]]))
-        n = float(np.median([r[name] for r in rounds["now"]]))
-        total_b += b
-        total_n += n
-        lines.append(f"| {name} | {b:.3f} s | {n:.3f} s | {n / b:.2f} | "
-                     f"{rounds['base'][0][name + ' evaluations']}, "
-                     f"{rounds['now'][0][name + ' evaluations']} |")
-    lines.append(f"| all seven | {total_b:.3f} s | {total_n:.3f} s | {total_n / total_b:.2f} | |")
-    paths = {rounds["now"][0][n + " path"] for n in SCENARIOS}
-    lines.append(f"\nPath of the working tree: {', '.join(sorted(paths))}.")
+        b, n, c = med["base"][name], med["now"][name], med["now-refs"][name]
+        lines.append(f"| {name} | {b:.3f} s | {n:.3f} s | {n / b:.2f} | {c:.3f} s | {c / b:.2f} | "
+                     + ", ".join(str(rounds[p][0][name + " evaluations"]) for p in rounds) + " |")
+    tot = {p: sum(med[p].values()) for p in med}
+    lines.append(f"| all seven | {tot['base']:.3f} s | {tot['now']:.3f} s | "
+                 f"{tot['now'] / tot['base']:.2f} | {tot['now-refs']:.3f} s | "
+                 f"{tot['now-refs'] / tot['base']:.2f} | |")
+    paths = {rounds[p][0][n + " path"] for p in PATHS for n in SCENARIOS}
+    lines.append(f"\nPaths of the working tree: {', '.join(sorted(paths))}.")
     RESULTS.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
 
