@@ -158,14 +158,21 @@ def check_commands(trace: Trace, v: np.ndarray, V_dc: float, where: str = "") ->
                 raise TraceError(f"{where}duty cycle {name} is {x[bad[0]]:.4g} at t = "
                                  f"{trace.t[bad[0]]:.6g} s, outside [0, 1]; log the legs' duty "
                                  "cycles as fractions of the period (not percent)")
-    peak = float(np.max(np.abs(v))) if v.size else 0.0
+    peak, row = _peak(v)
     if peak > BEYOND_DC_LINK * V_dc:
-        row = int(np.argmax(np.max(np.abs(v), axis=1)))
         raise TraceError(f"{where}the voltage commands reach {peak:.4g} V (period {row}), beyond "
                          f"the DC link of {V_dc:.4g} V, which no inverter on it applies: check "
                          "their unit (V), that they are phase and not line voltages, or the "
                          "DC link ([inverter] V_dc or the trace's v_dc)")
 
+
+def _peak(x: np.ndarray) -> tuple[float, int]:
+    """The largest magnitude in ``x (n, m)`` and its row (0 for none)."""
+    if not x.size:
+        return 0.0, 0
+    a = np.max(np.abs(x), axis=1)
+    row = int(np.argmax(a))
+    return float(a[row]), row
 
 
 #: How far a recorded current reference may exceed the drive's current limit [share]
@@ -186,9 +193,8 @@ def current_references(trace: Trace, samples: np.ndarray, I_max: float) -> np.nd
     i_d = (np.asarray(d["i_d_ref"], dtype=float)[samples] if "i_d_ref" in d
            else np.zeros_like(i_q))
     ref = np.column_stack([i_d, i_q])
-    peak = float(np.max(np.abs(ref))) if ref.size else 0.0
+    peak, row = _peak(ref)
     if peak > BEYOND_CURRENT_LIMIT * I_max:
-        row = int(np.argmax(np.max(np.abs(ref), axis=1)))
         raise TraceError(f"the current references reach {peak:.4g} A (period {row}), "
                          f"{peak / I_max:.1f}x the drive's current limit of {I_max:.4g} A, which "
                          "a drive clamps its reference at: check their unit (A, not mA or "
@@ -206,7 +212,7 @@ def speed_reference(trace: Trace, samples: np.ndarray, omega_max: float) -> np.n
                          "voltage commands or current references, or with the drive's model "
                          "(--drive-model)")
     w = np.ascontiguousarray(np.asarray(d["omega_ref"], dtype=float)[samples])
-    peak = float(np.max(np.abs(w))) if w.size else 0.0
+    peak, _ = _peak(w[:, None])
     if peak > BEYOND_CURRENT_LIMIT * omega_max:
         raise TraceError(f"the speed reference reaches {peak:.4g} rad/s, {peak / omega_max:.1f}x "
                          f"the drive's speed limit of {omega_max:.4g} rad/s: check its unit "
