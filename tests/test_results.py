@@ -187,3 +187,42 @@ def test_a_history_record_and_the_alpha_lambda_metric(tmp_path, history, trace):
     back = assert_round_trip(al)
     np.testing.assert_array_equal(back.passed, al.passed)
     assert back.score == al.score
+
+
+def test_campaign_specs():
+    from emaphm.campaign import AlgorithmSpec, CampaignSpec, ScenarioSpec
+
+    custom = ScenarioSpec.custom("mine", [0.1] * 7 + [0.5], magnitude="x", fault_model="paper")
+    spec = CampaignSpec(scenarios=("friction-low", "multiple", custom),
+                        algorithms=(AlgorithmSpec("pso", "pso-30", {"pop_size": 30}, budget=500),
+                                    "de"),
+                        runs=2, master_seed=7, budget="30s", params=siemens_1fk7060(),
+                        name="small")
+    back = assert_round_trip(spec)
+    assert back == spec and back.hash == spec.hash
+    for s in spec.scenarios:
+        assert assert_round_trip(s) == s
+    for a in spec.algorithms:
+        assert assert_round_trip(a) == a
+    every_physical = CampaignSpec(fault_model="physical")
+    assert assert_round_trip(every_physical) == every_physical
+
+
+def test_run_result():
+    from dataclasses import replace
+
+    from emaphm.campaign import AlgorithmSpec, CampaignSpec, RunResult
+    from emaphm.campaign.runner import execute_run
+
+    spec = CampaignSpec(scenarios=("friction-high",), algorithms=(AlgorithmSpec("pso"),),
+                        runs=1, budget=200, polish=False)
+    run = spec.runs_list()[0]
+    ok = execute_run(run)
+    failed = execute_run(replace(run, k_true=(2.0,) * 8))
+    assert ok.ok and failed.status == "failed" and failed.error_text
+    for r in (ok, failed):
+        back = assert_round_trip(r)
+        assert back == r and back.outcome() == r.outcome()
+    assert RunResult.from_dict(ok.to_dict()) == ok
+    with pytest.raises(ValueError, match="unknown field"):
+        RunResult.from_dict({**ok.to_dict(), "colour": "red"})

@@ -23,6 +23,10 @@ kind                       class
 ``inspection``             :class:`emaphm.prognosis.Inspection` (a history's record)
 ``alpha_lambda``           :class:`emaphm.prognosis.metrics.AlphaLambda`
 ``parameters``             :class:`emaphm.params.ActuatorParams`
+``campaign_spec``          :class:`emaphm.campaign.CampaignSpec`
+``scenario_spec``          :class:`emaphm.campaign.ScenarioSpec`
+``algorithm_spec``         :class:`emaphm.campaign.AlgorithmSpec`
+``run_result``             :class:`emaphm.campaign.RunResult` (a campaign's stored run)
 =========================  =====================================================
 
 What ``to_dict`` leaves out is not saved: the traces (an identification's
@@ -56,6 +60,10 @@ KINDS: dict[str, tuple[str, str]] = {
     "inspection": ("emaphm.prognosis.history", "Inspection"),
     "alpha_lambda": ("emaphm.prognosis.metrics", "AlphaLambda"),
     "parameters": ("emaphm.params", "ActuatorParams"),
+    "campaign_spec": ("emaphm.campaign.spec", "CampaignSpec"),
+    "scenario_spec": ("emaphm.campaign.spec", "ScenarioSpec"),
+    "algorithm_spec": ("emaphm.campaign.spec", "AlgorithmSpec"),
+    "run_result": ("emaphm.campaign.store", "RunResult"),
 }
 
 
