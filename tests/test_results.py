@@ -189,6 +189,84 @@ def test_a_history_record_and_the_alpha_lambda_metric(tmp_path, history, trace):
     assert back.score == al.score
 
 
+def test_history_records(tmp_path):
+    from emaphm.prognosis import HealthHistory
+    from emaphm.prognosis.history import Actuator, RemovedInspection, SkippedInspection
+
+    with HealthHistory(tmp_path / "h.sqlite") as h:
+        act = h.register("EMA-1", description="left aileron", time_unit="cycles")
+        h.add("EMA-1", 10.0, np.full(8, 0.1), diagnosis={"verdict": "healthy"})
+        h.add("EMA-1", 20.0, np.full(8, 0.2), diagnosis={"verdict": "healthy"})
+        listed = h.actuator("EMA-1")
+        removed = h.remove("EMA-1", at=20.0)
+    for a in (act, listed):
+        assert assert_round_trip(a) == a
+    assert listed.n_inspections == 2 and listed.last_time == 20.0
+    assert assert_round_trip(removed) == removed and removed.verdict == "healthy"
+    skipped = SkippedInspection(3, "EMA-1", math.nan, None, "its time is not a number")
+    back = assert_round_trip(skipped)
+    assert math.isnan(back.time) and back.reason == skipped.reason
+    assert RemovedInspection and Actuator
+
+
+def test_policy_run():
+    from emaphm.prognosis import DegradationLaw, DegradationScenario
+    from emaphm.prognosis.inspection import PolicyRun, simulate_policy
+
+    law = DegradationLaw.reaching("linear", 0.5, 1000.0, onset=100.0)
+    sc = DegradationScenario("friction", law)
+    run = simulate_policy(sc, InspectionPolicy(risk=0.1), seed=4, discrepancy={})
+    healthy = simulate_policy(None, InspectionPolicy(risk=0.1), seed=4, horizon=600.0)
+    assert run.flagged_at is not None and healthy.eol == math.inf
+    for r in (run, healthy):
+        back = assert_round_trip(r)
+        np.testing.assert_array_equal(back.times, r.times)
+        assert (back.rules, back.risks, back.flagged_at, back.missed, back.planned, back.eol) \
+            == (r.rules, r.risks, r.flagged_at, r.missed, r.planned, r.eol)
+        assert back.expected_misses == r.expected_misses
+    assert PolicyRun.from_dict(run.to_dict()).to_dict() == run.to_dict()
+
+
+def test_degradation_scenario_and_law():
+    from emaphm.prognosis import DEGRADATION_SCENARIOS, DegradationLaw, DegradationScenario
+    from emaphm.prognosis.thresholds import FailureThresholds
+
+    for sc in DEGRADATION_SCENARIOS.values():
+        assert assert_round_trip(sc) == sc and assert_round_trip(sc.law) == sc.law
+    own = DegradationScenario("short_b", DegradationLaw("power", 1e-7, 0.01, 2.5, 40.0),
+                              k_base=[0.1] + [0.0] * 5 + [0.5, 0.5], name="own",
+                              thresholds=FailureThresholds(short_circuit=0.2, friction=0.4))
+    back = assert_round_trip(own)
+    assert back == own and back.eol == own.eol
+    assert "thresholds" not in DEGRADATION_SCENARIOS["gain-drift"].to_dict()
+
+
+def test_demo_unit():
+    from emaphm.fleet.demo import demo_fleet
+
+    units = demo_fleet(4, seed=0, synthetic=True)
+    assert any(u.scenario is None for u in units) and any(u.scenario for u in units)
+    for u in units:
+        back = assert_round_trip(u)
+        assert back == u and back.eol == u.eol
+        np.testing.assert_array_equal(back.k_true(), u.k_true())
+
+
+def test_schedule_row(tmp_path):
+    import datetime as dt
+
+    from emaphm.fleet.demo import demo_fleet, record_demo_fleet
+    from emaphm.fleet.schedule import Calendar, schedule
+
+    record_demo_fleet(tmp_path / "h.sqlite", demo_fleet(4, seed=0, synthetic=True),
+                      synthetic=True)
+    dated = schedule(tmp_path / "h.sqlite", calendar=Calendar(dt.date(2026, 1, 5), 8.0))
+    plain = schedule(tmp_path / "h.sqlite")
+    assert dated[0].date is not None and plain[0].date is None
+    for row in dated + plain:
+        assert assert_round_trip(row) == row
+
+
 def test_campaign_specs():
     from emaphm.campaign import AlgorithmSpec, CampaignSpec, ScenarioSpec
 

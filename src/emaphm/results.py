@@ -23,6 +23,14 @@ kind                       class
 ``inspection``             :class:`emaphm.prognosis.Inspection` (a history's record)
 ``alpha_lambda``           :class:`emaphm.prognosis.metrics.AlphaLambda`
 ``parameters``             :class:`emaphm.params.ActuatorParams`
+``actuator``               :class:`emaphm.prognosis.history.Actuator`
+``skipped_inspection``     :class:`emaphm.prognosis.history.SkippedInspection`
+``removed_inspection``     :class:`emaphm.prognosis.history.RemovedInspection`
+``policy_run``             :class:`emaphm.prognosis.inspection.PolicyRun`
+``degradation_law``        :class:`emaphm.prognosis.DegradationLaw`
+``degradation_scenario``   :class:`emaphm.prognosis.DegradationScenario`
+``demo_unit``              :class:`emaphm.fleet.demo.DemoUnit`
+``schedule_row``           :class:`emaphm.fleet.schedule.ScheduleRow`
 ``campaign_spec``          :class:`emaphm.campaign.CampaignSpec`
 ``scenario_spec``          :class:`emaphm.campaign.ScenarioSpec`
 ``algorithm_spec``         :class:`emaphm.campaign.AlgorithmSpec`
@@ -60,6 +68,14 @@ KINDS: dict[str, tuple[str, str]] = {
     "inspection": ("emaphm.prognosis.history", "Inspection"),
     "alpha_lambda": ("emaphm.prognosis.metrics", "AlphaLambda"),
     "parameters": ("emaphm.params", "ActuatorParams"),
+    "actuator": ("emaphm.prognosis.history", "Actuator"),
+    "skipped_inspection": ("emaphm.prognosis.history", "SkippedInspection"),
+    "removed_inspection": ("emaphm.prognosis.history", "RemovedInspection"),
+    "policy_run": ("emaphm.prognosis.inspection", "PolicyRun"),
+    "degradation_law": ("emaphm.prognosis.simulator", "DegradationLaw"),
+    "degradation_scenario": ("emaphm.prognosis.simulator", "DegradationScenario"),
+    "demo_unit": ("emaphm.fleet.demo", "DemoUnit"),
+    "schedule_row": ("emaphm.fleet.schedule", "ScheduleRow"),
     "campaign_spec": ("emaphm.campaign.spec", "CampaignSpec"),
     "scenario_spec": ("emaphm.campaign.spec", "ScenarioSpec"),
     "algorithm_spec": ("emaphm.campaign.spec", "AlgorithmSpec"),
