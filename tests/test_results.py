@@ -189,6 +189,60 @@ def test_a_history_record_and_the_alpha_lambda_metric(tmp_path, history, trace):
     assert back.score == al.score
 
 
+# ----------------------------------------------------------------------------- the rest of item 5
+@pytest.fixture(scope="module")
+def examined(trace):
+    from emaphm.verdict import examine
+
+    return examine(trace, config=IdentificationConfig("pso", budget=400), seed=0, loops=False)
+
+
+def test_examination(examined):
+    from emaphm.traces import fingerprint
+    from emaphm.verdict import Examination
+
+    back = assert_round_trip(examined)
+    assert back.trace is None and back.trace_fingerprint == fingerprint(examined.trace)
+    np.testing.assert_array_equal(back.identification.k, examined.identification.k)
+    np.testing.assert_array_equal(back.k, examined.k)
+    assert back.diagnosis.verdict == examined.diagnosis.verdict
+    assert back.diagnosis.faults == examined.diagnosis.faults
+    assert back.sensor == examined.sensor
+    assert back.nuisance == examined.nuisance and back.error_all_pct == examined.error_all_pct
+    again = Examination.from_dict(back.to_dict())      # read back twice: the same fingerprint
+    assert again.to_dict() == examined.to_dict()
+
+
+def test_sensor_finding(examined, trace):
+    from dataclasses import replace
+
+    from emaphm.modes import DEFAULT_THRESHOLDS
+    from emaphm.modes.current_sensor import SensorFinding, screen
+    from emaphm.traces.zero_sum import best_fit
+
+    assert examined.sensor.fit is not None
+    assert assert_round_trip(examined.sensor) == examined.sensor
+    faulty = replace(trace, i_abc=trace.i_abc * np.array([1.0, 0.8, 1.0]))    # B reads 0.8
+    found = screen(faulty, None, DEFAULT_THRESHOLDS)
+    assert found.gain_fault and found.phase == 1 and assert_round_trip(found) == found
+    placed = SensorFinding(True, best_fit(trace.i_abc), False, True).placed(2)
+    assert assert_round_trip(placed) == placed
+    assert assert_round_trip(SensorFinding(observable=False)) == SensorFinding(observable=False)
+    old = {k: v for k, v in placed.to_dict().items() if k != "fit"}      # an older record
+    assert SensorFinding.from_dict(old).fit is None
+
+
+def test_unit():
+    from emaphm.units import Unit, draw_unit, nominal_unit
+
+    for unit in (draw_unit(siemens_1fk7060(), 5), nominal_unit(siemens_1fk7060(), load=0.3)):
+        back = Unit.from_dict(json.loads(json.dumps(unit.to_dict(params=True))))
+        assert back == unit and back.to_dict(params=True) == unit.to_dict(params=True)
+        assert Unit.from_dict(through_json(unit), params=unit.params) == unit
+    with pytest.raises(ValueError, match="without its parameters"):
+        Unit.from_dict(through_json(unit))
+
+
 def test_history_records(tmp_path):
     from emaphm.prognosis import HealthHistory
     from emaphm.prognosis.history import Actuator, RemovedInspection, SkippedInspection
@@ -304,3 +358,39 @@ def test_run_result():
     assert RunResult.from_dict(ok.to_dict()) == ok
     with pytest.raises(ValueError, match="unknown field"):
         RunResult.from_dict({**ok.to_dict(), "colour": "red"})
+
+
+def test_save_and_load_the_other_kinds(tmp_path, examined):
+    from emaphm.campaign import AlgorithmSpec, CampaignSpec, RunResult, ScenarioSpec
+    import datetime as dt
+
+    from emaphm.fleet.demo import demo_fleet
+    from emaphm.fleet.schedule import ScheduleRow
+    from emaphm.prognosis import DEGRADATION_SCENARIOS
+    from emaphm.prognosis.history import Actuator, RemovedInspection, SkippedInspection
+    from emaphm.prognosis.inspection import simulate_policy
+    from emaphm.units import draw_unit
+
+    sc = DEGRADATION_SCENARIOS["friction-growth"]
+    spec = CampaignSpec(scenarios=("gain-low",), algorithms=("pso",), runs=1)
+    run = RunResult.failure(spec.runs_list()[0], "ValueError: a test")
+    objs = [examined, examined.sensor, draw_unit(siemens_1fk7060(), 1),
+            Actuator("EMA-1", "", "h", "2026-01-01T00:00:00+00:00", 2, 20.0),
+            SkippedInspection(1, "EMA-1", 5.0, None, "k is not finite"),
+            RemovedInspection(2, "EMA-1", 20.0, None, "healthy", "a.csv"),
+            simulate_policy(None, InspectionPolicy(risk=0.1), seed=0, horizon=600.0),
+            sc, sc.law, demo_fleet(1, seed=0, synthetic=True)[0], spec,
+            ScenarioSpec.named("gain-low"), AlgorithmSpec("de", "de-20", {"pop_size": 20}), run,
+            ScheduleRow("EMA-1", "rudder", 320.5, "h", dt.date(2026, 2, 1), False, "risk",
+                        "friction", 0.05, 0.05, "the risk", 300.0, 4, "actuators/x.html")]
+    for i, obj in enumerate(objs):
+        back = results.load(results.save(obj, tmp_path / f"r{i}.json"))
+        assert type(back) is type(obj) and back.to_dict() == obj.to_dict(), type(obj).__name__
+    unit = objs[2]
+    assert results.load(tmp_path / "r2.json") == unit          # saved with its parameters
+    assert results.loads(results.dumps([unit, unit])) == [unit, unit]
+    assert {results.kind_of(o) for o in objs} == {
+        "examination", "sensor_finding", "unit", "actuator", "skipped_inspection",
+        "removed_inspection", "policy_run", "degradation_scenario", "degradation_law",
+        "demo_unit", "campaign_spec", "scenario_spec", "algorithm_spec", "run_result",
+        "schedule_row"}
