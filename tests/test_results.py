@@ -394,3 +394,31 @@ def test_save_and_load_the_other_kinds(tmp_path, examined):
         "removed_inspection", "policy_run", "degradation_scenario", "degradation_law",
         "demo_unit", "campaign_spec", "scenario_spec", "algorithm_spec", "run_result",
         "schedule_row"}
+
+
+def test_sensors_and_the_assessments_records(trace):
+    from emaphm.acquisition import Sensors
+    from emaphm.assessment.spec import AssessmentSpec, Case, cases
+    from emaphm.assessment.stats import Proportion, proportion
+    from emaphm.assessment.tuning import TunedThreshold, tune_thresholds
+    from emaphm.modes import DEFAULT_THRESHOLDS
+
+    recorded = Sensors.from_dict(trace.meta["sensors"])        # as the trace was recorded
+    assert recorded == DEFAULT_SENSORS and assert_round_trip(recorded) == recorded
+    chain = Sensors(0.01, 0.005, 4096, (1.0, 0.97, 1.0), (0.0, 0.02, 0.0), 20e3, 2, 4e3)
+    assert assert_round_trip(chain) == chain
+    assert assert_round_trip(proportion(3, 10)) == proportion(3, 10)
+    assert math.isnan(assert_round_trip(proportion(0, 0)).rate)
+    spec = AssessmentSpec(siemens_1fk7060().to_dict(), units=1, tune_units=1, healthy=2)
+    made = cases(spec, 0)
+    assert made
+    for case in made:
+        assert assert_round_trip(case) == case
+    rng = np.random.default_rng(0)
+    readings = [{"friction": float(x)} for x in rng.normal(0.02, 0.01, 200)]
+    for tuned in tune_thresholds(readings, 0.01, DEFAULT_THRESHOLDS).values():
+        back = assert_round_trip(tuned)
+        assert back.to_dict().keys() == tuned.to_dict().keys() and type(back) is TunedThreshold
+    for obj in (chain, proportion(3, 10), made[0], tuned):     # NaN where no unit was tuned
+        assert results.dumps(results.loads(results.dumps(obj))) == results.dumps(obj)
+    assert Proportion and Case

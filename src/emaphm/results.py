@@ -38,6 +38,10 @@ kind                       class
 ``scenario_spec``          :class:`emaphm.campaign.ScenarioSpec`
 ``algorithm_spec``         :class:`emaphm.campaign.AlgorithmSpec`
 ``run_result``             :class:`emaphm.campaign.RunResult` (a campaign's stored run)
+``sensors``                :class:`emaphm.acquisition.Sensors` (a recording chain)
+``assessment_case``        :class:`emaphm.assessment.spec.Case`
+``proportion``             :class:`emaphm.assessment.stats.Proportion`
+``tuned_threshold``        :class:`emaphm.assessment.tuning.TunedThreshold`
 =========================  =====================================================
 
 What ``to_dict`` leaves out is not saved: the traces (an identification's
@@ -87,6 +91,10 @@ KINDS: dict[str, tuple[str, str]] = {
     "scenario_spec": ("emaphm.campaign.spec", "ScenarioSpec"),
     "algorithm_spec": ("emaphm.campaign.spec", "AlgorithmSpec"),
     "run_result": ("emaphm.campaign.store", "RunResult"),
+    "sensors": ("emaphm.acquisition", "Sensors"),
+    "assessment_case": ("emaphm.assessment.spec", "Case"),
+    "proportion": ("emaphm.assessment.stats", "Proportion"),
+    "tuned_threshold": ("emaphm.assessment.tuning", "TunedThreshold"),
 }
 
 #: What a kind's ``to_dict`` is given to write all that its ``from_dict`` needs.
