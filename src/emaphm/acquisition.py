@@ -96,6 +96,15 @@ class Sensors:
                 "offset": list(self.offset), "f_sample": self.f_sample,
                 "aa_order": self.aa_order, "aa_cutoff": self.aa_cutoff}
 
+    @classmethod
+    def from_dict(cls, data: dict) -> "Sensors":
+        """The sensors :meth:`to_dict` wrote (a simulated trace's ``meta["sensors"]``)."""
+        d = dict(data)
+        for name in ("gain", "offset"):
+            if name in d:
+                d[name] = tuple(d[name])
+        return cls(**d)
+
     def with_unit(self, gain, offset) -> "Sensors":
         """These sensors with a unit's own gains and offsets."""
         from dataclasses import replace

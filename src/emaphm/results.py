@@ -23,11 +23,31 @@ kind                       class
 ``inspection``             :class:`emaphm.prognosis.Inspection` (a history's record)
 ``alpha_lambda``           :class:`emaphm.prognosis.metrics.AlphaLambda`
 ``parameters``             :class:`emaphm.params.ActuatorParams`
+``examination``            :class:`emaphm.verdict.Examination` (its trace's fingerprint)
+``sensor_finding``         :class:`emaphm.modes.current_sensor.SensorFinding`
+``unit``                   :class:`emaphm.units.Unit` (with its true parameters)
+``actuator``               :class:`emaphm.prognosis.history.Actuator`
+``skipped_inspection``     :class:`emaphm.prognosis.history.SkippedInspection`
+``removed_inspection``     :class:`emaphm.prognosis.history.RemovedInspection`
+``policy_run``             :class:`emaphm.prognosis.inspection.PolicyRun`
+``degradation_law``        :class:`emaphm.prognosis.DegradationLaw`
+``degradation_scenario``   :class:`emaphm.prognosis.DegradationScenario`
+``demo_unit``              :class:`emaphm.fleet.demo.DemoUnit`
+``schedule_row``           :class:`emaphm.fleet.schedule.ScheduleRow`
+``campaign_spec``          :class:`emaphm.campaign.CampaignSpec`
+``scenario_spec``          :class:`emaphm.campaign.ScenarioSpec`
+``algorithm_spec``         :class:`emaphm.campaign.AlgorithmSpec`
+``run_result``             :class:`emaphm.campaign.RunResult` (a campaign's stored run)
+``sensors``                :class:`emaphm.acquisition.Sensors` (a recording chain)
+``assessment_case``        :class:`emaphm.assessment.spec.Case`
+``proportion``             :class:`emaphm.assessment.stats.Proportion`
+``tuned_threshold``        :class:`emaphm.assessment.tuning.TunedThreshold`
 =========================  =====================================================
 
 What ``to_dict`` leaves out is not saved: the traces (an identification's
-``model_trace``), a calibration's fitted currents and, unless asked for
-(``Prognosis.to_dict(samples=True)``), a prediction's draws.
+``model_trace``, an examination's trace: its fingerprint is kept), a calibration's fitted
+currents and, unless asked for (``Prognosis.to_dict(samples=True)``), a prediction's
+draws. A unit is saved with its true parameters (``Unit.to_dict(params=True)``).
 """
 
 from __future__ import annotations
@@ -56,7 +76,29 @@ KINDS: dict[str, tuple[str, str]] = {
     "inspection": ("emaphm.prognosis.history", "Inspection"),
     "alpha_lambda": ("emaphm.prognosis.metrics", "AlphaLambda"),
     "parameters": ("emaphm.params", "ActuatorParams"),
+    "examination": ("emaphm.verdict", "Examination"),
+    "sensor_finding": ("emaphm.modes.current_sensor", "SensorFinding"),
+    "unit": ("emaphm.units", "Unit"),
+    "actuator": ("emaphm.prognosis.history", "Actuator"),
+    "skipped_inspection": ("emaphm.prognosis.history", "SkippedInspection"),
+    "removed_inspection": ("emaphm.prognosis.history", "RemovedInspection"),
+    "policy_run": ("emaphm.prognosis.inspection", "PolicyRun"),
+    "degradation_law": ("emaphm.prognosis.simulator", "DegradationLaw"),
+    "degradation_scenario": ("emaphm.prognosis.simulator", "DegradationScenario"),
+    "demo_unit": ("emaphm.fleet.demo", "DemoUnit"),
+    "schedule_row": ("emaphm.fleet.schedule", "ScheduleRow"),
+    "campaign_spec": ("emaphm.campaign.spec", "CampaignSpec"),
+    "scenario_spec": ("emaphm.campaign.spec", "ScenarioSpec"),
+    "algorithm_spec": ("emaphm.campaign.spec", "AlgorithmSpec"),
+    "run_result": ("emaphm.campaign.store", "RunResult"),
+    "sensors": ("emaphm.acquisition", "Sensors"),
+    "assessment_case": ("emaphm.assessment.spec", "Case"),
+    "proportion": ("emaphm.assessment.stats", "Proportion"),
+    "tuned_threshold": ("emaphm.assessment.tuning", "TunedThreshold"),
 }
+
+#: What a kind's ``to_dict`` is given to write all that its ``from_dict`` needs.
+_WRITE_ALL: dict[str, dict[str, Any]] = {"unit": {"params": True}}
 
 
 def _class(kind: str) -> type:
@@ -82,10 +124,12 @@ def _payload(result: Any) -> dict[str, Any]:
         if len(kinds) != 1:
             raise TypeError(f"a list of results is saved when they are of one kind, got "
                             f"{', '.join(sorted(kinds)) or 'an empty list'}")
-        return {"emaphm_result": kinds.pop(), "emaphm_version": __version__, "many": True,
-                "data": [r.to_dict() for r in result]}
-    return {"emaphm_result": kind_of(result), "emaphm_version": __version__,
-            "data": result.to_dict()}
+        kind = kinds.pop()
+        return {"emaphm_result": kind, "emaphm_version": __version__, "many": True,
+                "data": [r.to_dict(**_WRITE_ALL.get(kind, {})) for r in result]}
+    kind = kind_of(result)
+    return {"emaphm_result": kind, "emaphm_version": __version__,
+            "data": result.to_dict(**_WRITE_ALL.get(kind, {}))}
 
 
 def dumps(result: Any, **json_kw: Any) -> str:

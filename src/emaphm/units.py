@@ -38,7 +38,7 @@ import math
 import os
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -134,11 +134,29 @@ class Unit:
     seed: int | None = None
     deviations: dict[str, Any] | None = None
 
-    def to_dict(self) -> dict[str, Any]:
-        """The unit's truth (recorded in a simulated trace's metadata; diagnosis never reads it)."""
-        return {"seed": self.seed, "sensor_gain": list(self.sensor_gain),
-                "sensor_offset": list(self.sensor_offset), "unreported_load": self.load,
-                "deviations": self.deviations or {}}
+    def to_dict(self, params: bool = False) -> dict[str, Any]:
+        """The unit's truth (recorded in a simulated trace's metadata; diagnosis never reads
+        it); with ``params`` its true parameters too (``"params"``), which :meth:`from_dict`
+        needs (the trace's metadata has the data sheet's beside it)."""
+        d = {"seed": self.seed, "sensor_gain": list(self.sensor_gain),
+             "sensor_offset": list(self.sensor_offset), "unreported_load": self.load,
+             "deviations": self.deviations or {}}
+        if params:
+            d["params"] = self.params.to_dict()
+        return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], params: ActuatorParams | None = None) -> "Unit":
+        """The unit :meth:`to_dict` wrote; its true parameters from ``data["params"]``
+        (``to_dict(params=True)``) or ``params``."""
+        if "params" in data:
+            params = ActuatorParams.from_dict(data["params"], source="unit params")
+        if params is None:
+            raise ValueError("this unit was written without its parameters: write it with "
+                             "to_dict(params=True), or give params= (its true ActuatorParams)")
+        return cls(params=params, sensor_gain=tuple(data["sensor_gain"]),
+                   sensor_offset=tuple(data["sensor_offset"]), load=data["unreported_load"],
+                   seed=data["seed"], deviations=dict(data["deviations"]) or None)
 
 
 def nominal_unit(params: ActuatorParams, *, load: float = 0.0) -> Unit:

@@ -29,7 +29,7 @@ reading from being a diagnosis:
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any, Callable
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -413,15 +413,53 @@ class Examination:
     read on (a hypothesis' refit where one was kept, :attr:`Diagnosis.refit`, else the
     identification's), and ``error_all_pct`` their error against a simulated trace's truth
     (:func:`emaphm.problem.error_all_pct`: Eq. 9 with the parameters beside k; None for a
-    bench trace)."""
+    bench trace).
+
+    :meth:`to_dict` keeps the identification, the diagnosis, the sensor finding, ``k``,
+    ``nuisance`` and ``error_all_pct`` (each as its own ``to_dict``), and of the trace only
+    its fingerprint (:func:`emaphm.traces.fingerprint`, of its signals: SHA-256), not the
+    trace: JSON has no compact exact form of its signals, and the trace has its own files
+    (:func:`emaphm.traces.write_trace`). An examination read back (:meth:`from_dict`) has ``trace``
+    None and ``trace_fingerprint`` set; what the identification's ``to_dict`` leaves out
+    (its ``model_trace``) is not kept either."""
 
     identification: Any
     diagnosis: Diagnosis
-    trace: Trace
+    trace: Trace | None
     sensor: Any
     k: Any = None
     nuisance: dict | None = None
     error_all_pct: float | None = None
+    trace_fingerprint: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain, JSON-ready form (the class docstring says what is kept)."""
+        from .traces import fingerprint
+
+        fp = self.trace_fingerprint
+        if fp is None and self.trace is not None:
+            fp = fingerprint(self.trace)
+        return {"identification": self.identification.to_dict(),
+                "diagnosis": self.diagnosis.to_dict(), "sensor": self.sensor.to_dict(),
+                "k": None if self.k is None else [float(x) for x in self.k],
+                "nuisance": None if self.nuisance is None else dict(self.nuisance),
+                "error_all_pct": self.error_all_pct, "trace_fingerprint": fp}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Examination":
+        """The examination :meth:`to_dict` wrote, without its trace (``trace`` None)."""
+        from .identify import Identification
+        from .modes.current_sensor import SensorFinding
+
+        k = data.get("k")
+        nu = data.get("nuisance")
+        return cls(identification=Identification.from_dict(data["identification"]),
+                   diagnosis=Diagnosis.from_dict(data["diagnosis"]), trace=None,
+                   sensor=SensorFinding.from_dict(data["sensor"]),
+                   k=None if k is None else np.asarray(k, dtype=float),
+                   nuisance=None if nu is None else dict(nu),
+                   error_all_pct=data.get("error_all_pct"),
+                   trace_fingerprint=data.get("trace_fingerprint"))
 
 
 def screen_sensors(trace: Trace, *, params: ActuatorParams | None, config: Any, seed: int,

@@ -74,6 +74,13 @@ class Case:
                 "magnitude": self.magnitude, "phase": self.phase, "kwargs": dict(self.kwargs),
                 "expected": [list(e) for e in self.expected]}
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Case":
+        """The case :meth:`to_dict` wrote."""
+        return cls(grid=data["grid"], mode=data["mode"], severity=data["severity"],
+                   magnitude=data["magnitude"], phase=data["phase"], kwargs=dict(data["kwargs"]),
+                   expected=tuple(tuple(e) for e in data["expected"]))
+
 
 @dataclass(frozen=True)
 class AssessmentSpec:

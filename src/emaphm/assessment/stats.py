@@ -64,6 +64,11 @@ class Proportion:
     def to_dict(self) -> dict[str, float | int]:
         return {"k": self.k, "n": self.n, "rate": self.rate, "lo": self.lo, "hi": self.hi}
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "Proportion":
+        """The proportion :meth:`to_dict` wrote."""
+        return cls(int(d["k"]), int(d["n"]), float(d["rate"]), float(d["lo"]), float(d["hi"]))
+
 
 def proportion(k: int, n: int) -> Proportion:
     lo, hi = wilson(k, n)

@@ -72,6 +72,11 @@ class TunedThreshold:
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "TunedThreshold":
+        """The threshold :meth:`to_dict` wrote."""
+        return cls(**dict(data))
+
 
 def _censored_normal(x: np.ndarray, bound: float) -> tuple[float, float]:
     """Maximum-likelihood (mu, sigma) of a normal observed as ``max(X, bound)``."""

@@ -190,6 +190,12 @@ class ScenarioSpec:
         return {"name": self.name, "k": list(self.k), "mode": self.mode, "magnitude": self.magnitude,
                 "fault_model": self.fault_model}
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "ScenarioSpec":
+        """The scenario :meth:`to_dict` wrote (validated as a custom one; a table without
+        ``fault_model`` is "physical", as in a spec file)."""
+        return parse_scenarios([dict(data)])[0]
+
 
 @dataclass(frozen=True)
 class AlgorithmSpec:
@@ -214,6 +220,12 @@ class AlgorithmSpec:
         if self.budget is not None:
             d["budget"] = self.budget
         return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "AlgorithmSpec":
+        """The algorithm :meth:`to_dict` wrote (its name and options are checked by the
+        :class:`CampaignSpec` that holds it)."""
+        return parse_algorithms([dict(data)])[0]
 
 
 @dataclass(frozen=True)

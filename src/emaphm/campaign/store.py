@@ -36,9 +36,9 @@ import os
 import socket
 import sqlite3
 from contextlib import contextmanager
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Iterator, Mapping
 
 from emaphm import __version__
 from emaphm._files import regular_file
@@ -204,6 +204,23 @@ class RunResult:
         """A failed run: the error text and no numbers."""
         return cls(**_run_fields(run), status="failed", error_text=error_text,
                    worker=f"{socket.gethostname()}:{os.getpid()}", finished_at=_now())
+
+    def to_dict(self) -> dict[str, Any]:
+        """Every field, JSON-ready (the tuples as lists); :meth:`from_dict` reads it back."""
+        return {name: list(v) if isinstance(v, tuple) else v for name, v in asdict(self).items()}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "RunResult":
+        """The run :meth:`to_dict` wrote."""
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"not a stored run: unknown field(s) {', '.join(unknown)}")
+        kw = dict(data)
+        for name in _JSON_FIELDS:
+            if kw.get(name) is not None:
+                kw[name] = tuple(int(x) if name == "spawn_key" else x for x in kw[name])
+        return cls(**kw)
 
     def outcome(self) -> dict[str, Any]:
         """The reproducible part: what the same run gives again, bit for bit, on any

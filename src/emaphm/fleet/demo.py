@@ -102,6 +102,14 @@ class DemoUnit:
                 "times": list(self.times), "seed": self.seed,
                 "eol": None if math.isinf(self.eol) else self.eol}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "DemoUnit":
+        """The unit :meth:`to_dict` wrote (``eol`` follows from the scenario)."""
+        sc = data["scenario"]
+        return cls(id=data["id"], description=data["description"],
+                   scenario=None if sc is None else DegradationScenario.from_dict(sc),
+                   times=tuple(data["times"]), seed=data["seed"], fault=data["fault"])
+
 
 def _check_count(n: Any, synthetic: bool = False) -> int:
     most = MAX_SYNTHETIC if synthetic else MAX_ACTUATORS

@@ -41,7 +41,7 @@ import math
 from urllib.parse import quote, urlsplit, urlunsplit
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Mapping, Sequence
 
 from .._files import atomic_write_text
 from ..prognosis.inspection import InspectionPolicy
@@ -125,6 +125,13 @@ class ScheduleRow:
         d = dict(self.__dict__)
         d["date"] = None if self.date is None else self.date.isoformat()
         return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "ScheduleRow":
+        """The row :meth:`to_dict` wrote (the date from its ISO form)."""
+        d = dict(data)
+        d["date"] = None if d.get("date") is None else _dt.date.fromisoformat(d["date"])
+        return cls(**d)
 
 
 def page_links(ids: Sequence[str], base: str) -> dict[str, str]:

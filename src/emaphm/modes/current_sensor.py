@@ -20,8 +20,8 @@ are not observable, and the verdict says so.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
-from typing import Any, Callable
+from dataclasses import asdict, dataclass, replace
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -68,11 +68,25 @@ class SensorFinding:
         return replace(self, phase=int(phase))
 
     def to_dict(self) -> dict:
+        """Plain form: ``gain`` and ``offset_a`` of the fit beside the verdict, and the
+        whole ``fit`` (its phase as a letter) for :meth:`from_dict`."""
         f = self.fit
         return {"observable": self.observable,
                 "phase": None if self.phase is None else PHASES[self.phase],
                 "gain": None if f is None else f.gain, "offset_a": None if f is None else f.offset,
-                "gain_fault": self.gain_fault, "offset_fault": self.offset_fault}
+                "gain_fault": self.gain_fault, "offset_fault": self.offset_fault,
+                "fit": None if f is None else {**asdict(f), "phase": PHASES[f.phase]}}
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "SensorFinding":
+        """The finding :meth:`to_dict` wrote (one written without ``fit``, by an older
+        emaphm, reads back without it)."""
+        f = data.get("fit")
+        fit = None if f is None else SensorFit(**{**f, "phase": PHASES.index(f["phase"])})
+        phase = data.get("phase")
+        return cls(observable=bool(data["observable"]), fit=fit,
+                   gain_fault=bool(data["gain_fault"]), offset_fault=bool(data["offset_fault"]),
+                   phase=None if phase is None else PHASES.index(phase))
 
 
 def _measured(trace: Trace, params) -> np.ndarray:

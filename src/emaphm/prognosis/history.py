@@ -190,6 +190,11 @@ class Actuator:
     def to_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Actuator":
+        """The actuator :meth:`to_dict` wrote."""
+        return cls(**dict(data))
+
 
 @dataclass(frozen=True)
 class Inspection:
@@ -285,6 +290,13 @@ class RemovedInspection:
         d = dict(self.__dict__)
         d["time"] = self.time if math.isfinite(self.time) else str(self.time)
         return d
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> "RemovedInspection":
+        """The record :meth:`to_dict` wrote."""
+        return cls(id=int(d["id"]), actuator=str(d["actuator"]), time=float(d["time"]),
+                   recorded_utc=d.get("recorded_utc"), verdict=d.get("verdict"),
+                   source=d.get("source"))
 
 
 @dataclass(frozen=True)

@@ -627,6 +627,14 @@ class PolicyRun:
                 "flagged_at": self.flagged_at, "missed": self.missed, "planned": self.planned,
                 "risks": list(self.risks), "expected_misses": self.expected_misses}
 
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "PolicyRun":
+        """The run :meth:`to_dict` wrote (``expected_misses`` is computed again)."""
+        return cls(eol=float(data["eol"]), times=np.asarray(data["times"], dtype=float),
+                   rules=tuple(data["rules"]), flagged_at=data["flagged_at"],
+                   missed=bool(data["missed"]), planned=data.get("planned"),
+                   risks=tuple(data.get("risks", ())))
+
 
 def simulate_policy(scenario: Any, policy: InspectionPolicy = InspectionPolicy(), *, seed: int,
                     fixed_interval: float | None = None, noise: float = 0.007,

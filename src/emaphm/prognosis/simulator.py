@@ -126,6 +126,11 @@ class DegradationLaw:
         return {"kind": self.kind, "rate": self.rate, "d0": self.d0, "exponent": self.exponent,
                 "onset": self.onset}
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "DegradationLaw":
+        """The law :meth:`to_dict` wrote."""
+        return cls(**dict(data))
+
 
 @dataclass(frozen=True)
 class DegradationScenario:
@@ -175,9 +180,25 @@ class DegradationScenario:
         return K[0] if t_arr.ndim == 0 else K
 
     def to_dict(self) -> dict[str, Any]:
-        return {"name": self.name, "indicator": self.indicator, "law": self.law.to_dict(),
-                "direction": self.direction, "k_base": list(self.k_base),
-                "threshold": self.threshold, "eol": self.eol}
+        """Plain form: the law, the threshold on the indicator and the end of life it
+        gives; ``thresholds`` (every mode's) only where they are not the defaults."""
+        d = {"name": self.name, "indicator": self.indicator, "law": self.law.to_dict(),
+             "direction": self.direction, "k_base": list(self.k_base),
+             "threshold": self.threshold, "eol": self.eol}
+        if self.thresholds != DEFAULT_FAILURE_THRESHOLDS:
+            d["thresholds"] = self.thresholds.to_dict()
+        return d
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "DegradationScenario":
+        """The scenario :meth:`to_dict` wrote (``threshold`` and ``eol`` follow from the
+        rest; without ``thresholds``, the defaults with the indicator's ``threshold``)."""
+        thr = data.get("thresholds")
+        thresholds = FailureThresholds.from_dict(thr) if thr is not None else \
+            DEFAULT_FAILURE_THRESHOLDS.with_updates({data["indicator"]: data["threshold"]})
+        return cls(indicator=data["indicator"], law=DegradationLaw.from_dict(data["law"]),
+                   direction=int(data["direction"]), k_base=tuple(data["k_base"]),
+                   name=data.get("name", ""), thresholds=thresholds)
 
 
 def _presets() -> dict[str, DegradationScenario]:
