@@ -4,7 +4,8 @@ Eight plant traces (scenarios and seeds of their own), each identified by PSO on
 sized for at least a second of work; the same identifications
 
 1. in a row in this process (warm: one identification before the clock starts),
-2. as one batch on ``--workers`` processes started for it (``identify(traces, workers=2)``,
+2. as one batch on ``--workers`` processes: this one and ``workers - 1`` started for it
+   (``identify(traces, workers=2)``,
    the pool's start and the workers' warm-up included), and
 3. as a second batch on the same, warm, workers,
 
@@ -89,9 +90,9 @@ def main() -> None:
         "| how | wall [s] | against in a row |",
         "|---|---|---|",
         f"| {len(traces)} calls in a row (mean of {s1:.2f} and {s2:.2f}) | {t_serial:.2f} | 1.00 |",
-        f"| one batch, {args.workers} workers started for it | {t_cold:.2f} | "
+        f"| one batch, this process and {args.workers - 1} worker(s) started for it | {t_cold:.2f} | "
         f"{t_cold / t_serial:.2f} |",
-        f"| the next batch, the same warm workers | {t_warm:.2f} | {t_warm / t_serial:.2f} |",
+        f"| the next batch, the same warm worker(s) | {t_warm:.2f} | {t_warm / t_serial:.2f} |",
         "",
     ]
     text = "\n".join(lines)

@@ -13,7 +13,8 @@ ROOT = Path(__file__).parent
 ORDER = ["plant.md", "commissioning.md", "assess.md", "pipeline.md", "identification.md", "identification_twin.md",
          "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
          "inspection.md", "fault_coverage.md", "fleet.md", "long_history.md", "versions.md",
-         "import.md", "batch_identify.md"]
+         "import.md", "batch_identify.md", "drives.md", "drives-described-undescribed-references.md",
+         "drive_cost.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
 CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
 HEADER = """# Benchmarks
@@ -56,6 +57,8 @@ functions: it does not depend on the actuator model. Every script re-runs its se
 | two versions side by side (a refactor keeps the speed) | `benchmarks/bench_versions.py` |
 | trace files at scale: the limits' refusals, the CSV writer, a 1-hour bench export (`emaphm import`) | `benchmarks/bench_import.py` |
 | a batch of traces on worker processes against the calls in a row | `benchmarks/bench_batch.py` |
+| drives that are not emaphm's: recorded voltages (A), the drive described (B), neither (C), recorded current references (D) | `benchmarks/bench_drives.py` |
+| the cost of identifying from what the drive recorded, beside 216ed3d's modelled controller | `benchmarks/bench_drive_cost.py` |
 
 """
 

@@ -4,10 +4,12 @@
 tuple) of traces come here: each trace is identified (examined) as a call of its own would
 identify it, with the same settings and the same seed, so a batch gives, trace by trace
 and in order, the results of the calls made one after the other. ``workers`` processes
-(the campaigns' :class:`~emaphm.campaign.executors.LocalExecutor`) share the traces; their
-workers load the model kernels once (:func:`~emaphm.campaign.executors.warm_up`) and stay
-warm for the next batch of the same size of pool, until :func:`close_pools` (or the
-process ends). ``workers`` None, 0 or 1: in this process, one after the other.
+share the traces: this one and ``workers - 1`` of the campaigns'
+:class:`~emaphm.campaign.executors.LocalExecutor`, each taking the next trace as it comes
+free, so that this process, warm already, works while the others start. Those load the
+model kernels once (:func:`~emaphm.campaign.executors.warm_up`) and stay warm for the
+next batch of the same size of pool, until :func:`close_pools` (or the process ends).
+``workers`` None, 0 or 1: in this process, one after the other.
 
 An optimizer or solver of one's own goes to the workers with the traces (it is pickled:
 a module-level function or class, or a name registered with
@@ -85,18 +87,94 @@ def _run(what: str, traces: Sequence[Any], kw: dict[str, Any], workers: int,
         raise ValueError("a callback watches a search in this process; a batch on worker "
                          "processes takes none (drop callback=, or give workers=0)")
     tasks = [(i, what, t, kw, plugins) for i, t in enumerate(traces)]
-    if workers <= 1:
+    if workers <= 1 or len(tasks) <= 1:
         return [_one(task) for task in tasks]
     out: list[Any] = [None] * len(tasks)
-    errors = []
-    for task, value in _pool(workers).map_unordered(_one, tasks):
-        if isinstance(value, BaseException):
-            errors.append((task[0], value))
-        out[task[0]] = value
+    for index, value in _shared(tasks, workers - 1):
+        out[index] = value
+    errors = [(i, v) for i, v in enumerate(out) if isinstance(v, BaseException)]
     if errors:
         i, exc = min(errors, key=lambda e: e[0])
         raise type(exc)(f"trace {i} of the batch: {exc}") if isinstance(exc, ValueError) else exc
     return out
+
+
+def _local(task: tuple) -> Any:
+    try:
+        return _one(task)
+    except Exception as exc:             # noqa: BLE001 - reported with the trace's index
+        return exc
+
+
+def _shared(tasks: list[tuple], n_pool: int) -> list[tuple[int, Any]]:
+    """``(index, result or exception)`` of every task: this process and a kept pool of
+    ``n_pool`` workers each take the next task as they come free (a worker holds one at a
+    time, and is handed the next the moment it returns one, from the pool's own thread, so
+    that it never waits for this process to finish a task of its own). A task a dying
+    worker took is run here instead."""
+    import threading
+    from collections import deque
+    from concurrent.futures.process import BrokenProcessPool
+
+    executor = _pool(n_pool)
+    pool = executor.kept_pool()
+    todo = deque(tasks)
+    lock = threading.Lock()
+    done: list[tuple[int, Any]] = []
+    orphans: list[tuple] = []               # taken by a worker that died
+    finished = threading.Semaphore(0)       # one release per task a worker ends
+    handed = [0]
+
+    def take(worker: bool) -> tuple | None:
+        """The next task (for a worker: counted as handed, in the same lock, so that this
+        process, once the list is empty, knows how many to wait for)."""
+        with lock:
+            if not todo:
+                return None
+            handed[0] += worker
+            return todo.popleft()
+
+    def hand(task: tuple) -> None:
+        try:
+            fut = pool.submit(_one, task)
+        except (BrokenProcessPool, RuntimeError):
+            with lock:
+                orphans.append(task)
+            finished.release()
+            return
+        fut.add_done_callback(lambda f, task=task: ended(f, task))
+
+    def ended(fut: Any, task: tuple) -> None:
+        try:
+            value = fut.result()
+        except BrokenProcessPool:
+            with lock:
+                orphans.append(task)
+            finished.release()
+            return
+        except Exception as exc:            # noqa: BLE001 - the task's own failure
+            value = exc
+        with lock:
+            done.append((task[0], value))
+        nxt = take(True)
+        if nxt is not None:
+            hand(nxt)
+        finished.release()
+
+    for _ in range(n_pool):
+        task = take(True)
+        if task is None:
+            break
+        hand(task)
+    ours: list[tuple[int, Any]] = []
+    while (task := take(False)) is not None:
+        ours.append((task[0], _local(task)))
+    for _ in range(handed[0]):              # every task a worker was handed has ended
+        finished.acquire()
+    ours += [(t[0], _local(t)) for t in orphans]
+    if orphans:                             # broken: the next batch starts a new pool
+        executor.close()
+    return done + ours
 
 
 def _check(traces: Any) -> list[Any]:

@@ -43,10 +43,12 @@ def test_a_batch_is_the_calls_in_a_row(traces):
 
 def test_workers_give_the_same_results_in_order_and_stay_warm(traces):
     try:
+        # two processes: this one and a worker of the kept pool, which takes the first
+        # trace while this one takes the next
         got = identify(traces, CONFIG, seed=5, workers=2)
-        pool = batch._POOLS[2]._pool
+        pool = batch._POOLS[1]._pool
         again = identify(traces[::-1], CONFIG, seed=5, workers=2)
-        assert batch._POOLS[2]._pool is pool            # the warm workers, reused
+        assert batch._POOLS[1]._pool is pool            # the warm workers, reused
     finally:
         batch.close_pools()
     for a, t in zip(got, traces):
@@ -64,3 +66,35 @@ def test_misuse_of_a_batch_says_what_to_give(traces):
         identify(traces[0], seed=0, workers=2)
     with pytest.raises(ValueError, match="takes none"):
         identify(traces, seed=0, workers=2, callback=lambda s: None)
+
+
+def midpoint_here_only(objective, bounds, rng):
+    """The middle of the box; a worker process that runs it dies at once (as one the
+    kernel's OOM killer took would)."""
+    import os
+
+    if str(os.getpid()) != os.environ.get("EMAPHM_TEST_BATCH_PARENT"):
+        os._exit(3)
+    lo, hi = bounds
+    return (lo + hi) / 2.0
+
+
+def test_a_trace_a_dying_worker_took_is_identified_here(traces, monkeypatch):
+    """The worker dies on the trace it took: this process identifies it instead, and the
+    batch is still the calls in a row, in order; the next batch starts a new pool."""
+    import os
+
+    from emaphm.optim import register, unregister
+
+    monkeypatch.setenv("EMAPHM_TEST_BATCH_PARENT", str(os.getpid()))
+    register("midpoint-here-only", midpoint_here_only)
+    config = IdentificationConfig("midpoint-here-only", polish=False)
+    try:
+        batch.close_pools()
+        got = identify(traces, config, seed=2, workers=2)
+        assert batch._POOLS[1]._pool is None             # the broken pool was let go
+        for a, t in zip(got, traces):
+            same(a, identify(t, config, seed=2))
+    finally:
+        batch.close_pools()
+        unregister("midpoint-here-only")

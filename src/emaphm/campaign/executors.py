@@ -204,6 +204,13 @@ class LocalExecutor:
     def __exit__(self, *exc: Any) -> None:
         self.close()
 
+    def kept_pool(self) -> ProcessPoolExecutor:
+        """The kept pool itself (``keep=True``; started on first use): for a caller that
+        hands out its own work, one item at a time (:mod:`emaphm.batch`)."""
+        if not self.keep:
+            raise ValueError("kept_pool() is for a LocalExecutor(keep=True)")
+        return self._new_pool(self.workers)
+
     def _new_pool(self, n_items: int) -> ProcessPoolExecutor:
         if self.keep and self._pool is not None:
             return self._pool
