@@ -93,10 +93,11 @@ def _history_panel(data: "HistoryData", j: int, status: np.ndarray, thr: dict, x
                  xlabel=xlabel if bottom else "", ylabel=f"k{j + 1} [-]", xticklabels=bottom)
 
 
-def _cone_panel(prog: "Prognosis", name: str, y: np.ndarray, last: bool) -> Panel:
-    """One indicator's trend, cone, threshold and RUL."""
+def _cone_panel(prog: "Prognosis", name: str, last: bool) -> Panel:
+    """One indicator's trend, cone, threshold and RUL, with the readings it used."""
     p = prog.predictions[name]
     t = prog.times
+    t_y, y = prog.readings(name)
     span = max(float(t[-1] - t[0]), 1e-9)
     flat = p.no_growth(span)
     ends = [x for x in (p.hi, p.median) if math.isfinite(x)]
@@ -105,7 +106,7 @@ def _cone_panel(prog: "Prognosis", name: str, y: np.ndarray, last: bool) -> Pane
     lo, mid, hi = p.band(grid, (0.05, 0.5, 0.95))
     layers = {"cone": Layer("band", grid, lo, hi, color="C0", label="trend, 90 % cone"),
               "trend": Layer("line", grid, mid, color="C0", label=f"trend ({p.model})"),
-              "identified": Layer("points", t, y, color="k", label="identified"),
+              "identified": Layer("points", t_y, y, color="k", label="identified"),
               "threshold": Layer("hline", [], [p.threshold], color="C3",
                                  label="failure threshold"),
               "now": Layer("vline", [p.t_now], [], color="0.5")}
@@ -130,8 +131,8 @@ def _cone_panel(prog: "Prognosis", name: str, y: np.ndarray, last: bool) -> Pane
     return Panel(title=(f"{name}: no growth" if flat else
                         f"{name}: RUL median {med} [{p.lo:.0f}, {hi_txt}] {unit}"),
                  xlim=_span(xs),
-                 ylim=(min(0.0, float(np.nanmin(y)) - 0.01),
-                       max(p.threshold * 1.25, float(np.nanmax(y)) * 1.1)),
+                 ylim=(min(0.0, float(np.nanmin(y, initial=0.0)) - 0.01),
+                       max(p.threshold * 1.25, float(np.nanmax(y, initial=0.0)) * 1.1)),
                  layers=layers, legend=True, notes=notes,
                  xlabel=f"time [{unit}]" if last else "",
                  ylabel=name + (" (k8 - 0.5, signed)" if name == "gain_drift" else "") + " [-]")
@@ -183,8 +184,6 @@ class PageFigures:
 
     def prognosis_panels(self, prog: "Prognosis", *, indicators: Sequence[str]) -> list[Panel]:
         """A :class:`~emaphm.fleet.svgplot.Panel` per indicator in ``indicators`` (1 to 3)."""
-        from ..prognosis.trends import indicator_series
-
         names = list(indicators)
         for n in names:
             if n not in prog.predictions:
@@ -192,9 +191,7 @@ class PageFigures:
                                  f"{', '.join(prog.predictions)}")
         if not 1 <= len(names) <= 3:
             raise ValueError(f"a page's prognosis shows 1 to 3 indicators, got {len(names)}")
-        series = indicator_series(prog.K)
-        return [_cone_panel(prog, name, np.asarray(series[name], dtype=float),
-                            k == len(names) - 1) for k, name in enumerate(names)]
+        return [_cone_panel(prog, name, k == len(names) - 1) for k, name in enumerate(names)]
 
     @staticmethod
     def prognosis_title(prog: "Prognosis") -> str:

@@ -172,7 +172,7 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
         draws = {} if policy is None else {"n_samples": n_samples_for(policy.risk)}
         prognosis = prognose(data.times, data.K, seed=seed, thresholds=thresholds,
                              actuator=data.actuator.id, time_unit=data.actuator.time_unit,
-                             level=level, **draws)
+                             level=level, observed=data.observed, **draws)
     preds = prognosis.predictions if prognosis is not None else {}
     past = [n for n in INDICATORS if ratio[n] >= 1.0 or (n in preds and preds[n].median <= 0.0)]
     span = float(data.times[-1] - data.times[0])

@@ -295,6 +295,21 @@ def threshold_option(items: list[str] | None):
         raise _usage(f"--threshold: {exc}") from None
 
 
+def _unobserved_lines(prog: Any) -> list[str]:
+    """What the trends left out: inspections whose drive path could not see a mode."""
+    from .trends import MIN_INSPECTIONS
+
+    n = prog.times.size
+    out = []
+    for name, ix in prog.unobserved.items():
+        seen = n - len(ix)
+        tail = (f"trended on the other {seen}" if name in prog.predictions else
+                f"no trend (it needs {MIN_INSPECTIONS} inspections that see it)")
+        out.append(f"{name}: not observable on {len(ix)} of {n} inspections (their drive path "
+                   f"cannot see it: its k there is a placeholder); {tail}")
+    return out
+
+
 def _prognosis_table(prog: Any) -> str:
     from .inspection import HEALTHY_SHARE
     from .trends import indicator_state, level_at_last
@@ -323,6 +338,7 @@ def _prognosis_table(prog: Any) -> str:
         lines.append(f"(now: > or < marks a trend carried to {prog.t_now:g} {unit} past the range "
                      "its indicator can take, shown at the bound)")
     lines += [f"{n}: {p.extrapolated}" for n, p in prog.predictions.items() if p.extrapolated]
+    lines += _unobserved_lines(prog)
     first = prog.first
     if first is not None and math.isfinite(first.median):
         lines.append(f"\nfirst to fail: {first.indicator}, median RUL {_fmt_time(first.median, unit)} "
@@ -436,7 +452,7 @@ def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, ind
 
     common = dict(seed=args.seed, thresholds=thresholds, indicators=indicators, t_now=args.at,
                   actuator=data.actuator.id, time_unit=data.actuator.time_unit,
-                  level=args.level, selection=args.selection)
+                  level=args.level, selection=args.selection, observed=data.observed)
     if policy is None:
         return prognose(data.times, data.K, **common), None
     from .inspection import n_samples_for, plan_inspection

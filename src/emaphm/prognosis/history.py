@@ -317,6 +317,19 @@ class HistoryData:
     def n(self) -> int:
         return int(self.times.size)
 
+    @property
+    def observed(self) -> dict[str, np.ndarray]:
+        """Health indicator -> which inspections could see its fault mode (a boolean mask
+        over ``times``): False where the drive path the inspection was identified on
+        could not (its record's ``extra["not_observable"]``, e.g. the gain drift k8 from
+        recorded voltages, where no position loop is modelled; its k there is a
+        placeholder). :func:`~emaphm.prognosis.trends.prognose` trends the others only."""
+        from .thresholds import INDICATOR_MODE
+
+        blind = [frozenset((i.extra or {}).get("not_observable") or ()) for i in self.inspections]
+        return {n: np.fromiter((m not in b for b in blind), dtype=bool, count=len(blind))
+                for n, m in INDICATOR_MODE.items()}
+
     def skipped_note(self) -> str | None:
         """One sentence on the inspections left out of the analyses (None when none was):
         how many, the first ones by id and time, why, and how to take them back."""

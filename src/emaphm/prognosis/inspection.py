@@ -474,7 +474,8 @@ def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]
         return set(part)
     p0 = prognosis.predictions[next(iter(part))]
     options = {"n_samples": int(p0.samples.size), **prognosis.options}
-    before = prognose(prognosis.times[:-1], prognosis.K[:-1],
+    observed = {n: prognosis.observed(n)[:-1] for n in prognosis.unobserved}
+    before = prognose(prognosis.times[:-1], prognosis.K[:-1], observed=observed,
                       seed=0 if p0.seed is None else int(p0.seed),
                       thresholds=prognosis.thresholds, indicators=list(part),
                       discrepancy={m: prognosis.predictions[m].discrepancy for m in part},

@@ -188,13 +188,10 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
     ``horizon`` how far past the last inspection to draw (default: past the
     largest finite upper RUL bound, at most 1.5 times the history's span).
     """
-    from .trends import indicator_series
-
     names = list(indicators) if indicators is not None else interesting_indicators(prog)
     for n in names:
         if n not in prog.predictions:
             raise ValueError(f"no prediction for indicator {n!r}; have {', '.join(prog.predictions)}")
-    series = indicator_series(prog.K)
     fig = _figure(10, 3.2 * len(names) + 0.6)
     axes = np.atleast_1d(fig.subplots(len(names), 1,
                                       gridspec_kw=_grid(fig, len(names), 1, hgap=0.75)))
@@ -216,7 +213,8 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
         lo, mid, hi = p.band(grid, (0.05, 0.5, 0.95))
         ax.fill_between(grid, lo, hi, color="C0", alpha=0.18, lw=0, label="trend, 90 % cone")
         ax.plot(grid, mid, color="C0", lw=1.3, label=f"trend ({p.model})")
-        ax.plot(t, series[name], "o", color="k", ms=4, label="identified")
+        t_y, y = prog.readings(name)
+        ax.plot(t_y, y, "o", color="k", ms=4, label="identified")
         ax.axhline(p.threshold, color="C3", ls="--", lw=1.0, label="failure threshold")
         ax.axvline(p.t_now, color="0.5", lw=0.8)
         if (note := p.extrapolated.partition(":")[0] or p.beyond(grid)):    # k lies in [0, 1]
@@ -239,8 +237,8 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
         ax.set_title(f"{name}: no growth" if flat else
                      f"{name}: RUL median {med} [{p.lo:.0f}, {hi_txt}] {_unit(prog.time_unit)}",
                      fontsize=9)
-        top = max(p.threshold * 1.25, float(np.nanmax(series[name])) * 1.1)
-        ax.set_ylim(min(0.0, float(np.nanmin(series[name])) - 0.01), top)
+        top = max(p.threshold * 1.25, float(np.nanmax(y, initial=0.0)) * 1.1)
+        ax.set_ylim(min(0.0, float(np.nanmin(y, initial=0.0)) - 0.01), top)
         ax.set_ylabel(name + (" (k8 - 0.5, signed)" if name == "gain_drift" else "") + " [-]")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="upper left")

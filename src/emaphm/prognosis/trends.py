@@ -969,6 +969,25 @@ class Prognosis:
     #: and what went to :func:`predict_rul`: ``models``, ``selection``, ``n_samples``...),
     #: so that it can be predicted again alike
     options: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    #: indicator -> the inspections (indices into ``times``) its trend left out: the drive
+    #: path those were identified on could not see its fault mode (their k there is a
+    #: placeholder, :attr:`emaphm.identify.Identification.not_observable`). An indicator
+    #: seen on fewer than :data:`MIN_INSPECTIONS` has no prediction.
+    unobserved: Mapping[str, tuple] = field(default_factory=dict, repr=False)
+
+    def observed(self, indicator: str) -> np.ndarray:
+        """Which inspections ``indicator``'s trend used (a boolean mask over ``times``)."""
+        mask = np.ones(self.times.size, dtype=bool)
+        mask[list(self.unobserved.get(indicator, ()))] = False
+        return mask
+
+    def readings(self, indicator: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(times, values)`` of the readings ``indicator``'s trend used
+        (:func:`indicator_series` of the inspections that could see it)."""
+        m = self.observed(indicator)
+        if not m.any():
+            return self.times[m], np.empty(0)
+        return self.times[m], indicator_series(self.K[m])[indicator]
 
     @property
     def first(self) -> RULPrediction | None:
@@ -992,7 +1011,8 @@ class Prognosis:
                 "predictions": {n: {**p.to_dict(samples), "state": indicator_state(p, span)[0]}
                                 for n, p in self.predictions.items()},
                 "times": self.times.tolist(), "K": self.K.tolist(),
-                "options": json.loads(json.dumps(dict(self.options), default=str))}
+                "options": json.loads(json.dumps(dict(self.options), default=str)),
+                "unobserved": {n: [int(i) for i in ix] for n, ix in self.unobserved.items()}}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Prognosis":
@@ -1004,7 +1024,9 @@ class Prognosis:
                    thresholds=FailureThresholds.from_dict(data["thresholds"]),
                    times=np.asarray(data.get("times", []), dtype=float),
                    K=np.asarray(data.get("K", []), dtype=float).reshape(-1, 8),
-                   options=dict(data.get("options") or {}))
+                   options=dict(data.get("options") or {}),
+                   unobserved={n: tuple(int(i) for i in ix)
+                               for n, ix in (data.get("unobserved") or {}).items()})
 
     def to_frame(self) -> Any:
         """One row per health indicator: its threshold, state, median RUL and interval,
@@ -1023,8 +1045,16 @@ class Prognosis:
 def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = DEFAULT_FAILURE_THRESHOLDS,
              indicators: Sequence[str] = INDICATORS, t_now: float | None = None,
              actuator: str | None = None, time_unit: str = "h", sigma_floor: float = 0.003,
-             discrepancy: Mapping[str, float] | None = None, **kwargs: Any) -> Prognosis:
+             discrepancy: Mapping[str, float] | None = None,
+             observed: Mapping[str, Any] | None = None, **kwargs: Any) -> Prognosis:
     """RUL of each health indicator from a k history ``K`` (n, 8) at ``times`` (n,).
+
+    ``observed`` (indicator -> boolean mask (n,), :attr:`HistoryData.observed
+    <emaphm.prognosis.history.HistoryData.observed>`): the inspections whose drive path
+    could see the indicator's fault mode; each trend uses those only (the others' k is a
+    placeholder, not a healthy reading), and an indicator seen fewer than
+    :data:`MIN_INSPECTIONS` times gets no prediction (:attr:`Prognosis.unobserved` says
+    which were left out). Default: all.
 
     Each indicator gets its own seed, spawned from ``seed`` by
     :class:`numpy.random.SeedSequence` in the order of :data:`INDICATORS`, so
@@ -1047,12 +1077,19 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
                          f"{', '.join(INDICATORS)}")
     series = indicator_series(K)
     times = np.asarray(times, dtype=float)
+    masks = _observed_masks(observed, times.size)
     children = np.random.SeedSequence(seed).spawn(len(INDICATORS))
-    preds = {}
+    preds, unobserved = {}, {}
     for name, ss in zip(INDICATORS, children):
         if name not in indicators:
             continue
-        preds[name] = predict_rul(times, series[name], thresholds.for_indicator(name),
+        t, y = times, series[name]
+        if name in masks:
+            unobserved[name] = tuple(int(i) for i in np.flatnonzero(~masks[name]))
+            if int(masks[name].sum()) < MIN_INSPECTIONS:
+                continue
+            t, y = times[masks[name]], indicator_series(np.asarray(K)[masks[name]])[name]
+        preds[name] = predict_rul(t, y, thresholds.for_indicator(name),
                                   seed=np.random.default_rng(ss), t_now=t_now,
                                   sigma_floor=sigma_floor, indicator=name,
                                   discrepancy=float(discrepancy.get(name, 0.0)),
@@ -1061,7 +1098,23 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
     return Prognosis(actuator=actuator, t_now=float(times[-1] if t_now is None else t_now),
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
                      times=times, K=np.atleast_2d(np.asarray(K, dtype=float)),
-                     options={"sigma_floor": sigma_floor, **kwargs})
+                     options={"sigma_floor": sigma_floor, **kwargs}, unobserved=unobserved)
+
+
+def _observed_masks(observed: Mapping[str, Any] | None, n: int) -> dict[str, np.ndarray]:
+    """The masks of :func:`prognose`'s ``observed`` that leave an inspection out."""
+    masks = {}
+    for name, m in (observed or {}).items():
+        if name not in INDICATOR_MODE:
+            raise ValueError(f"observed: unknown health indicator {name!r}; choose from "
+                             f"{', '.join(INDICATORS)}")
+        m = np.asarray(m, dtype=bool)
+        if m.shape != (n,):
+            raise ValueError(f"observed[{name!r}] must have one entry per inspection ({n}), "
+                             f"got shape {m.shape}")
+        if not m.all():
+            masks[name] = m
+    return masks
 
 
 def _with_seed(p: RULPrediction, seed: int) -> RULPrediction:
