@@ -100,3 +100,16 @@ def test_cli_says_what_it_left_out(db, capsys):
     assert main(["prognose", "EMA-1", "--db", str(db), "--seed", "1", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["unobserved"] == {"gain_drift": list(BLIND)}
+
+
+def test_the_level_now_is_the_last_reading_that_saw_the_mode(db):
+    from emaphm.prognosis.thresholds import latest_values
+
+    with HealthHistory(db, readonly=True) as h:
+        data = h.data("EMA-1")
+    now = latest_values(data.K, data.observed)
+    assert now["gain_drift"] == pytest.approx(DRIFT[7] - 0.5)
+    blind_last = {**data.observed, "gain_drift": np.array([True] * 3 + [False] * 5)}
+    assert latest_values(data.K, blind_last)["gain_drift"] == pytest.approx(0.0)  # k8 = 0.5 at 2
+    assert latest_values(data.K, {"gain_drift": np.zeros(8, bool)})["gain_drift"] == 0.0
+    assert latest_values(data.K)["friction"] == 0.0

@@ -51,7 +51,7 @@ from typing import TYPE_CHECKING, Iterable
 
 from ..prognosis.inspection import DEFAULT_RISK, InspectionPolicy, n_samples_for, plan_inspection
 from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds,
-                                    indicator_values)
+                                    latest_values)
 from ..prognosis.trends import growth_rate, indicator_state
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -163,7 +163,7 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
                               rul_median=math.nan, rul_lo=math.nan, rul_hi=math.nan,
                               no_growth=False, past_threshold=False, trend=None,
                               growth=math.nan, prognosis=None, plan=plan, **base)
-    now = indicator_values(data.K[-1])
+    now = latest_values(data.K, data.observed)       # a placeholder k is no reading
     thr = {n: thresholds.for_indicator(n) for n in INDICATORS}
     ratio = {n: float(now[n]) / thr[n] for n in INDICATORS}
     if prognosis is None and data.n >= MIN_INSPECTIONS:

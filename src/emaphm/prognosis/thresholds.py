@@ -52,7 +52,7 @@ import numpy as np
 from .._text import shown
 
 __all__ = ["INDICATORS", "INDICATOR_MODE", "INDICATOR_COMPONENT", "FailureThresholds",
-           "DEFAULT_FAILURE_THRESHOLDS", "indicator_values", "parse_threshold"]
+           "DEFAULT_FAILURE_THRESHOLDS", "indicator_values", "latest_values", "parse_threshold"]
 
 #: Health indicators in the order of k.
 from .choices import INDICATORS  # noqa: E402  (the CLI's parser reads it there)
@@ -136,6 +136,19 @@ def indicator_values(K: np.ndarray) -> dict[str, np.ndarray]:
     for name in INDICATORS:
         j = INDICATOR_COMPONENT[name]
         out[name] = np.abs(K[..., j] - 0.5) if name == "gain_drift" else K[..., j].copy()
+    return out
+
+
+def latest_values(K: np.ndarray, observed: Mapping[str, np.ndarray] | None = None) -> dict[str, float]:
+    """Each health indicator at the last inspection of ``K`` (n, 8) that could see its
+    fault mode (``observed``: :attr:`~emaphm.prognosis.history.HistoryData.observed`;
+    default every inspection); 0 (healthy) where none could."""
+    values = indicator_values(np.atleast_2d(K))
+    out = {}
+    for name, v in values.items():
+        m = None if observed is None else observed.get(name)
+        seen = np.flatnonzero(m) if m is not None else np.arange(v.size)
+        out[name] = float(v[seen[-1]]) if seen.size else 0.0
     return out
 
 
