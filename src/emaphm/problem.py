@@ -323,10 +323,9 @@ class IdentificationProblem:
                     params: ActuatorParams | None = None) -> dict[str, list[float]]:
         """What the monitoring model at ``k`` (and ``nu``, or on ``params``) says of each
         phase's fault loop (:func:`loop_report`: its RMS current, the power in its bridge
-        and its ampere-turns ``mu i_f``), from
-        the readable loop of the model (:func:`emaphm.models.monitoring.simulate_reference`,
-        which keeps the loop currents the kernels do not)."""
-        from .models.monitoring import simulate_reference
+        and its ampere-turns ``mu i_f``), from the loop currents of the scalar kernel
+        (:meth:`emaphm.models.monitoring.MonitoringModel.loop_currents`)."""
+        from .models.monitoring import MonitoringModel
 
         params = self.params_at(nu) if params is None else params
         if self.fault_model != "physical":
@@ -340,8 +339,9 @@ class IdentificationProblem:
             trial = replace(self, params=params, nuisance=tuple(drive), objective=None)
             f_abc = trial.objective.model.simulate(k, list(drive.values())).f_abc[0]
         else:
-            f_abc = simulate_reference(params, k, model.profile, n_sub=model.n_sub,
-                                       theta0=model.theta0, fault_model="physical")["f_abc"]
+            f_abc = MonitoringModel(params, model.profile, n_sub=model.n_sub, theta0=model.theta0,
+                                    fault_model="physical").loop_currents(
+                np.asarray(k, dtype=float)[None, :])[0]
         return loop_report(np.mean(f_abc ** 2, axis=0), params.motor.R_f,
                            shorted_fraction(np.asarray(k, dtype=float)[2:5]))
 

@@ -37,7 +37,7 @@ def _run(kernel, mm, P, CP, T_load):
     empty = np.zeros((0, 3))
     ref = np.ascontiguousarray(mm.profile.theta_ref(mm.t))
     kernel(P, CP, ref, np.ascontiguousarray(T_load), mm.n_sub, empty, empty, out_i, th, om, tq,
-           fit, status)
+           fit, status, np.zeros((0, 0, 3)))
     return out_i, th
 
 

@@ -330,6 +330,7 @@ def test_batched_kernel_equals_python_reference(n_sub, fault_model):
                    scenario("turn-short-15pct")])
     model = MonitoringModel(PARAMS, PROFILE, n_sub=n_sub, fault_model=fault_model)
     res = model.simulate_population(K)
+    loops = model.loop_currents(K)
     assert res.status.tolist() == [STATUS_OK] * len(K)
     assert res.i_abc.shape == (len(K), PROFILE.grid(T_S).size, 3)
     # The compiled kernel contracts multiply-adds (FMA) where Python rounds twice; the
@@ -341,6 +342,9 @@ def test_batched_kernel_equals_python_reference(n_sub, fault_model):
         np.testing.assert_allclose(res.theta_m[j], ref["theta_m"], rtol=0, atol=1e-9)
         np.testing.assert_allclose(res.omega_m[j], ref["omega_m"], rtol=0, atol=1e-7)
         np.testing.assert_allclose(res.torque[j], ref["torque"], rtol=0, atol=ROUND_OFF_A)
+        # the fault loops' currents (the kernel writes them where asked; none for "paper")
+        np.testing.assert_allclose(loops[j], ref["f_abc"], rtol=0, atol=ROUND_OFF_A)
+    assert (fault_model == "physical") == bool(np.abs(loops).max() > 0.1)
     np.testing.assert_array_equal(res.t, ref["t"])
     np.testing.assert_array_equal(res.theta_ref, ref["theta_ref"])
 
@@ -422,7 +426,7 @@ def _run_kernel(P, CP, model, i_target=None, weights=None):
     empty = np.zeros((0, 3))
     _kernel(P, np.ascontiguousarray(CP), model._ref, model._load, model.n_sub,
             empty if i_target is None else i_target, empty if weights is None else weights,
-            out_i, *outs, fitness, status)
+            out_i, *outs, fitness, status, np.zeros((0, 0, 3)))
     return out_i, fitness, status
 
 

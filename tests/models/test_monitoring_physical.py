@@ -212,7 +212,7 @@ def test_misuse_raises():
     with pytest.raises(ValueError, match="another n_sub"):
         _kernel(P, CP, mm._ref, mm._load, 2, np.zeros((0, 3)), np.zeros((0, 3)),
                 np.zeros((1, n, 3)), np.zeros((1, n)), np.zeros((1, n)), np.zeros((1, n)),
-                np.zeros(1), np.zeros(1, dtype=np.int64))
+                np.zeros(1), np.zeros(1, dtype=np.int64), np.zeros((0, 0, 3)))
     with pytest.raises(ValueError, match="another n_sub"):
         simulate_population_numpy(P, CP, mm._ref, mm._load, 2)
     # a non-finite candidate is a value, not an exception, under this model too

@@ -21,6 +21,9 @@ from emaphm.models.monitoring_simd import LANES, TRIG_LIMIT, _kernel, sincos
 
 K = population()
 
+#: no fault-loop currents asked of a kernel
+NO_LOOPS = np.zeros((0, 0, 3))
+
 
 def _inputs(mm):
     """Command [rad] and load torque [N m] on the model's grid, as the kernel gets them."""
@@ -36,7 +39,8 @@ def simd_traces(mm, P, CP):
     fitness = np.zeros(n_pop)
     status = np.zeros(n_pop, dtype=np.int64)
     empty = np.zeros((0, 3))
-    _kernel(P, CP, *_inputs(mm), mm.n_sub, empty, empty, out_i, th, om, tq, fitness, status)
+    _kernel(P, CP, *_inputs(mm), mm.n_sub, empty, empty, out_i, th, om, tq, fitness, status,
+            NO_LOOPS)
     return {"i_abc": out_i, "theta_m": th, "omega_m": om, "torque": tq, "status": status,
             "fitness": fitness}
 
@@ -48,7 +52,7 @@ def simd_sse(mm, P, CP, i_target, weights):
     status = np.full(n_pop, -1, dtype=np.int64)
     none3, none2 = np.zeros((0, 0, 3)), np.zeros((0, 0))
     _kernel(P, CP, *_inputs(mm), mm.n_sub, np.ascontiguousarray(i_target),
-            np.ascontiguousarray(weights), none3, none2, none2, none2, fitness, status)
+            np.ascontiguousarray(weights), none3, none2, none2, none2, fitness, status, NO_LOOPS)
     return fitness, status
 
 
@@ -146,7 +150,7 @@ def test_a_diverging_candidate_is_flagged_and_leaves_its_neighbours_alone(poison
     f_scalar, s_scalar = np.zeros(len(k)), np.zeros(len(k), dtype=np.int64)
     from emaphm.models.monitoring import _kernel as scalar_kernel
     scalar_kernel(P, bad, *_inputs(mm), mm.n_sub, np.zeros((0, 3)), np.zeros((0, 3)),
-                  i_scalar, *outs, f_scalar, s_scalar)
+                  i_scalar, *outs, f_scalar, s_scalar, NO_LOOPS)
     np.testing.assert_array_equal(tr_bad["status"], s_scalar)
     np.testing.assert_allclose(tr_bad["i_abc"][others], i_scalar[others], rtol=TOL, atol=TOL)
 
@@ -201,7 +205,7 @@ def scalar_fdlibm(mm, P, CP, i_target=None, weights=None):
     scalar_kernel(P, np.ascontiguousarray(CP), *_inputs(mm), mm.n_sub,
                   empty if store else np.ascontiguousarray(i_target),
                   empty if store else np.ascontiguousarray(weights),
-                  out_i, th, om, tq, fitness, status, True)
+                  out_i, th, om, tq, fitness, status, NO_LOOPS, True)
     return {"i_abc": out_i, "theta_m": th, "omega_m": om, "torque": tq, "status": status,
             "fitness": fitness}
 

@@ -108,7 +108,7 @@ _read_ctl = vector_reader(N_CTL, "read_ctl")
 
 @jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
-            out_i, out_theta, out_omega, out_torque, fitness, status, fdlibm=False):
+            out_i, out_theta, out_omega, out_torque, fitness, status, out_f, fdlibm=False):
     """Simulate ``CP.shape[0]`` candidates over ``theta_ref.shape[0]`` control periods,
     one candidate after another, each period :func:`~emaphm.models.step.control` and
     ``n_sub`` times :func:`~emaphm.models.step.substep` (inlined) on libm's sines
@@ -117,14 +117,16 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     Shapes: ``P (N_P,)``, ``CP (n_pop, N_CP)``, ``theta_ref, T_load (n,)``;
     ``i_target, weights (n, 3)`` or ``(0, 3)`` for no fitness; ``out_i
     (n_pop, n, 3)``, ``out_theta, out_omega, out_torque (n_pop, n)`` or
-    zero-sized for no traces; ``fitness, status (n_pop,)`` written in place.
-    ``fitness`` accumulates ``sum_k sum_j weights[k, j] (i_j - i_target[k, j])^2``.
+    zero-sized for no traces; ``fitness, status (n_pop,)`` written in place; ``out_f
+    (n_pop, n, 3)`` the fault loops' currents, or zero-sized (the SIMD kernel has no such
+    output). ``fitness`` accumulates ``sum_k sum_j weights[k, j] (i_j - i_target[k, j])^2``.
     ``P, CP`` must be packed for ``n_sub`` (ValueError otherwise).
     """
     _check_step(P, n_sub)
     n_pop = CP.shape[0]
     n = theta_ref.shape[0]
     store = out_i.shape[0] == n_pop and n_pop > 0
+    loops = out_f.shape[0] == n_pop and n_pop > 0
     with_fit = i_target.shape[0] == n
     p = P[P_POLES]
     T_s = P[P_T_S]
@@ -175,6 +177,10 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                     out_i[j, k, 2] = x[11]
                     out_theta[j, k] = x[0]
                     out_omega[j, k] = x[1]
+                if s == 0 and loops:
+                    out_f[j, k, 0] = x[6]
+                    out_f[j, k, 1] = x[7]
+                    out_f[j, k, 2] = x[8]
                 if ideal:
                     x, tq = substep_ideal_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
                 else:
@@ -341,14 +347,15 @@ class MonitoringModel:
         (:func:`emaphm.models.layout.pack_population` with its fault model and step)."""
         return self._packer(K)
 
-    def _run(self, CP, P, i_target, weights, store):
+    def _run(self, CP, P, i_target, weights, store, loops=False):
         n_pop, n = CP.shape[0], self._t.size
         shape = (n_pop, n) if store else (0, 0)
         out_i = np.zeros(shape + (3,))
         outs = [np.zeros(shape) for _ in range(3)]
+        out_f = np.zeros(((n_pop, n) if loops else (0, 0)) + (3,))
         fitness = np.zeros(n_pop)
         status = np.zeros(n_pop, dtype=np.int64)
-        if self.kernel == "scalar":
+        if self.kernel == "scalar" or loops:     # the loops' currents: the scalar kernel's
             parts = [(slice(0, n_pop), _kernel)]
         else:
             from .monitoring_simd import LANES, _kernel as simd
@@ -361,8 +368,8 @@ class MonitoringModel:
             if rows.stop > rows.start:
                 kernel(P, CP[rows], self._ref, self._load, self.n_sub, i_target, weights,
                        out_i[rows] if store else out_i, *(o[rows] if store else o for o in outs),
-                       fitness[rows], status[rows])
-        return out_i, outs, fitness, status
+                       fitness[rows], status[rows], out_f[rows] if loops else out_f)
+        return (out_i, outs, fitness, status) + ((out_f,) if loops else ())
 
     def simulate_population(self, K) -> PopulationResult:
         """Traces of every candidate in ``K`` (n_pop, 8)."""
@@ -370,6 +377,14 @@ class MonitoringModel:
         empty = np.zeros((0, 3))
         out_i, (th, om, tq), _, status = self._run(CP, P, empty, empty, True)
         return PopulationResult(self._t, self._ref, th, om, out_i, tq, status)
+
+    def loop_currents(self, K) -> np.ndarray:
+        """The fault loops' currents ``f_abc (n_pop, n, 3)`` [A] of every candidate in ``K``
+        at the control instants (zero where a phase has no loop: the ``"paper"`` fault
+        model has none), from the scalar kernel."""
+        P, CP = self.pack(K)
+        empty = np.zeros((0, 3))
+        return self._run(CP, P, empty, empty, False, loops=True)[4]
 
     def simulate(self, k, nu=None) -> PopulationResult:
         """Traces of one fault vector (a population of one), with its nuisance values

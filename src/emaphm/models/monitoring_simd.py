@@ -215,8 +215,9 @@ _commit_stage = inlined(_commit_stage)
 
 @kernel_jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
-            out_i, out_theta, out_omega, out_torque, fitness, status):
-    """Drop-in for :func:`emaphm.models.monitoring._kernel` (same arguments, same results).
+            out_i, out_theta, out_omega, out_torque, fitness, status, out_f):
+    """Drop-in for :func:`emaphm.models.monitoring._kernel` (same arguments, same results;
+    ``out_f``, the fault loops' currents, is not written: ask the scalar kernel).
 
     Shapes: ``P (N_P,)``, ``CP (n_pop, N_CP)``, ``theta_ref, T_load (n,)``;
     ``i_target, weights (n, 3)`` or ``(0, 3)`` for no fitness; ``out_i
