@@ -31,7 +31,7 @@ from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_optio
                           calibration_seconds, identification_seconds, negative_values, out_path,
                           plot_path, warn_if_long)
 from ._cli_common import seed as _seed
-from ._text import one_line, shown
+from ._text import one_line, printable_streams, shown
 from .firmware import DRIVE_MODELS, FOREIGN_DRIVES
 
 __all__ = ["main", "build_parser", "EXIT_USAGE", "UsageError"]
@@ -651,6 +651,7 @@ def trace_warnings_as_lines(cmd: str):
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    printable_streams()
     parser = build_parser()
     args = parser.parse_args(negative_values(parser, sys.argv[1:] if argv is None else argv))
     cmd = " ".join(["emaphm", args.command] + ([args.history_command]

@@ -1418,3 +1418,63 @@ def test_a_parameter_near_its_edge_is_one_warning_line(base, tmp_path, capsys):
     assert warning == [f"emaphm simulate: warning: {tmp_path / 'p.toml'}: controller.omega_max "
                        "[rad/s] = 20000 is unlike a servo actuator's (usually 1 to 10000): check "
                        "it is in rad/s: 3000 rpm = 314.16"]
+
+
+# issue 37 partial items: file names that are no UTF-8, and a C locale ----------------------
+def test_a_latin1_file_name_is_imported_diagnosed_and_recorded(base, tmp_path, capsys):
+    """A name holding bytes that are no UTF-8 (Latin-1 'é' = 0xe9; Python holds it as a
+    surrogate) was "surrogates not allowed" in import, diagnose and history add."""
+    src = _bench_csv(base, tmp_path / os.fsdecode(b"b\xe9nch.csv"))
+    out = tmp_path / os.fsdecode(b"tr\xe9.parquet")
+    csv = write_trace(base.trace, tmp_path / os.fsdecode(b"caf\xe9.csv"))
+    _toml(tmp_path / "map.toml", _MAP)
+    db = ["--db", str(tmp_path / os.fsdecode(b"h\xe9.sqlite"))]
+    fit = ["--budget", "30", "--quiet"]
+    for argv in (["import", str(src), "--map", str(tmp_path / "map.toml"), "--out", str(out)],
+                 ["import", str(out), "--inspect"],
+                 ["diagnose", str(out)] + fit, ["diagnose", str(csv)] + fit,
+                 ["history", "register", "EMA-1"] + db,
+                 ["history", "add", "EMA-1", str(out), "--at", "1"] + db + fit,
+                 ["history", "show", "EMA-1"] + db):
+        rc, _, err = _run_in_process(argv, capsys, 600)
+        assert rc == 0, (argv, err)
+        assert "Traceback" not in err and "surrogates" not in err
+    from emaphm.prognosis.history import HealthHistory
+
+    with HealthHistory(tmp_path / os.fsdecode(b"h\xe9.sqlite"), create=False) as h:
+        assert h.inspections("EMA-1")[0].source.endswith("tr\\xe9.parquet")   # its bytes, shown
+
+
+def _in_c_locale(argv: list[str], cwd: Path) -> tuple[int, str, str]:
+    """``emaphm ARGV`` in a child process under ``LC_ALL=C PYTHONUTF8=0``: an ASCII locale,
+    in which Python holds every non-ASCII byte of a name or an argument as a surrogate."""
+    code = "import sys\nfrom emaphm.cli import main\nsys.exit(main(sys.argv[1:]))"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path), "LC_ALL": "C",
+           "PYTHONUTF8": "0", "PYTHONIOENCODING": ""}
+    arg_bytes = [a.encode() for a in argv]
+    proc = subprocess.run([sys.executable.encode(), b"-c", code.encode(), *arg_bytes], cwd=cwd,
+                          env=env, capture_output=True, timeout=300)
+    return proc.returncode, proc.stdout.decode("utf-8", "replace"), proc.stderr.decode("utf-8", "replace")
+
+
+def test_lc_all_c_keeps_unicode_paths_and_leaves_no_empty_history(base, tmp_path):
+    """Under LC_ALL=C PYTHONUTF8=0 a history named 'hé.sqlite' was written but not read
+    back, a description 'vérin' failed and left an empty database, an id the history
+    refuses left one too, and printing 'é' to the ASCII stdout failed."""
+    db = ["--db", "hé.sqlite"]
+    rc, _, err = _in_c_locale(["history", "register", "EMA-é"] + db, tmp_path)
+    assert rc == 2 and err.count("\n") == 1 and "must be 1-64 characters" in err
+    assert not (tmp_path / "hé.sqlite").exists(), "a refused id left a database behind"
+    for argv in (["history", "register", "EMA-1", "--description", "vérin gauche"] + db,
+                 ["history", "show", "EMA-1"] + db, ["history", "list"] + db,
+                 ["fleet", "report", "--out", "sité", "--workers", "0", "--quiet"] + db):
+        rc, out, err = _in_c_locale(argv, tmp_path)
+        assert rc == 0, (argv, err)
+        assert "Traceback" not in err and "surrogates" not in err
+    rc, out, _ = _in_c_locale(["history", "list"] + db, tmp_path)
+    assert "v\\xe9rin gauche" in out                      # the ASCII stdout escapes the 'é'
+    from emaphm.prognosis.history import HealthHistory
+
+    with HealthHistory(tmp_path / "hé.sqlite", create=False) as h:
+        assert h.actuator("EMA-1").description == "vérin gauche"
+    assert "hé.sqlite" in (tmp_path / "sité" / "index.html").read_text()

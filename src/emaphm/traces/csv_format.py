@@ -14,6 +14,7 @@ memory follows the columns kept, not the file. The bench importer
 from __future__ import annotations
 
 import csv
+import os
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -371,7 +372,7 @@ def csv_blocks(layout: CsvLayout, columns: Sequence[int], *, max_rows: int | Non
     names = [f"c{k}" for k in range(width)]
     if layout.path.stat().st_size <= layout.data_offset:
         return                                          # a header and no data
-    stream = pa.OSFile(str(layout.path))
+    stream = pa.OSFile(os.fsencode(layout.path))        # bytes: any name the OS holds
     stream.seek(layout.data_offset)
     try:
         reader = pcsv.open_csv(
