@@ -1113,6 +1113,13 @@ def _(d, b):
             "--workers", "0"]
 
 
+@case("campaign-new-store-in-a-read-only-folder", "cannot create the campaign store",
+      "in the folder", "Permission denied", unprivileged=True)
+def _(d, b):                         # it said "ro/store.sqlite is damaged ... Restore it"
+    return ["campaign", "--store", str(_read_only_folder(d / "ro") / "store.sqlite"),
+            "--workers", "0", "--runs", "1", "--scenarios", "gain-low", "--algorithms", "pso"]
+
+
 @case("history-db-in-memory", "--db ':memory:' names SQLite's in-memory database",
       "give the path of a health history file")
 def _(d, b):
