@@ -461,6 +461,9 @@ def get_profile(name: str) -> Profile:
 
 #: Most samples a profile file may hold (a 0.5 s test at 8 kHz is 4,000).
 MAX_PROFILE_SAMPLES = 1_000_000
+#: Shortest profile a file may describe [s]: a diagnosis reads at least 100 samples
+#: (emaphm.traces.MIN_SAMPLES), 12.5 ms at the preset's 8 kHz control rate.
+MIN_PROFILE_DURATION_S = 100 / 8000.0
 #: Longest profile a file may describe [s]: a simulation of the plant takes about as long
 #: as the test; a diagnosis needs one profile of about 0.5 s.
 MAX_PROFILE_DURATION_S = 60.0
@@ -533,10 +536,18 @@ def _profile_of_samples(t: np.ndarray, theta: np.ndarray, where: str, name: str)
                            f"from {t[i]:.9g} to {t[i + 1]:.9g} s at data row {i + 2}; sort the "
                            "rows by time and remove repeated times")
     span = float(t[-1] - t[0])
+    if span < MIN_PROFILE_DURATION_S:
+        raise ProfileError(f"{where}: the command lasts {span:.6g} s ({t.size} rows), shorter "
+                           f"than the {MIN_PROFILE_DURATION_S:g} s a diagnosis needs (100 samples "
+                           "at 8 kHz); give a test of about 0.5 s (is t in s?)")
     if span > MAX_PROFILE_DURATION_S:
         raise ProfileError(f"{where}: the command lasts {span:.6g} s, longer than "
                            f"{MAX_PROFILE_DURATION_S:g} s (is t in ms? divide it by 1000); a "
                            "diagnosis needs one test of about 0.5 s")
+    if np.ptp(theta) == 0.0:
+        raise ProfileError(f"{where}: theta_ref is {theta[0]:g} rad in every row: a command "
+                           "that does not move the actuator identifies nothing; give a test "
+                           "that moves it (e.g. the built-in diagnostic profile)")
     theta = theta - theta[0]
     peak = float(np.max(np.abs(theta)))
     if peak > MAX_COMMAND_RAD:

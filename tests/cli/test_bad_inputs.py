@@ -1120,6 +1120,22 @@ def _(d, b):                         # it said "ro/store.sqlite is damaged ... R
             "--workers", "0", "--runs", "1", "--scenarios", "gain-low", "--algorithms", "pso"]
 
 
+@case("simulate-profile-of-2-rows-in-1-ms", "p.csv: the command lasts 0.001 s (2 rows), shorter "
+      "than the 0.0125 s a diagnosis needs (100 samples at 8 kHz)")
+def _(d, b):                         # it wrote a trace of 16 samples, exit 0
+    (d / "p.csv").write_text("t,theta_ref\n0,0\n0.001,0.001\n")
+    return ["simulate", "--scenario", "nominal", "--model", "monitoring", "--profile",
+            str(d / "p.csv"), "--out", str(d / "x.csv")]
+
+
+@case("simulate-profile-that-does-not-move", "p.csv: theta_ref is 1 rad in every row: a command "
+      "that does not move the actuator identifies nothing")
+def _(d, b):
+    (d / "p.csv").write_text("t,theta_ref\n0,1\n0.5,1\n")
+    return ["simulate", "--scenario", "nominal", "--model", "monitoring", "--profile",
+            str(d / "p.csv"), "--out", str(d / "x.csv")]
+
+
 @case("history-db-in-memory", "--db ':memory:' names SQLite's in-memory database",
       "give the path of a health history file")
 def _(d, b):
