@@ -484,6 +484,7 @@ def read_profile(path: Any) -> Profile:
     from .quantities import QuantityError, measure
     from .traces import TraceError
     from .traces.csv_format import collect, csv_blocks, sniff_csv
+    from .traces.limits import TooManySamples
 
     p = Path(path)
     if p.suffix.lower() != ".csv":
@@ -509,6 +510,10 @@ def read_profile(path: Any) -> Profile:
                          if unit not in ("", "-") else 1.0)
         t, theta = collect(csv_blocks(layout, [names.index("t"), names.index("theta_ref")],
                                       max_rows=MAX_PROFILE_SAMPLES), 2)
+    except TooManySamples as exc:
+        raise ProfileError(f"profile file {p}: {exc.found}, above the {exc.limit:,} rows a "
+                           "profile file may hold (a 0.5 s test at 8 kHz is 4,000); give one "
+                           "test of about 0.5 s") from None
     except (TraceError, QuantityError) as exc:
         text = str(exc)
         text = text[len(f"{p}: "):] if text.startswith(f"{p}: ") else text

@@ -639,7 +639,7 @@ def _(d, b):
     return ["import", str(_bench_csv(b, d / "bench.csv")), "--out", str(d / "o.csv")]
 
 
-@case("csv-of-5-million-rows", "more than 2,", "rows, above the 2,000,000 samples a trace may have",
+@case("csv-of-5-million-rows", "at least 2,", "rows, above the 2,000,000 samples a trace may have",
       "--window START:END")
 def _(d, b):
     (d / "big.csv").write_bytes(b"t,theta_ref,theta_m,omega_m,i_a,i_b,i_c\n"
@@ -1132,6 +1132,15 @@ def _(d, b):                         # it wrote a trace of 16 samples, exit 0
       "that does not move the actuator identifies nothing")
 def _(d, b):
     (d / "p.csv").write_text("t,theta_ref\n0,1\n0.5,1\n")
+    return ["simulate", "--scenario", "nominal", "--model", "monitoring", "--profile",
+            str(d / "p.csv"), "--out", str(d / "x.csv")]
+
+
+@case("simulate-profile-of-1.5-million-rows", "p.csv: at least 1,", "rows, above the 1,000,000 "
+      "rows a profile file may hold")
+def _(d, b):                         # it said "more than 1,251,286 rows, above the 2,000,000"
+    rows = "".join(f"{k * 1e-5:.5f},0\n" for k in range(1_500_000))
+    (d / "p.csv").write_text("t,theta_ref\n" + rows)
     return ["simulate", "--scenario", "nominal", "--model", "monitoring", "--profile",
             str(d / "p.csv"), "--out", str(d / "x.csv")]
 

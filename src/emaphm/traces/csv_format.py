@@ -395,7 +395,8 @@ def csv_blocks(layout: CsvLayout, columns: Sequence[int], *, max_rows: int | Non
             except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
                 raise _row_error(exc, layout, columns) from None
             if max_rows is not None and row + batch.num_rows > max_rows:
-                raise too_many_samples(f"{layout.path}", f"more than {row + batch.num_rows:,} rows")
+                raise too_many_samples(f"{layout.path}", f"at least {row + batch.num_rows:,} rows",
+                                       max_rows)
             yield row, [batch.column(k).to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
                         for k in range(batch.num_columns)]
             row += batch.num_rows
