@@ -1510,3 +1510,35 @@ def test_lc_all_c_keeps_unicode_paths_and_leaves_no_empty_history(base, tmp_path
     with HealthHistory(tmp_path / "hé.sqlite", create=False) as h:
         assert h.actuator("EMA-1").description == "vérin gauche"
     assert "hé.sqlite" in (tmp_path / "sité" / "index.html").read_text()
+
+
+def test_cr_only_line_endings_read_as_any_other(base, tmp_path, capsys):
+    """An old Mac export (lines ended by a lone CR) read as "no rows of numbers found": a
+    bench export imports, and a trace file reads, the same as with LF endings."""
+    from emaphm.traces import read_trace
+
+    lf = _bench_csv(base, tmp_path / "lf.csv")
+    cr = tmp_path / "cr.csv"
+    cr.write_bytes(lf.read_bytes().replace(b"\n", b"\r"))
+    _toml(tmp_path / "map.toml", _MAP)
+    for src in (lf, cr):
+        argv = ["import", str(src), "--map", str(tmp_path / "map.toml"), "--out",
+                str(tmp_path / f"{src.stem}.parquet"), "--quiet"]
+        assert _run_in_process(argv, capsys, 120)[0] == 0
+    a, b = read_trace(tmp_path / "lf.parquet"), read_trace(tmp_path / "cr.parquet")
+    assert np.array_equal(a.i_abc, b.i_abc) and np.array_equal(a.theta_m, b.theta_m)
+    trace_lf = write_trace(base.trace, tmp_path / "t.csv")
+    (tmp_path / "t_cr.csv").write_bytes(trace_lf.read_bytes().replace(b"\n", b"\r"))
+    assert np.array_equal(read_trace(tmp_path / "t_cr.csv").i_abc, base.trace.i_abc)
+
+
+@pytest.mark.parametrize("chunk", [1, 2, 3, 7, 1 << 16])
+def test_csv_lines_end_at_lf_crlf_or_a_lone_cr_across_chunks(chunk):
+    import io
+
+    from emaphm.traces.csv_format import _raw_lines
+
+    data = b"a\r\nbb\rccc\n\r\nd\r"
+    assert list(_raw_lines(io.BytesIO(data), 100, chunk)) == [b"a\r\n", b"bb\r", b"ccc\n",
+                                                              b"\r\n", b"d\r"]
+    assert list(_raw_lines(io.BytesIO(b"x" * 50 + b"\n"), 10, chunk)) == [b"x" * 11]

@@ -138,14 +138,38 @@ MAX_LINE_BYTES = 2 << 20
 _NUMERIC_LINE = re.compile(r"^[\s\d.,;\t+\-eE\"]*\d[\s\d.,;\t+\-eEnaNA\"]*$")
 
 
+_LINE_END = re.compile(rb"\r\n|\r|\n")
+
+
+def _raw_lines(fh: IO[bytes], limit: int, chunk: int = 1 << 16) -> Iterator[bytes]:
+    """The lines of ``fh`` with their endings: ``\\n``, ``\\r\\n`` or a lone ``\\r`` (an
+    old Mac export, which pyarrow's parser reads too); a line longer than ``limit`` is
+    yielded cut at ``limit + 1`` bytes, and no more after it."""
+    buf, start, eof = b"", 0, False
+    while True:
+        m = _LINE_END.search(buf, start)
+        if m is not None and (m.end() < len(buf) or eof or m.group() != b"\r"):
+            if m.end() > limit + 1:
+                yield buf[:limit + 1]
+                return
+            yield buf[:m.end()]
+            buf, start = buf[m.end():], 0
+            continue
+        if eof or len(buf) > limit:
+            if buf:
+                yield buf[:limit + 1]
+            return
+        start = max(len(buf) - 1, 0)        # a CR at the end may start a CRLF
+        data = fh.read(chunk)
+        eof = not data
+        buf += data
+
+
 def _lines(path: Path, encoding: str) -> Iterator[tuple[int, int, str]]:
     """``(line index, byte offset after the line, text)`` of the first lines of ``path``."""
     offset = 0
     with open(path, "rb") as fh:
-        for index in range(SNIFF_LINES):
-            raw = fh.readline(MAX_LINE_BYTES + 1)
-            if not raw:
-                return
+        for index, raw in zip(range(SNIFF_LINES), _raw_lines(fh, MAX_LINE_BYTES)):
             if len(raw) > MAX_LINE_BYTES:
                 raise TraceError(f"{path}: line {index + 1} is longer than {MAX_LINE_BYTES:,} "
                                  "bytes: not a CSV text file (or its lines are not ended)")
