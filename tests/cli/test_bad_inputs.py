@@ -1145,6 +1145,43 @@ def _(d, b):                         # it said "more than 1,251,286 rows, above 
             str(d / "p.csv"), "--out", str(d / "x.csv")]
 
 
+def _absurd(d: Path, b: Base, **changes) -> list[str]:
+    write_trace(_with(b.trace, **changes), d / "t.csv")
+    return ["diagnose", str(d / "t.csv"), "--quiet"]
+
+
+# values no unit explains are said to be absurd, not guessed a unit; no numpy warning printed
+@case("trace-currents-of-1e298", "column 'i_a' reaches 1e+298 at row 10", "beyond any actuator's "
+      "current, in A or in mA (1e+06): not a unit to convert, the values are not physical")
+def _(d, b):                         # it said "looks like mA, not A ... divide by 1000"
+    i = b.trace.i_abc.copy()
+    i[10, 0] = 1e298
+    return _absurd(d, b, i_abc=i)
+
+
+@case("trace-time-step-of-1e296", "column 't' has a mean step of 1.25e+296", "neither seconds nor "
+      "milliseconds")
+def _(d, b):                         # it said "looks like milliseconds ... divide t by 1000"
+    return _absurd(d, b, t=b.trace.t * 1e300)
+
+
+@case("trace-starting-at-1e308", "column 't' starts at 5e+307 s, beyond the 1e+10 s (the year "
+      "2286) of any clock")
+def _(d, b):                         # it shifted a "clock time" to 0, then refused t[1] <= t[0]
+    return _absurd(d, b, t=b.trace.t + 5e307)
+
+
+@case("trace-theta-m-of-1e300", "column 'theta_m' reaches", "beyond the 1e+07 rad of any "
+      "actuator's recording")
+def _(d, b):                         # it was diagnosed HEALTHY
+    return _absurd(d, b, theta_m=b.trace.theta_m * 1e300)
+
+
+@case("trace-speed-of-1e300", "column 'omega_m' reaches 7.7", "beyond any servo motor")
+def _(d, b):                         # numpy printed "RuntimeWarning: overflow encountered in dot"
+    return _absurd(d, b, omega_m=b.trace.omega_m * 1e300)
+
+
 @case("history-db-in-memory", "--db ':memory:' names SQLite's in-memory database",
       "give the path of a health history file")
 def _(d, b):
@@ -1542,3 +1579,21 @@ def test_csv_lines_end_at_lf_crlf_or_a_lone_cr_across_chunks(chunk):
     assert list(_raw_lines(io.BytesIO(data), 100, chunk)) == [b"a\r\n", b"bb\r", b"ccc\n",
                                                               b"\r\n", b"d\r"]
     assert list(_raw_lines(io.BytesIO(b"x" * 50 + b"\n"), 10, chunk)) == [b"x" * 11]
+
+
+@pytest.mark.parametrize("change", [
+    lambda tr: {"omega_m": tr.omega_m * 1e300}, lambda tr: {"theta_m": tr.theta_m * 1e300},
+    lambda tr: {"i_abc": tr.i_abc * 1e298}, lambda tr: {"t": tr.t * 1e300},
+    lambda tr: {"t": tr.t + 5e307}])
+def test_absurd_values_are_refused_without_a_numpy_warning(base, tmp_path, change):
+    """numpy's RuntimeWarnings ("overflow encountered in dot") were printed before the
+    refusal: under pytest they are caught, so they are made errors here."""
+    import warnings
+
+    from emaphm.traces import TraceError, read_trace
+
+    write_trace(_with(base.trace, **change(base.trace)), tmp_path / "t.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        with pytest.raises(TraceError):
+            read_trace(tmp_path / "t.csv")
