@@ -1182,6 +1182,34 @@ def _(d, b):                         # numpy printed "RuntimeWarning: overflow e
     return _absurd(d, b, omega_m=b.trace.omega_m * 1e300)
 
 
+def _short(d: Path, b: Base) -> Path:
+    """The first 400 samples of the base trace (less than a revolution), without its profile."""
+    tr, k = b.trace, slice(0, 400)
+    meta = {key: v for key, v in tr.meta.items() if key != "profile"}
+    return write_trace(Trace(t=tr.t[k], theta_ref=tr.theta_ref[k], theta_m=tr.theta_m[k],
+                             omega_m=tr.omega_m[k], i_abc=tr.i_abc[k], meta=meta), d / "short.csv")
+
+
+# advice that applies to the command that was run (it advised min_rotation=0 everywhere) -----
+@case("import-shorter-than-a-revolution", "rad is below min_rotation = 6.283 rad",
+      "Import a longer --window (or the whole recording), or record a longer profile")
+def _(d, b):
+    return _import(d, _bench_csv(b, d / "bench.csv", rows=slice(0, 400)))
+
+
+@case("diagnose-shorter-than-a-revolution", "rad is below min_rotation",
+      "or pass --min-rotation 0 to skip this check")
+def _(d, b):
+    return ["diagnose", str(_short(d, b)), "--quiet"]
+
+
+@case("history-add-shorter-than-a-revolution", "rad is below min_rotation",
+      "revolution. Record a longer profile (e.g. the built-in diagnostic profile, 0.5 s)")
+def _(d, b):
+    return ["history", "add", "EMA-1", str(_short(d, b)), "--at", "1", "--quiet", "--db",
+            str(_copy(b.history, d / "h.sqlite"))]
+
+
 @case("history-db-in-memory", "--db ':memory:' names SQLite's in-memory database",
       "give the path of a health history file")
 def _(d, b):

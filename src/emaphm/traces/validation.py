@@ -17,6 +17,11 @@ from .zero_sum import best_fit
 
 __all__ = ["MIN_SAMPLES", "validate"]
 
+#: What :func:`validate` advises for a trace that turns less than ``min_rotation``: the
+#: Python API's words (the command line says its own, ``emaphm.cli.command_advice``).
+ROTATION_ADVICE = ("Record a longer profile, e.g. the default diagnostic profile "
+                   "emaphm.profiles.diagnostic(), or pass min_rotation=0 to skip this check")
+
 #: Fewest samples :func:`validate` accepts.
 MIN_SAMPLES = 100
 
@@ -473,8 +478,7 @@ def validate(
                 f"trace too short in rotation: max(theta_m) - min(theta_m) = "
                 f"{rotation:.4g} rad is below min_rotation = {min_rotation:.4g} rad; "
                 "eccentricity identification needs at least one full mechanical "
-                "revolution. Record a longer profile, e.g. the default diagnostic profile "
-                "emaphm.profiles.diagnostic(), or pass min_rotation=0 to skip this check"
+                f"revolution. {ROTATION_ADVICE}"
             )
 
     _check_star(trace)
