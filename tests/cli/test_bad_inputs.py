@@ -1551,7 +1551,8 @@ def _in_c_locale(argv: list[str], cwd: Path) -> tuple[int, str, str]:
     arg_bytes = [a.encode() for a in argv]
     proc = subprocess.run([sys.executable.encode(), b"-c", code.encode(), *arg_bytes], cwd=cwd,
                           env=env, capture_output=True, timeout=300)
-    return proc.returncode, proc.stdout.decode("utf-8", "replace"), proc.stderr.decode("utf-8", "replace")
+    return (proc.returncode, proc.stdout.decode("utf-8", "replace"),
+            proc.stderr.decode("utf-8", "replace"))
 
 
 def test_lc_all_c_keeps_unicode_paths_and_leaves_no_empty_history(base, tmp_path):

@@ -557,7 +557,8 @@ def _register_history(subparsers: Any) -> None:
 
     r = hs.add_parser("register", help="register an actuator before its first inspection")
     r.add_argument("actuator", type=actuator_id, help="actuator id, e.g. EMA-0042")
-    r.add_argument("--description", default="", type=utf8_text, help="free text, e.g. 'left aileron, A320 MSN 1234'")
+    r.add_argument("--description", default="", type=utf8_text,
+                   help="free text, e.g. 'left aileron, A320 MSN 1234'")
     r.add_argument("--unit", choices=("h", "cycles"), default="h",
                    help="time unit of its inspections: flight hours (default, 0 to 1e6) or "
                         "cycles (0 to 1e9)")

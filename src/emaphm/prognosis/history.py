@@ -70,7 +70,8 @@ from ..traces import fingerprint
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "MAX_TIME", "HistoryError", "UnknownActuatorError",
            "TimeOrderError", "DuplicateInspectionError", "ReadOnlyHistoryError", "Actuator",
            "Inspection", "HistoryData", "SkippedInspection", "RemovedInspection",
-           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB", "check_registration"]
+           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB",
+           "check_registration"]
 
 SCHEMA_VERSION = 2
 TIME_UNITS = ("h", "cycles")

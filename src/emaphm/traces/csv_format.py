@@ -145,21 +145,22 @@ def _raw_lines(fh: IO[bytes], limit: int, chunk: int = 1 << 16) -> Iterator[byte
     """The lines of ``fh`` with their endings: ``\\n``, ``\\r\\n`` or a lone ``\\r`` (an
     old Mac export, which pyarrow's parser reads too); a line longer than ``limit`` is
     yielded cut at ``limit + 1`` bytes, and no more after it."""
-    buf, start, eof = b"", 0, False
+    buf, pos, start, eof = b"", 0, 0, False       # the line at buf[pos:] starts
     while True:
         m = _LINE_END.search(buf, start)
         if m is not None and (m.end() < len(buf) or eof or m.group() != b"\r"):
-            if m.end() > limit + 1:
-                yield buf[:limit + 1]
+            if m.end() - pos > limit + 1:
+                yield buf[pos:pos + limit + 1]
                 return
-            yield buf[:m.end()]
-            buf, start = buf[m.end():], 0
+            yield buf[pos:m.end()]
+            pos = start = m.end()
             continue
-        if eof or len(buf) > limit:
-            if buf:
-                yield buf[:limit + 1]
+        if eof or len(buf) - pos > limit:
+            if len(buf) > pos:
+                yield buf[pos:pos + limit + 1]
             return
-        start = max(len(buf) - 1, 0)        # a CR at the end may start a CRLF
+        buf, start = buf[pos:], max(len(buf) - pos - 1, 0)   # a CR at the end may start a CRLF
+        pos = 0
         data = fh.read(chunk)
         eof = not data
         buf += data

@@ -33,8 +33,10 @@ _MIN_TIME_STEP_IF_MS = 1e-3  # s; read as ms, a smaller step would be under 1 us
 _MAX_SPEED = 2000.0  # rad/s (19,100 rpm); no servo motor turns faster
 #: Beyond these no unit explains a value (the importer's reach: 1.6 million revolutions;
 #: a current beyond 1000 A read as mA): it is no measurement, and no unit is guessed.
-_REACH = {**{x: (1e7, "the {:g} rad of any actuator's recording") for x in ("theta_ref", "theta_m")},
-          **{x: (1e6, "any actuator's current, in A or in mA ({:g})") for x in ("i_a", "i_b", "i_c")}}
+_REACH = {**{x: (1e7, "the {:g} rad of any actuator's recording")
+             for x in ("theta_ref", "theta_m")},
+          **{x: (1e6, "any actuator's current, in A or in mA ({:g})")
+             for x in ("i_a", "i_b", "i_c")}}
 _MIN_SPEED_CORRELATION = 0.9  # omega_m vs d(theta_m)/dt must be this collinear to judge units
 _RATIO_TOLERANCE = 0.10  # relative distance of a speed ratio to a known factor
 _RATIO_BAND = (0.5, 2.0)  # ratios outside this band (and not a known factor) are an error
