@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
-from ._text import one_line, shown
+from ._text import one_line, shown, utf8_text
 
 __all__ = ["EXIT_USAGE", "UsageError", "Parser", "arg_type", "seed", "bounded_int",
            "budget_option", "out_path", "plot_path", "writable_folder", "actuator_id", "MAX_ID_CHARS",
@@ -143,7 +143,7 @@ def actuator_id(text: str) -> str:
         raise argparse.ArgumentTypeError(
             f"actuator id {shown(text)} is longer than {MAX_ID_CHARS} characters; give the id "
             "it was registered with, e.g. EMA-0042")
-    return text
+    return utf8_text(text)           # under LC_ALL=C: the characters typed, not surrogates
 
 
 # a value that starts like a negative number but that argparse takes for an option

@@ -54,7 +54,9 @@ def connect_readonly(path: Path, timeout: float) -> sqlite3.Connection:
     is sound because nobody can be writing it there: a writer would need the same folder.
     A log that still holds changes is never skipped that way (SQLite's error is raised).
     """
-    uri = f"file:{urllib.parse.quote(str(Path(path).resolve()))}?mode=ro"
+    # the path's bytes, %-quoted: any name the OS holds (a Latin-1 name, or any non-ASCII
+    # name under LC_ALL=C), not only those that encode as UTF-8
+    uri = f"file:{urllib.parse.quote(os.fsencode(Path(path).resolve()))}?mode=ro"
     conn = sqlite3.connect(uri, uri=True, timeout=timeout, isolation_level=None)
     try:
         conn.execute("SELECT count(*) FROM sqlite_master").fetchone()

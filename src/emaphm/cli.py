@@ -31,7 +31,7 @@ from ._cli_common import (EXIT_USAGE, Parser, UsageError, arg_type, budget_optio
                           calibration_seconds, identification_seconds, negative_values, out_path,
                           plot_path, warn_if_long)
 from ._cli_common import seed as _seed
-from ._text import one_line, shown
+from ._text import one_line, printable_streams, shown
 from .firmware import DRIVE_MODELS, FOREIGN_DRIVES
 
 __all__ = ["main", "build_parser", "EXIT_USAGE", "UsageError"]
@@ -650,14 +650,35 @@ def trace_warnings_as_lines(cmd: str):
         yield
 
 
+#: What a command says in place of validate()'s advice for a trace that turns less than a
+#: revolution (``min_rotation=0`` is a keyword of the Python API, not an option of these).
+_ROTATION_ADVICE = {
+    "diagnose": "Record a longer profile (e.g. the built-in diagnostic profile), or pass "
+                "--min-rotation 0 to skip this check (the eccentricity is then not identified)",
+    "import": "Import a longer --window (or the whole recording), or record a longer profile "
+              "(e.g. the built-in diagnostic profile)",
+}
+
+
+def command_advice(command: str, text: str) -> str:
+    """``text`` with the Python API's advice replaced by what ``command`` can do."""
+    if "min_rotation=0" not in text:
+        return text
+    from .traces.validation import ROTATION_ADVICE
+
+    return text.replace(ROTATION_ADVICE, _ROTATION_ADVICE.get(
+        command, "Record a longer profile (e.g. the built-in diagnostic profile, 0.5 s)"))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    printable_streams()
     parser = build_parser()
     args = parser.parse_args(negative_values(parser, sys.argv[1:] if argv is None else argv))
     cmd = " ".join(["emaphm", args.command] + ([args.history_command]
                                                if getattr(args, "history_command", None) else []))
 
     def error(text: str) -> int:
-        print(f"{cmd}: error: {one_line(text)}", file=sys.stderr)
+        print(f"{cmd}: error: {one_line(command_advice(args.command, text))}", file=sys.stderr)
         return EXIT_USAGE
 
     # the one error boundary: an expected failure is one line and exit 2, anything else is a

@@ -461,6 +461,9 @@ def get_profile(name: str) -> Profile:
 
 #: Most samples a profile file may hold (a 0.5 s test at 8 kHz is 4,000).
 MAX_PROFILE_SAMPLES = 1_000_000
+#: Shortest profile a file may describe [s]: a diagnosis reads at least 100 samples
+#: (emaphm.traces.MIN_SAMPLES), 12.5 ms at the preset's 8 kHz control rate.
+MIN_PROFILE_DURATION_S = 100 / 8000.0
 #: Longest profile a file may describe [s]: a simulation of the plant takes about as long
 #: as the test; a diagnosis needs one profile of about 0.5 s.
 MAX_PROFILE_DURATION_S = 60.0
@@ -481,6 +484,7 @@ def read_profile(path: Any) -> Profile:
     from .quantities import QuantityError, measure
     from .traces import TraceError
     from .traces.csv_format import collect, csv_blocks, sniff_csv
+    from .traces.limits import TooManySamples
 
     p = Path(path)
     if p.suffix.lower() != ".csv":
@@ -506,6 +510,10 @@ def read_profile(path: Any) -> Profile:
                          if unit not in ("", "-") else 1.0)
         t, theta = collect(csv_blocks(layout, [names.index("t"), names.index("theta_ref")],
                                       max_rows=MAX_PROFILE_SAMPLES), 2)
+    except TooManySamples as exc:
+        raise ProfileError(f"profile file {p}: {exc.found}, above the {exc.limit:,} rows a "
+                           "profile file may hold (a 0.5 s test at 8 kHz is 4,000); give one "
+                           "test of about 0.5 s") from None
     except (TraceError, QuantityError) as exc:
         text = str(exc)
         text = text[len(f"{p}: "):] if text.startswith(f"{p}: ") else text
@@ -533,10 +541,18 @@ def _profile_of_samples(t: np.ndarray, theta: np.ndarray, where: str, name: str)
                            f"from {t[i]:.9g} to {t[i + 1]:.9g} s at data row {i + 2}; sort the "
                            "rows by time and remove repeated times")
     span = float(t[-1] - t[0])
+    if span < MIN_PROFILE_DURATION_S:
+        raise ProfileError(f"{where}: the command lasts {span:.6g} s ({t.size} rows), shorter "
+                           f"than the {MIN_PROFILE_DURATION_S:g} s a diagnosis needs (100 samples "
+                           "at 8 kHz); give a test of about 0.5 s (is t in s?)")
     if span > MAX_PROFILE_DURATION_S:
         raise ProfileError(f"{where}: the command lasts {span:.6g} s, longer than "
                            f"{MAX_PROFILE_DURATION_S:g} s (is t in ms? divide it by 1000); a "
                            "diagnosis needs one test of about 0.5 s")
+    if np.ptp(theta) == 0.0:
+        raise ProfileError(f"{where}: theta_ref is {theta[0]:g} rad in every row: a command "
+                           "that does not move the actuator identifies nothing; give a test "
+                           "that moves it (e.g. the built-in diagnostic profile)")
     theta = theta - theta[0]
     peak = float(np.max(np.abs(theta)))
     if peak > MAX_COMMAND_RAD:

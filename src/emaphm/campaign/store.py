@@ -41,7 +41,7 @@ from pathlib import Path
 from typing import Any, Iterator, Mapping
 
 from emaphm import __version__
-from emaphm._files import regular_file
+from emaphm._files import folder_problem, regular_file
 from emaphm._sqlite import (SQLITE_HEADER, connect_readonly, enable_wal, journal_files,
                             remove_journal_files, store_name_problem, write_problem)
 
@@ -338,6 +338,9 @@ class CampaignStore:
                                     "to create one")
         elif not p.parent.exists():
             raise FileNotFoundError(f"cannot create {p}: folder {p.parent} does not exist; create it first")
+        elif (problem := folder_problem(p.parent)) is not None:
+            raise StoreError(f"cannot create the campaign store {p}: cannot write in the folder "
+                             f"{p.parent} ({problem}); give a --store in a folder you can write to")
 
         created = journal_files(p) if exists else []
         try:

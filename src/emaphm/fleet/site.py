@@ -85,6 +85,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 
 from .._files import atomic_write_text
+from .._text import utf8_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
 from .markup import esc, fmt_deadline, page_stem, schedule_key, script_json, unit_rank
@@ -1162,7 +1163,8 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
         written += _write_assets(folder, staging)
         written += _write_index(folder, rows, [entries[i]["cells"] for i in order],
                                 [[stems[i], entries[i]["key"]] for i in order], settings,
-                                staging, redraw=redraw, title=title, source=h.path.name,
+                                staging, redraw=redraw, title=title,
+                                source=utf8_text(h.path.name),
                                 thresholds=thresholds, seed=seed, level=level, policy=policy)
         staging.commit()
     except OSError as exc:

@@ -28,6 +28,7 @@ from typing import Any
 from .._cli_common import (UsageError, actuator_id, arg_type, budget_option,
                            identification_seconds, plot_path, shown, warn_if_long)
 from .._cli_common import seed as _seed
+from .._text import utf8_text
 
 __all__ = ["register", "db_path", "threshold_option", "warn", "inspection_policy",
            "planning_options", "option_words"]
@@ -96,9 +97,10 @@ def _fmt_time(x: float, unit: str) -> str:
 
 # ----------------------------------------------------------------------------- history
 def cmd_register(args: argparse.Namespace) -> int:
-    from .history import HealthHistory
+    from .history import HealthHistory, check_registration
 
     db = db_path(args)
+    check_registration(args.actuator, args.unit)     # no new file for an id it would refuse
     with HealthHistory(db) as h:
         a = h.register(args.actuator, description=args.description, time_unit=args.unit)
     print(f"registered {a.id} (time in {a.time_unit}) in {db}", file=sys.stderr)
@@ -571,7 +573,8 @@ def _register_history(subparsers: Any) -> None:
 
     r = hs.add_parser("register", help="register an actuator before its first inspection")
     r.add_argument("actuator", type=actuator_id, help="actuator id, e.g. EMA-0042")
-    r.add_argument("--description", default="", help="free text, e.g. 'left aileron, A320 MSN 1234'")
+    r.add_argument("--description", default="", type=utf8_text,
+                   help="free text, e.g. 'left aileron, A320 MSN 1234'")
     r.add_argument("--unit", choices=("h", "cycles"), default="h",
                    help="time unit of its inspections: flight hours (default, 0 to 1e6) or "
                         "cycles (0 to 1e9)")

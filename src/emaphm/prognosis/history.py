@@ -63,14 +63,15 @@ import numpy as np
 from .._files import folder_problem, regular_file
 from .._sqlite import (SQLITE_HEADER, connect_readonly, enable_wal, journal_files,
                        remove_journal_files, store_name_problem, write_problem)
-from .._text import shown
+from .._text import shown, utf8_text
 from ..faults import as_k
 from ..traces import fingerprint
 
 __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "MAX_TIME", "HistoryError", "UnknownActuatorError",
            "TimeOrderError", "DuplicateInspectionError", "ReadOnlyHistoryError", "Actuator",
            "Inspection", "HistoryData", "SkippedInspection", "RemovedInspection",
-           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB"]
+           "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB",
+           "check_registration"]
 
 SCHEMA_VERSION = 2
 TIME_UNITS = ("h", "cycles")
@@ -380,6 +381,18 @@ def _vec(x: Any, name: str) -> np.ndarray:
     return a
 
 
+def check_registration(actuator_id: Any, time_unit: Any = "h") -> None:
+    """A :class:`HistoryError` for an actuator id or a time unit :meth:`HealthHistory.register`
+    refuses, checked before a history file is created."""
+    if not isinstance(actuator_id, str) or not _ID.fullmatch(actuator_id):
+        raise HistoryError(f"actuator id {shown(actuator_id)} must be 1-64 characters of letters, "
+                           "digits and . _ : / - starting with a letter or digit, e.g. "
+                           "EMA-0042")
+    if time_unit not in TIME_UNITS:
+        raise HistoryError(f"time unit {time_unit!r} unknown; choose one of "
+                           f"{', '.join(TIME_UNITS)} (flight hours or cycles)")
+
+
 def _json(obj: Any) -> str:
     return json.dumps(obj, sort_keys=True, allow_nan=False, default=_json_default)
 
@@ -624,7 +637,7 @@ class HealthHistory:
             con.execute("INSERT INTO calibrations (actuator, time, params, sources, recorded_utc) "
                         "VALUES (?, ?, ?, ?, ?)",
                         (actuator_id, t, _json(params.to_dict()),
-                         _json([str(s) for s in sources]), _now()))
+                         _json([utf8_text(str(s)) for s in sources]), _now()))
 
     def calibration(self, actuator_id: str, at: float | None = None) -> tuple[float, Any] | None:
         """``(time, params)`` of the latest calibration of ``actuator_id`` at or before
@@ -663,13 +676,7 @@ class HealthHistory:
     # ------------------------------------------------------------------ actuators
     def register(self, actuator_id: str, *, description: str = "", time_unit: str = "h") -> Actuator:
         """Register a new actuator; its inspections are then timed in ``time_unit``."""
-        if not isinstance(actuator_id, str) or not _ID.fullmatch(actuator_id):
-            raise HistoryError(f"actuator id {shown(actuator_id)} must be 1-64 characters of letters, "
-                               "digits and . _ : / - starting with a letter or digit, e.g. "
-                               "EMA-0042")
-        if time_unit not in TIME_UNITS:
-            raise HistoryError(f"time unit {time_unit!r} unknown; choose one of "
-                               f"{', '.join(TIME_UNITS)} (flight hours or cycles)")
+        check_registration(actuator_id, time_unit)
         now = _now()
         try:
             with self._transaction() as con:
@@ -790,7 +797,7 @@ class HealthHistory:
                      algorithm, None if seed is None else int(seed),
                      None if fitness is None else float(fitness),
                      None if evaluations is None else int(evaluations),
-                     None if source is None else str(source), _now(), payload[4]))
+                     None if source is None else utf8_text(str(source)), _now(), payload[4]))
                 row_id = cur.lastrowid
                 self._touch(con, actuator_id)
         except sqlite3.IntegrityError as exc:       # the schema's own guard (e.g. a racing writer)

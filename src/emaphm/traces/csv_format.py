@@ -14,6 +14,7 @@ memory follows the columns kept, not the file. The bench importer
 from __future__ import annotations
 
 import csv
+import os
 import re
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -137,14 +138,39 @@ MAX_LINE_BYTES = 2 << 20
 _NUMERIC_LINE = re.compile(r"^[\s\d.,;\t+\-eE\"]*\d[\s\d.,;\t+\-eEnaNA\"]*$")
 
 
+_LINE_END = re.compile(rb"\r\n|\r|\n")
+
+
+def _raw_lines(fh: IO[bytes], limit: int, chunk: int = 1 << 16) -> Iterator[bytes]:
+    """The lines of ``fh`` with their endings: ``\\n``, ``\\r\\n`` or a lone ``\\r`` (an
+    old Mac export, which pyarrow's parser reads too); a line longer than ``limit`` is
+    yielded cut at ``limit + 1`` bytes, and no more after it."""
+    buf, pos, start, eof = b"", 0, 0, False       # the line at buf[pos:] starts
+    while True:
+        m = _LINE_END.search(buf, start)
+        if m is not None and (m.end() < len(buf) or eof or m.group() != b"\r"):
+            if m.end() - pos > limit + 1:
+                yield buf[pos:pos + limit + 1]
+                return
+            yield buf[pos:m.end()]
+            pos = start = m.end()
+            continue
+        if eof or len(buf) - pos > limit:
+            if len(buf) > pos:
+                yield buf[pos:pos + limit + 1]
+            return
+        buf, start = buf[pos:], max(len(buf) - pos - 1, 0)   # a CR at the end may start a CRLF
+        pos = 0
+        data = fh.read(chunk)
+        eof = not data
+        buf += data
+
+
 def _lines(path: Path, encoding: str) -> Iterator[tuple[int, int, str]]:
     """``(line index, byte offset after the line, text)`` of the first lines of ``path``."""
     offset = 0
     with open(path, "rb") as fh:
-        for index in range(SNIFF_LINES):
-            raw = fh.readline(MAX_LINE_BYTES + 1)
-            if not raw:
-                return
+        for index, raw in zip(range(SNIFF_LINES), _raw_lines(fh, MAX_LINE_BYTES)):
             if len(raw) > MAX_LINE_BYTES:
                 raise TraceError(f"{path}: line {index + 1} is longer than {MAX_LINE_BYTES:,} "
                                  "bytes: not a CSV text file (or its lines are not ended)")
@@ -371,7 +397,7 @@ def csv_blocks(layout: CsvLayout, columns: Sequence[int], *, max_rows: int | Non
     names = [f"c{k}" for k in range(width)]
     if layout.path.stat().st_size <= layout.data_offset:
         return                                          # a header and no data
-    stream = pa.OSFile(str(layout.path))
+    stream = pa.OSFile(os.fsencode(layout.path))        # bytes: any name the OS holds
     stream.seek(layout.data_offset)
     try:
         reader = pcsv.open_csv(
@@ -394,7 +420,8 @@ def csv_blocks(layout: CsvLayout, columns: Sequence[int], *, max_rows: int | Non
             except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
                 raise _row_error(exc, layout, columns) from None
             if max_rows is not None and row + batch.num_rows > max_rows:
-                raise too_many_samples(f"{layout.path}", f"more than {row + batch.num_rows:,} rows")
+                raise too_many_samples(f"{layout.path}", f"at least {row + batch.num_rows:,} rows",
+                                       max_rows)
             yield row, [batch.column(k).to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
                         for k in range(batch.num_columns)]
             row += batch.num_rows

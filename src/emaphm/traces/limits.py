@@ -16,7 +16,7 @@ from pathlib import Path
 from .container import TraceError
 
 __all__ = ["MAX_SAMPLES", "MAX_FILE_BYTES", "check_file_size", "too_many_samples",
-           "check_samples"]
+           "check_samples", "TooManySamples"]
 
 #: Most samples a trace may have: 100 s at 20 kHz, 250 s at the preset's 8 kHz.
 MAX_SAMPLES = 2_000_000
@@ -47,12 +47,22 @@ def check_file_size(path: str | os.PathLike[str], limit: int = MAX_FILE_BYTES) -
     return size
 
 
-def too_many_samples(source: str, found: str, limit: int = MAX_SAMPLES) -> TraceError:
+class TooManySamples(TraceError):
+    """:func:`too_many_samples`' error; ``found`` and ``limit`` kept for a reader of other
+    files (a profile) to say it in its own words."""
+
+    def __init__(self, message: str, found: str, limit: int) -> None:
+        super().__init__(message)
+        self.found, self.limit = found, limit
+
+
+def too_many_samples(source: str, found: str, limit: int = MAX_SAMPLES) -> TooManySamples:
     """The error for a trace of more than ``limit`` samples (``found`` says how many)."""
-    return TraceError(
+    return TooManySamples(
         f"{source}: {found}, above the {limit:,} samples a trace may have (100 s at 20 kHz); "
         "a diagnosis needs one test profile (0.5 s): cut the test out of the recording with "
-        "`emaphm import FILE --map MAP.toml --window START:END --out TRACE.parquet`")
+        "`emaphm import FILE --map MAP.toml --window START:END --out TRACE.parquet`",
+        found, limit)
 
 
 def check_samples(n: int, source: str, limit: int = MAX_SAMPLES) -> int:

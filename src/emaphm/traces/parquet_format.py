@@ -4,6 +4,7 @@ schema metadata under the key ``b"emaphm"`` and the format version under
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import IO
 
@@ -36,16 +37,20 @@ def _write_parquet(trace: Trace, fh: IO[bytes]) -> None:
 
 def _read_parquet(path: Path) -> tuple[dict[str, np.ndarray], dict]:
     import pyarrow as pa
+
+    check_file_size(path)
+    with pa.OSFile(os.fsencode(path)) as stream:        # bytes: any name the OS holds
+        return _read_parquet_stream(stream, str(path))
+
+
+def _read_parquet_stream(stream, source: str) -> tuple[dict[str, np.ndarray], dict]:
+    import pyarrow as pa
     import pyarrow.parquet as pq
 
-    source = str(path)
-    check_file_size(path)
     try:
-        schema = pq.read_schema(path)
-        rows = pq.ParquetFile(path).metadata.num_rows
+        file = pq.ParquetFile(stream)
+        schema, rows = file.schema_arrow, file.metadata.num_rows
     except (pa.ArrowInvalid, OSError) as exc:
-        if isinstance(exc, FileNotFoundError):
-            raise
         raise TraceError(f"{source}: not a readable Parquet file ({exc})") from None
     check_samples(rows, source)
     raw = (schema.metadata or {})
@@ -59,7 +64,7 @@ def _read_parquet(path: Path) -> tuple[dict[str, np.ndarray], dict]:
     names = list(schema.names)
     _require_columns(names, source)
     wanted = [c for c in COLUMNS + OPTIONAL_COLUMNS if c in names]
-    table = pq.read_table(path, columns=wanted)
+    table = file.read(columns=wanted)
     columns = {}
     for name in wanted:
         col = table.column(name)

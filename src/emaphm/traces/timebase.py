@@ -9,13 +9,15 @@ from datetime import datetime, timezone
 
 import numpy as np
 
-from .container import Trace, TraceWarning
+from .container import Trace, TraceError, TraceWarning
 
 __all__ = ["EPOCH_START_S", "from_epoch", "warn_if_shorter_than_profile"]
 
 #: A trace whose time starts above this many seconds (about 3 years) holds clock times,
 #: not the time of a test: recorders write Unix times (1.7e9 s in 2023).
 EPOCH_START_S = 1e8
+#: A time column that starts above this many seconds (the year 2286) is no clock's.
+MAX_CLOCK_S = 1e10
 
 
 def _when(t0: float) -> str:
@@ -35,6 +37,10 @@ def from_epoch(t: np.ndarray, source: str) -> tuple[np.ndarray, float | None]:
     if t.size < 2 or not math.isfinite(float(t[0])) or float(t[0]) <= EPOCH_START_S:
         return t, None
     t0 = float(t[0])
+    if t0 > MAX_CLOCK_S:
+        raise TraceError(f"{source}: column 't' starts at {t0:.4g} s, beyond the {MAX_CLOCK_S:g} s "
+                         "(the year 2286) of any clock: it holds no time of a test; check the "
+                         "export")
     shifted = t - t0
     steps = np.diff(shifted)
     dt = float(shifted[-1]) / (t.size - 1)

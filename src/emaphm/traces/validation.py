@@ -17,6 +17,11 @@ from .zero_sum import best_fit
 
 __all__ = ["MIN_SAMPLES", "validate"]
 
+#: What :func:`validate` advises for a trace that turns less than ``min_rotation``: the
+#: Python API's words (the command line says its own, ``emaphm.cli.command_advice``).
+ROTATION_ADVICE = ("Record a longer profile, e.g. the default diagnostic profile "
+                   "emaphm.profiles.diagnostic(), or pass min_rotation=0 to skip this check")
+
 #: Fewest samples :func:`validate` accepts.
 MIN_SAMPLES = 100
 
@@ -26,6 +31,12 @@ _MAX_DURATION = 1e3  # s; a longer trace suggests milliseconds
 _MAX_CURRENT = 1e3  # A; a larger current suggests milliamperes
 _MIN_TIME_STEP_IF_MS = 1e-3  # s; read as ms, a smaller step would be under 1 us
 _MAX_SPEED = 2000.0  # rad/s (19,100 rpm); no servo motor turns faster
+#: Beyond these no unit explains a value (the importer's reach: 1.6 million revolutions;
+#: a current beyond 1000 A read as mA): it is no measurement, and no unit is guessed.
+_REACH = {**{x: (1e7, "the {:g} rad of any actuator's recording")
+             for x in ("theta_ref", "theta_m")},
+          **{x: (1e6, "any actuator's current, in A or in mA ({:g})")
+             for x in ("i_a", "i_b", "i_c")}}
 _MIN_SPEED_CORRELATION = 0.9  # omega_m vs d(theta_m)/dt must be this collinear to judge units
 _RATIO_TOLERANCE = 0.10  # relative distance of a speed ratio to a known factor
 _RATIO_BAND = (0.5, 2.0)  # ratios outside this band (and not a known factor) are an error
@@ -136,6 +147,7 @@ _SPEED_FACTORS: tuple[tuple[float, str], ...] = (
 )
 
 
+@np.errstate(over="ignore", invalid="ignore")     # a huge speed is refused next, not warned
 def _check_speed_scale(trace: Trace) -> None:
     theta, omega = trace.theta_m, trace.omega_m
     if np.ptp(theta) == 0.0:
@@ -232,12 +244,30 @@ def _import_command(source: Any, options: str) -> str:
     return f"`emaphm import {shlex.quote(str(source)) if source else 'FILE'} {options}`"
 
 
+def _check_reach(trace: Trace) -> None:
+    """Refuse positions and currents beyond :data:`_REACH`: absurd values, not a unit."""
+    cols = trace.columns()
+    for name, (reach, what) in _REACH.items():
+        beyond = np.abs(cols[name]) > reach
+        if beyond.any():
+            first = int(np.argmax(beyond))
+            raise TraceError(
+                f"column '{name}' reaches {cols[name][first]:.4g} at {_where(trace, first)}, "
+                f"beyond {what.format(reach)}: not a unit to convert, the values are not "
+                "physical; check the export (or its scale)")
+
+
 def _check_time_scale(dt: float, duration: float, source: Any = None) -> None:
     """Time in s: a step above 0.01 s is milliseconds. A trace longer than 1000 s is a
     long recording in seconds where its step read as ms would be under 1 us; with a step
     of 1-10 ms it may be either, and both readings are said. ``dt`` is the mean step and
     ``duration`` the span of the time column, in its own unit; ``source`` the file it was
     read from, named in the command the fix gives."""
+    if dt > 1000 * _MAX_TIME_STEP:
+        raise TraceError(
+            f"column 't' has a mean step of {dt:.6g} (duration {duration:.6g}): neither seconds "
+            f"nor milliseconds (a trace in seconds has a step <= {_MAX_TIME_STEP} s, in ms <= "
+            f"{1000 * _MAX_TIME_STEP:g} ms); the column holds no time of a test: check the export")
     if dt > _MAX_TIME_STEP:
         raise TraceError(
             f"column 't' looks like milliseconds, not seconds: mean step {dt:.6g}, duration "
@@ -426,6 +456,7 @@ def validate(
                 "samples (or cut the trace before them)"
             )
 
+    _check_reach(trace)
     _check_time_column(trace, rtol_dt, source)
 
     for k, name in enumerate(("i_a", "i_b", "i_c")):
@@ -449,8 +480,7 @@ def validate(
                 f"trace too short in rotation: max(theta_m) - min(theta_m) = "
                 f"{rotation:.4g} rad is below min_rotation = {min_rotation:.4g} rad; "
                 "eccentricity identification needs at least one full mechanical "
-                "revolution. Record a longer profile, e.g. the default diagnostic profile "
-                "emaphm.profiles.diagnostic(), or pass min_rotation=0 to skip this check"
+                f"revolution. {ROTATION_ADVICE}"
             )
 
     _check_star(trace)

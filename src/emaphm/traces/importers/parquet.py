@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
@@ -25,8 +26,13 @@ class ParquetSource:
 
         self.path = read_path(path)
         try:
-            self.file = pq.ParquetFile(self.path)
+            self.stream = pa.OSFile(os.fsencode(self.path))      # bytes: any name the OS holds
+        except OSError as exc:
+            raise TraceError(f"{self.path}: cannot be opened ({cause(exc)})") from None
+        try:
+            self.file = pq.ParquetFile(self.stream)
         except (pa.ArrowInvalid, OSError) as exc:
+            self.stream.close()
             raise TraceError(f"{self.path}: not a readable Parquet file ({cause(exc)})") from None
         schema = self.file.schema_arrow
         n = self.file.metadata.num_rows
@@ -58,3 +64,4 @@ class ParquetSource:
 
     def close(self) -> None:
         self.file.close()
+        self.stream.close()
