@@ -107,11 +107,16 @@ def drive_check(problem: IdentificationProblem, k: Any, ratio: float | None, fau
     (:data:`DRIVE_DEVIATIONS`, one at a time, on the modelled controller); a refit that fits
     at least about as well (within :data:`HYPOTHESIS_GAIN` of ``ratio``) and does not name a
     fault takes that fault from the verdict. ``read(k, extra, ratio)`` is the verdict on a
-    refit."""
+    refit. Faults of one phase (a short, a current sensor) are not checked: the control acts
+    on the three phases alike."""
     from .identify import minimize     # local: the search stack is heavy to import
 
     kept, why = list(faults), None
     if not kept or problem.drive_model != MODELLED:
+        return tuple(kept), None
+    if all(f.phase is not None for f in kept):
+        # the drive's control acts on the three phases alike: no deviation of it reads as
+        # one phase's fault (measured: every refit of a short or a sensor named it again)
         return tuple(kept), None
     ctl = problem.params.controller
     for name, options in DRIVE_DEVIATIONS.items():

@@ -191,6 +191,45 @@ def test_a_drive_lag_the_description_lacks_is_not_read_as_a_fault():
     assert "the drive's control likely differs from [controller]" in ex.diagnosis.unexplained.hint
 
 
+def test_the_drive_check_refits_only_the_deviations_that_could_explain_a_fault(monkeypatch):
+    """The check's cost: a deviation far off (fitting k and the healthy actuator both more
+    than DRIVE_SCREEN times worse) is not refitted, and faults of one phase are not checked
+    at all; the verdicts are those of the check that refits every deviation."""
+    import emaphm.identify as identify_mod
+    import emaphm.verdict as verdict
+
+    calls = []
+    real = identify_mod.minimize
+
+    def counting(problem, *a, **kw):
+        calls.append(problem.params.controller)
+        return real(problem, *a, **kw)
+
+    monkeypatch.setattr(identify_mod, "minimize", counting)
+    cases = {"friction-high": simulate(scenario="friction-high", sensors=DEFAULT_SENSORS, seed=1),
+             "short": simulate(faults=["short_circuit:a:0.1:0.15"], sensors=DEFAULT_SENSORS,
+                               seed=1)}
+    screened = {}
+    for name, tr in cases.items():
+        calls.clear()
+        ex = examine(tr, seed=0)
+        screened[name] = (ex.diagnosis.verdict, [(f.mode, f.phase) for f in ex.diagnosis.faults])
+        deviations = [c for c in calls if c != DATASHEET.controller]
+        if name == "short":
+            assert deviations == []                       # one phase's fault: not checked
+        else:
+            assert 0 < len(deviations) < len(verdict.DRIVE_DEVIATIONS)   # some screened out
+    assert screened == {"friction-high": ("faulty", [("friction", None)]),
+                        "short": ("faulty", [("short_circuit", "A")])}
+    # every deviation refitted: the same verdict on the friction trace
+    monkeypatch.setattr(verdict, "DRIVE_SCREEN", np.inf)
+    calls.clear()
+    ex = examine(cases["friction-high"], seed=0)
+    assert len([c for c in calls if c != DATASHEET.controller]) == len(verdict.DRIVE_DEVIATIONS)
+    assert (ex.diagnosis.verdict, [(f.mode, f.phase) for f in ex.diagnosis.faults]) == \
+        screened["friction-high"]
+
+
 @pytest.mark.slow
 def test_calibration_refuses_to_absorb_a_drive_it_does_not_describe():
     from emaphm.calibration import CalibrationError, calibrate
