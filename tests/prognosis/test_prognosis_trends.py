@@ -63,7 +63,9 @@ def _exponential_by_trust_region(tau, y):
     on (alpha, b) from a grid of 21 starting rates, the best of them."""
     from scipy import optimize
 
-    from emaphm.prognosis.trends import _ALPHA_MIN, _jacobian, _model_value
+    from emaphm.prognosis.shapes import _ALPHA_MIN, SHAPES
+
+    exp = SHAPES["exponential"]
 
     span = float(tau[-1] - tau[0])
     level = max(float(np.max(np.abs(y))), 1e-6)
@@ -71,8 +73,8 @@ def _exponential_by_trust_region(tau, y):
     for rate in np.linspace(-50.0, 50.0, 21):
         x0 = np.array([min(max(math.log(level), _ALPHA_MIN + 1.0), 2.0), rate / span])
         res = optimize.least_squares(
-            lambda th: _model_value("exponential", th, tau) - y, x0,
-            jac=lambda th: _jacobian("exponential", th, tau),
+            lambda th: exp.value(th, tau) - y, x0,
+            jac=lambda th: exp.jacobian(th, tau),
             bounds=([_ALPHA_MIN, -60.0 / span], [math.log(10.0), 60.0 / span]),
             method="trf", x_scale=[1.0, 1.0 / span])
         if best is None or res.cost < best.cost:
@@ -84,7 +86,7 @@ def test_the_exponential_fit_finds_the_least_squares_minimum_of_a_trust_region_s
     """Growing, scattering-at-zero, linear and level series, 3 to 40 inspections: the
     variable-projection fit's residual sum of squares is never above the best of a
     multistart trust-region search's (and equal where both find the same minimum)."""
-    from emaphm.prognosis.trends import _fit_exponential, _model_value
+    from emaphm.prognosis.shapes import SHAPES, _fit_exponential
 
     rng = np.random.default_rng(20261126)
     for trial in range(80):
@@ -94,7 +96,7 @@ def test_the_exponential_fit_finds_the_least_squares_minimum_of_a_trust_region_s
              0.1 + 1e-4 * t + noise, np.abs(0.3 + 10 * noise))[trial % 4]
         tau = t - t[-1]
         theta = _fit_exponential(tau, y)
-        rss = float(np.sum((_model_value("exponential", theta, tau) - y) ** 2))
+        rss = float(np.sum((SHAPES["exponential"].value(theta, tau) - y) ** 2))
         ref, ref_rss = _exponential_by_trust_region(tau, y)
         assert rss <= ref_rss * (1 + 1e-7) + 1e-15, (trial, theta, ref)
         if trial % 4 == 0:                     # a clear growth: the same parameters
@@ -106,7 +108,7 @@ def test_the_onset_fit_recovers_the_onset_and_is_the_least_squares_minimum():
     gives back its level, slope and onset, with the straight line's crossing after it.
     Oracle: on noisy hinges, lines and flat series the fit's residual is never above the
     least of a fine brute-force scan of the onset (and never above the straight line's)."""
-    from emaphm.prognosis.trends import _fit_onset, _model_value
+    from emaphm.prognosis.shapes import SHAPES, _fit_onset
 
     f = fit_trend(T, 0.01 + 8e-4 * np.maximum(T - 130.0, 0.0), "onset")
     np.testing.assert_allclose(f.theta, [0.01 + 8e-4 * 370.0, 8e-4, 130.0 - 500.0], rtol=1e-6)
@@ -121,7 +123,7 @@ def test_the_onset_fit_recovers_the_onset_and_is_the_least_squares_minimum():
              np.abs(noise))[trial % 3]
         tau = t - t[-1]
         theta = _fit_onset(tau, y)
-        rss = float(np.sum((_model_value("onset", theta, tau) - y) ** 2))
+        rss = float(np.sum((SHAPES["onset"].value(theta, tau) - y) ** 2))
         scan = np.linspace(tau[0], tau[-3], 20001)
         X = np.maximum(tau[None, :], scan[:, None])
         best = min(float(np.sum((y - np.polyval(np.polyfit(x, y, 1), x)) ** 2)) for x in X[::40])
@@ -560,7 +562,7 @@ def test_the_leave_one_out_screen_leaves_out_what_a_refit_per_inspection_does():
 def test_the_onset_profile_is_the_least_squares_of_its_regressor_matrix():
     """The closed form from cumulative sums against the regressor matrix max(tau, c) of
     every onset, (m, n), as it was computed (1.6 GB at 10,000 inspections)."""
-    from emaphm.prognosis.trends import _onset_profile
+    from emaphm.prognosis.shapes import _onset_profile
 
     rng = np.random.default_rng(7)
     for _ in range(200):

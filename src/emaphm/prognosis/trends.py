@@ -3,7 +3,10 @@
 For one health indicator ``y`` (see :mod:`emaphm.prognosis.thresholds`) observed
 at inspection times ``t``, trend models are fitted by least squares, all
 written relative to the last inspection ``t_ref`` (so the first parameter is
-the current level, well conditioned whatever the time unit):
+the current level, well conditioned whatever the time unit). Each shape is a class of
+:mod:`emaphm.prognosis.shapes` (its value, Jacobian, fit, crossing and growth), registered
+in :data:`~emaphm.prognosis.shapes.SHAPES`; this module fits, compares and samples them
+without knowing which is which:
 
 ===========  ====================================  ==========================
 model        y(t), tau = t - t_ref                 parameters theta
@@ -69,9 +72,10 @@ from types import MappingProxyType
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import stats
 
 from ..seeds import as_generator, check_seed
+from .shapes import SHAPES, crossing_tau
 from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPONENT,
                          INDICATOR_MODE, FailureThresholds)
 
@@ -80,8 +84,7 @@ __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_tren
            "MIN_INSPECTIONS", "DEFAULT_MODELS", "RULTrack", "rul_track", "growth_rate",
            "indicator_state", "MODEL_DISCREPANCY", "INDICATOR_BOUNDS"]
 
-TREND_MODELS = ("linear", "exponential", "quadratic", "onset")
-_N_PARAMS = {"linear": 2, "exponential": 2, "quadratic": 3, "onset": 3}
+TREND_MODELS = tuple(SHAPES)
 #: The models fitted by default.
 DEFAULT_MODELS = TREND_MODELS
 from .choices import SELECTION_RULES  # noqa: E402  (the CLI reads it without SciPy)
@@ -109,72 +112,6 @@ MIN_INSPECTIONS = 3
 MODEL_DISCREPANCY: Mapping[str, float] = MappingProxyType({
     "friction": 0.053, "backlash": 0.058, "short_a": 0.020, "short_b": 0.020, "short_c": 0.020,
     "eccentricity": 0.0070, "gain_drift": 0.0051})
-
-_ALPHA_MIN = math.log(1e-9)
-
-
-# ----------------------------------------------------------------------------- models
-def _model_value(model: str, theta: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """Trend values; ``theta`` (..., 2), ``tau`` (m,) -> (..., m)."""
-    theta = np.asarray(theta, dtype=float)
-    a = theta[..., 0:1]
-    b = theta[..., 1:2]
-    if model == "linear":
-        return a + b * tau
-    if model == "quadratic":
-        return a + b * tau + theta[..., 2:3] * tau * tau
-    if model == "onset":
-        return a + b * np.maximum(tau, theta[..., 2:3])
-    return np.exp(np.clip(a + b * tau, -700.0, 700.0))
-
-
-def _jacobian(model: str, theta: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    if model == "linear":
-        return np.column_stack([np.ones_like(tau), tau])
-    if model == "quadratic":
-        return np.column_stack([np.ones_like(tau), tau, tau * tau])
-    if model == "onset":
-        b, c = float(theta[1]), float(theta[2])
-        return np.column_stack([np.ones_like(tau), np.maximum(tau, c), b * (tau < c)])
-    y = _model_value(model, theta, tau)
-    return np.column_stack([y, tau * y])
-
-
-def _crossing_tau(model: str, theta: np.ndarray, threshold: Any) -> np.ndarray:
-    """Time relative to t_ref where the trend reaches ``threshold`` (a number, or one per
-    draw) (n, p) -> (n,):
-    +inf if it never does, 0 if the trend is at or above it at t_ref already."""
-    a, b = theta[:, 0], theta[:, 1]
-    if model == "linear":
-        level, gap = a, threshold - a
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tau = np.where(b > 0, gap / b, np.inf)
-    elif model == "onset":
-        # flat until the onset c, linear after it: below the threshold at max(0, c), a
-        # rising line reaches it beyond there (fits and draws keep c <= 0; a theta given
-        # to crossing_time by hand may not)
-        level, gap = a + b * np.maximum(theta[:, 2], 0.0), threshold - a
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tau = np.where(b > 0, gap / b, np.inf)
-    elif model == "quadratic":
-        c = theta[:, 2]
-        level, gap = a, threshold - a
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            disc = b * b + 4.0 * c * gap
-            sq = np.sqrt(np.where(disc >= 0, disc, np.nan))
-            # roots of c tau^2 + b tau - gap = 0 in the stable form q / c and -gap / q;
-            # c = 0 leaves the linear root gap / b; the smallest positive root counts
-            q = -0.5 * (b + np.where(b >= 0, 1.0, -1.0) * sq)
-            roots = np.stack([q / c, -gap / q])
-            roots = np.where(np.isfinite(roots) & (roots > 0), roots, np.inf)
-            tau = np.min(roots, axis=0)
-    else:
-        level = np.exp(np.clip(a, -700.0, 700.0))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            tau = np.where(b > 0, (np.log(threshold) - a) / b, np.inf)
-    # at or above the threshold at t_ref: failed already (counted at t_ref), whatever the slope
-    return np.where(level >= threshold, 0.0, tau)
-
 
 @dataclass(frozen=True)
 class TrendFit:
@@ -214,7 +151,7 @@ class TrendFit:
     def value(self, t: Any) -> np.ndarray:
         """Trend at times ``t`` (history's unit)."""
         tau = np.atleast_1d(np.asarray(t, dtype=float)) - self.t_ref
-        return _model_value(self.model, self.theta, tau)
+        return SHAPES[self.model].value(self.theta, tau)
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
         """``n`` parameter draws (n, p) from the multivariate Student t of the fit. An
@@ -225,15 +162,13 @@ class TrendFit:
         z = rng.standard_normal((n, self.n_params))
         w = np.sqrt(self.dof / rng.chisquare(self.dof, size=n))
         theta = self.theta[None, :] + (z @ chol.T) * w[:, None]
-        if self.model == "onset":
-            theta[:, 2] = np.minimum(theta[:, 2], 0.0)
-        return theta
+        return SHAPES[self.model].constrain(theta)
 
     def crossing_time(self, threshold: Any, theta: np.ndarray | None = None) -> np.ndarray:
         """Absolute time(s) where the trend reaches ``threshold`` (a number, or one per row
         of ``theta``; inf: never)."""
         th = np.atleast_2d(self.theta if theta is None else theta)
-        return self.t_ref + _crossing_tau(self.model, th, threshold)
+        return self.t_ref + crossing_tau(SHAPES[self.model], th, threshold)
 
     def to_dict(self) -> dict[str, Any]:
         return {"model": self.model, "theta": self.theta.tolist(), "cov": self.cov.tolist(),
@@ -293,21 +228,16 @@ def fit_trend(t: Any, y: Any, model: str = "linear", *, sigma_floor: float = 0.0
     t, y = _check_series(t, y)
     t_ref = float(t[-1])
     tau = t - t_ref
-    p = _N_PARAMS[model]
+    shape = SHAPES[model]
+    p = shape.n_params
     n = t.size
     if n < p + 1:
         raise ValueError(f"the {model} trend needs at least {p + 1} inspections, got {n}")
-    if model in ("linear", "quadratic"):
-        X = _jacobian(model, np.zeros(p), tau)
-        theta = np.linalg.lstsq(X, y, rcond=None)[0]
-    elif model == "onset":
-        theta = _fit_onset(tau, y)
-    else:
-        theta = _fit_exponential(tau, y)
-    r = y - _model_value(model, theta, tau)
+    theta = shape.fit(tau, y)
+    r = y - shape.value(theta, tau)
     rss = float(r @ r)
     sigma = max(math.sqrt(rss / (n - p)), sigma_floor)
-    J = _jacobian(model, theta, tau)
+    J = shape.jacobian(theta, tau)
     JtJ = J.T @ J
     try:
         cov = sigma ** 2 * np.linalg.inv(JtJ)
@@ -317,119 +247,6 @@ def fit_trend(t: Any, y: Any, model: str = "linear", *, sigma_floor: float = 0.0
         cov = np.eye(p) * 1e6
     return TrendFit(model=model, theta=np.asarray(theta, dtype=float), cov=cov, t_ref=t_ref,
                     sigma=sigma, rss=rss, n=n, aicc=_aicc(rss, n, p))
-
-
-#: Rates ``b * span`` at which :func:`_fit_exponential` evaluates the profiled cost before
-#: refining the best: every 1 over the bounds (+-60), every 0.1 where growth is realistic.
-_RATE_GRID = np.unique(np.r_[np.linspace(-60.0, 60.0, 121), np.linspace(-5.0, 5.0, 101)])
-
-
-def _fit_exponential(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """(alpha, b) of ``y = exp(alpha + b tau)`` by least squares in y, within the bounds
-    ``alpha`` in [ln 1e-9, ln 10], ``b`` in +-60 / span.
-
-    Variable projection: at a fixed rate ``b`` the cost is a parabola in the level
-    ``A = exp(alpha)``, whose constrained minimum is its vertex clipped to the bounds; the
-    profiled cost of ``b`` alone is evaluated on :data:`_RATE_GRID` and refined between the
-    best point's neighbours by bounded Brent. The same minimum as a trust-region search
-    from several starts (``tests/prognosis/test_prognosis_trends.py`` checks it against
-    ``scipy.optimize.least_squares``), a tenth of the time: a fleet site fits it for every
-    indicator of every actuator.
-    """
-    span = max(float(tau[-1] - tau[0]), 1e-12)
-    a_lo, a_hi = math.exp(_ALPHA_MIN), 10.0
-    yy = float(y @ y)
-
-    def profile(rates: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        E = np.exp(np.multiply.outer(rates / span, tau))            # (m, n), tau <= 0
-        ee = np.einsum("ij,ij->i", E, E)
-        ey = E @ y
-        A = np.clip(ey / ee, a_lo, a_hi)
-        return A, yy - 2.0 * A * ey + A * A * ee
-
-    cost = profile(_RATE_GRID)[1]
-    i = int(np.argmin(cost))
-    lo, hi = _RATE_GRID[max(i - 1, 0)], _RATE_GRID[min(i + 1, _RATE_GRID.size - 1)]
-    res = optimize.minimize_scalar(lambda r: float(profile(np.array([r]))[1][0]),
-                                   bounds=(lo, hi), method="bounded",
-                                   options={"xatol": 1e-9})
-    r = float(res.x) if res.fun <= cost[i] else float(_RATE_GRID[i])
-    level = float(profile(np.array([r]))[0][0])
-    return np.array([math.log(level), r / span])
-
-
-def _onset_profile(tau: np.ndarray, y: np.ndarray, c: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """For each onset in ``c`` (m,): the least-squares level ``a`` and slope ``b`` of
-    ``y = a + b max(tau, c)`` and its residual sum of squares, each (m,); ``tau`` (n,)
-    ascending, its last 0 (the reference time).
-
-    In closed form, O(n + m) time and memory (the regressor matrix ``max(tau, c)`` of
-    every onset, (m, n), held 1.6 GB at 10,000 inspections): with the ``r`` points after
-    ``c`` (their mean time ``m``, their own sum of squares ``S`` and cross product ``P``
-    with ``y``, ``d = m - c``), the centred sums are ``s_xx = S + r d^2 (1 - r / n)`` and
-    ``s_xy = P + d sum(y - mean(y))`` over them. The sums over the points after ``c`` are
-    taken from the end (reversed cumulative sums, the times measured from the last),
-    where they are small: no sum over all the points is subtracted from another.
-    """
-    n = tau.size
-    cu = np.asarray(c, dtype=float)
-    yc = y - y.mean()
-
-    def from_end(x: np.ndarray) -> np.ndarray:      # [k] = sum of x[k:], [n] = 0
-        return np.concatenate([np.cumsum(x[::-1])[::-1], np.zeros(1)])
-
-    k = np.searchsorted(tau, cu, side="right")       # points at or before the onset
-    r = (n - k).astype(float)
-    s1, s2 = from_end(tau)[k], from_end(tau * tau)[k]
-    sy, sty = from_end(yc)[k], from_end(tau * yc)[k]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        m = np.where(r > 0, s1 / r, cu)
-        own = np.where(r > 0, np.maximum(s2 - s1 * m, 0.0), 0.0)
-        cross = np.where(r > 0, sty - m * sy, 0.0)
-    d = m - cu
-    sxx = own + r * d * d * (1.0 - r / n)
-    sxy = cross + d * sy
-    with np.errstate(divide="ignore", invalid="ignore"):      # every x alike: no slope
-        b = np.where(sxx > 0, sxy / sxx, 0.0)
-    xm = cu + r * d / n
-    a = float(y.mean()) - b * xm
-    rss = np.maximum(float(yc @ yc) - b * sxy, 0.0)
-    return a, b, rss
-
-
-def _fit_onset(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """(a, b, c) of ``y = a + b max(tau, c)`` by least squares, the onset ``c`` between the
-    first inspection and the third from last (at least three inspections on the slope, the
-    one at the onset included; ``c`` at the first is the linear trend).
-
-    Exact, in closed form: with the onset between inspections ``j`` and ``j + 1`` the
-    ``m = j + 1`` first regressors are ``c``, so the centred sums are ``s_xy = alpha c +
-    beta`` and ``s_xx = A c^2 + B c + C``, and the residual ``s_yy - s_xy^2 / s_xx`` is
-    least where ``s_xy^2 / s_xx`` is greatest: at the stretch's ends or at its one
-    stationary point ``c* = (beta B - 2 alpha C) / (alpha B - 2 beta A)``. Every candidate
-    of every stretch is evaluated and the least residual kept.
-    """
-    n = tau.size
-    edges = tau[:max(n - 2, 1)]
-    cand = [edges]
-    if edges.size >= 2:
-        m = np.arange(1, edges.size, dtype=float)               # points at or before c
-        ys, ts = float(y.sum()), tau.sum()
-        yh = np.cumsum(y)[:m.size]
-        st = ts - np.cumsum(tau)[:m.size]                        # sums over the rest
-        qt = float(tau @ tau) - np.cumsum(tau * tau)[:m.size]
-        pt = float(tau @ y) - np.cumsum(tau * y)[:m.size]
-        alpha, beta = yh - m * ys / n, pt - st * ys / n
-        A, B, C = m * (1.0 - m / n), -2.0 * m * st / n, qt - st * st / n
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cs = (beta * B - 2.0 * alpha * C) / (alpha * B - 2.0 * beta * A)
-        cs = np.clip(np.where(np.isfinite(cs), cs, edges[:-1]), edges[:-1], edges[1:])
-        cand.append(cs)
-    c = np.concatenate(cand)
-    a, b, rss = _onset_profile(tau, y, c)
-    i = int(np.argmin(rss))
-    return np.array([float(a[i]), float(b[i]), float(c[i])])
 
 
 def fit_trends(t: Any, y: Any, models: Sequence[str] = DEFAULT_MODELS, *,
@@ -442,14 +259,14 @@ def fit_trends(t: Any, y: Any, models: Sequence[str] = DEFAULT_MODELS, *,
             raise ValueError(f"unknown trend model {m!r}; choose one of {', '.join(TREND_MODELS)}")
     n = np.asarray(t).size
     # a model is compared only once its AICc is finite (n >= p + 2)
-    usable = ([m for m in models if n >= _N_PARAMS[m] + 2]
-              or [m for m in models if n >= _N_PARAMS[m] + 1] or list(models))
+    usable = ([m for m in models if n >= SHAPES[m].n_params + 2]
+              or [m for m in models if n >= SHAPES[m].n_params + 1] or list(models))
     fits = {m: fit_trend(t, y, m, sigma_floor=sigma_floor) for m in usable}
-    # an exponential whose level is lost in the noise has no meaningful covariance (its
-    # Jacobian scales with the level): leave it out when another model is there
-    e = fits.get("exponential")
-    if e is not None and len(fits) > 1 and math.exp(e.theta[0]) < max(sigma_floor, 1e-6):
-        del fits["exponential"]
+    # a fit whose covariance means nothing (an exponential whose level is lost in the
+    # noise: its Jacobian scales with the level) is left out when another model is there
+    lost = [m for m, f in fits.items() if SHAPES[m].lost(f.theta, max(sigma_floor, 1e-6))]
+    for m in lost[:len(fits) - 1]:
+        del fits[m]
     return fits
 
 
@@ -546,7 +363,7 @@ class RULPrediction:
         """Quantiles of the trend over the stored parameter draws at times ``t`` (m,):
         (len(quantiles), m), the prediction cone of the plots."""
         tau = np.atleast_1d(np.asarray(t, dtype=float))
-        parts = [_model_value(m, th, tau - self.fits[m].t_ref) for m, th in self.theta.items()]
+        parts = [SHAPES[m].value(th, tau - self.fits[m].t_ref) for m, th in self.theta.items()]
         return np.quantile(np.concatenate(parts), quantiles, axis=0)
 
     def beyond(self, t: Any) -> str:
@@ -787,7 +604,7 @@ def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_f
     keep = np.ones(t.size, dtype=bool)
     if t.size < 6:
         return keep
-    models = tuple(m for m in fits if m in ("linear", "quadratic")) or ("linear", "quadratic")
+    models = _screen_models(fits)
     for _ in range(max(1, t.size // 5)):
         idx = np.flatnonzero(keep)
         z = np.zeros(t.size)
@@ -801,6 +618,13 @@ def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_f
     return keep
 
 
+def _screen_models(fits: Mapping[str, TrendFit]) -> tuple[str, ...]:
+    """The shapes the outlier screen compares: those of ``fits`` linear in their
+    parameters (closed-form leave-one-out), or all such shapes."""
+    linear = tuple(m for m, shape in SHAPES.items() if shape.linear)
+    return tuple(m for m in fits if SHAPES[m].linear) or linear
+
+
 def _loo_scores(t: np.ndarray, y: np.ndarray, models: Sequence[str], sigma_floor: float,
                 p_false: float) -> tuple[np.ndarray, np.ndarray]:
     """For each inspection but the last two: its distance from the best trend of
@@ -808,15 +632,15 @@ def _loo_scores(t: np.ndarray, y: np.ndarray, models: Sequence[str], sigma_floor
     Student t quantile it is held to (the models and counts of :func:`fit_trends`)."""
     n = t.size
     m = n - 1                                  # points in each leave-one-out fit
-    usable = ([k for k in models if m >= _N_PARAMS[k] + 2]
-              or [k for k in models if m >= _N_PARAMS[k] + 1] or list(models))
+    usable = ([k for k in models if m >= SHAPES[k].n_params + 2]
+              or [k for k in models if m >= SHAPES[k].n_params + 1] or list(models))
     tau = t - t[-1]                            # the last two stay: t_ref does not move
     best_aicc = np.full(n - 2, np.inf)
     z = np.zeros(n - 2)
     crit = np.full(n - 2, np.inf)
     for model in usable:
-        p = _N_PARAMS[model]
-        X = _jacobian(model, np.zeros(p), tau)
+        p = SHAPES[model].n_params
+        X = SHAPES[model].jacobian(np.zeros(p), tau)
         q = np.linalg.qr(X)[0]
         resid = y - X @ np.linalg.lstsq(X, y, rcond=None)[0]
         e = resid[:-2]
@@ -849,7 +673,7 @@ def _inliers_refit(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit],
     keep = np.ones(t.size, dtype=bool)
     if t.size < 6:
         return keep
-    models = tuple(m for m in fits if m in ("linear", "quadratic")) or ("linear", "quadratic")
+    models = _screen_models(fits)
     for _ in range(max(1, t.size // 5)):
         idx = np.flatnonzero(keep)
         z = np.zeros(t.size)
@@ -894,15 +718,7 @@ def indicator_series(K: Any) -> dict[str, np.ndarray]:
 def growth_rate(fit: TrendFit) -> tuple[float, float]:
     """``(rate, standard error)`` of a trend at its reference time (the last inspection):
     its derivative there and the delta-method error from the fit's covariance."""
-    a, b = float(fit.theta[0]), float(fit.theta[1])
-    if fit.model in ("linear", "quadratic", "onset"):   # the onset is before t_ref
-        grad = np.zeros(fit.n_params)
-        grad[1] = 1.0
-        rate = b
-    else:                                     # exp(alpha + b tau): d/dtau = exp(alpha) b
-        level = math.exp(min(a, 700.0))
-        grad = np.array([level * b, level])
-        rate = level * b
+    rate, grad = SHAPES[fit.model].growth(fit.theta)
     var = float(grad @ fit.cov @ grad)
     return rate, math.sqrt(max(var, 0.0))
 
