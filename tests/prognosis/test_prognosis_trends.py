@@ -546,7 +546,7 @@ def test_the_leave_one_out_screen_leaves_out_what_a_refit_per_inspection_does():
     """The screen's closed form (residual over one minus leverage) against its reference,
     a fit without each inspection, on 300 seeded histories of 6 to 80 inspections with up
     to three wrong identifications each."""
-    from emaphm.prognosis.trends import _inliers, _inliers_refit
+    from emaphm.prognosis.fits import _inliers, _inliers_refit
 
     rng = np.random.default_rng(37)
     left_out = 0

@@ -13,6 +13,14 @@ SPREAD_METHODS = ("population", "seeds", "bootstrap")
 INDICATORS = ("friction", "backlash", "short_a", "short_b", "short_c", "eccentricity",
               "gain_drift")
 
+#: An indicator at or above this share of its failure threshold is off its healthy level:
+#: it takes part in an inspection plan's risk, growing or not
+#: (:mod:`emaphm.prognosis.inspection`), and a trend's crossing before the last inspection
+#: counts as past the threshold (:func:`emaphm.prognosis.states.indicator_state`); the same
+#: quarter marks where the model discrepancy is measured
+#: (:data:`emaphm.prognosis.trends.MODEL_DISCREPANCY`).
+HEALTHY_SHARE = 0.25
+
 #: The risk an inspection plan keeps under by default (``emaphm fleet``); how it was set is
 #: in :mod:`emaphm.prognosis.inspection`.
 DEFAULT_RISK = 0.01

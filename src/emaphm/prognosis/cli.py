@@ -313,7 +313,7 @@ def _unobserved_lines(prog: Any) -> list[str]:
 
 
 def _prognosis_table(prog: Any) -> str:
-    from .inspection import HEALTHY_SHARE
+    from .choices import HEALTHY_SHARE
     from .trends import indicator_state, level_at_last
 
     unit = prog.time_unit

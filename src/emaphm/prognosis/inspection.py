@@ -79,11 +79,7 @@ __all__ = ["IntervalDefaults", "INTERVAL_DEFAULTS", "InspectionPolicy", "NextIns
 #: The risk of the fleet's "inspect by" column and of ``emaphm fleet schedule`` unless given
 #: (docs/inspection-planning.md: the risk at which the simulated fleet had no miss).
 from .choices import DEFAULT_RISK, FLIGHT_HOUR_INTERVALS  # noqa: E402  (the CLI's parser reads them)
-
-#: An indicator at or above this share of its failure threshold takes part in the risk,
-#: growing or not (module docstring); the same quarter marks where the model discrepancy
-#: is measured (:data:`emaphm.prognosis.trends.MODEL_DISCREPANCY`).
-HEALTHY_SHARE = 0.25
+from .choices import HEALTHY_SHARE  # noqa: E402  (the states read it too)
 
 #: Least number of Monte Carlo draws beyond the risk quantile (:func:`n_samples_for`).
 MIN_DRAWS_IN_TAIL = 40
