@@ -10,11 +10,12 @@ what to change in the plant to simulate the fault at that severity). The registr
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping
+from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
 
-from ..params import ActuatorParams
+if TYPE_CHECKING:                   # annotations only: params reads the modes' thresholds
+    from ..params import ActuatorParams
 
 __all__ = ["Fault", "Reading", "Injection", "FaultMode", "Grid", "PHASES"]
 
