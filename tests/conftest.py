@@ -4,7 +4,8 @@ Hypothesis runs under the ``emaphm`` profile unless ``HYPOTHESIS_PROFILE``
 names another: no deadline (the first call of a Numba function compiles it),
 derandomised (the same examples on every run, so a failure reproduces), no
 example database, and its home folder in a temporary directory (tests write
-nothing into the repository).
+nothing into the repository). No kernel is compiled ahead of need in a child process
+(``EMAPHM_PREFETCH=0``; ``tests/models/test_warm.py`` tests that on its own).
 """
 
 from __future__ import annotations
@@ -31,6 +32,10 @@ settings.register_profile(
 settings.register_profile("emaphm-explore", parent=settings.get_profile("emaphm"),
                           derandomize=False, max_examples=1000)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "emaphm"))
+
+# the CLI's diagnosis compiles its drive check's kernels in a child process where they are
+# not cached (emaphm.models.warm): not beside the suite's own workers
+os.environ.setdefault("EMAPHM_PREFETCH", "0")
 
 
 @pytest.fixture(scope="session")

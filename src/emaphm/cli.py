@@ -313,6 +313,30 @@ def _table(ident, diag) -> str:
     return "\n".join(lines)
 
 
+def _prefetch_drive_check(params: Any, trace: Any) -> None:
+    """The kernels a diagnosis will run, compiled in child processes meanwhile where they
+    are not cached (:func:`emaphm.models.warm.prefetch`): on the modelled controller its
+    drive's own variant, and on a data sheet the one with options its drive check runs."""
+    from .firmware import MODELLED
+    from .models.warm import prefetch
+    from .recorded import drive_model_of
+    from .verdict import needs_mismatch_check
+
+    try:                               # a speed-up only: what it cannot tell, the run will say
+        if trace is not None and drive_model_of(trace, None) != MODELLED:
+            return
+        from .models.controller import plain as plain_drive
+        from .models.layout import drive_settings
+        from .params import siemens_1fk7060
+
+        sheet = siemens_1fk7060() if params is None else params
+        ideal = sheet.inverter.V_lost == 0.0
+        plain = bool(plain_drive.py_func(drive_settings(sheet)))
+        prefetch([(plain, ideal)] + ([(False, ideal)] if needs_mismatch_check(params) else []))
+    except Exception:                  # noqa: BLE001
+        return
+
+
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .faults import scenario
     from .identify import IdentificationConfig, algorithm_names
@@ -341,6 +365,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                              "plant: use them with --scenario, not with a trace file")
         trace = _trace_file(args.trace, args.min_rotation)
     else:
+        _prefetch_drive_check(params, None)
         k_true = scenario(args.scenario)
         sim_fault_model = _fault_model_option(args)
         unit = _unit_options(args, params)
@@ -356,6 +381,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                              **unit).with_meta(scenario=args.scenario)
     if args.trace is not None:
         params = resolve_params(given, trace, warn=False)[0]
+        _prefetch_drive_check(params, trace)
     if not args.quiet:
         warn_if_long("emaphm diagnose", identification_seconds(trace.duration, params,
                                                                args.algorithm, budget),

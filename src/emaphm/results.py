@@ -69,7 +69,7 @@ KINDS: dict[str, tuple[str, str]] = {
     "spread": ("emaphm.prognosis.uncertainty", "IdentificationSpread"),
     "interval": ("emaphm.prognosis.uncertainty", "KInterval"),
     "prognosis": ("emaphm.prognosis.trends", "Prognosis"),
-    "rul_prediction": ("emaphm.prognosis.trends", "RULPrediction"),
+    "rul_prediction": ("emaphm.prognosis.predictor", "RULPrediction"),
     "rul_track": ("emaphm.prognosis.trends", "RULTrack"),
     "next_inspection": ("emaphm.prognosis.inspection", "NextInspection"),
     "inspection_policy": ("emaphm.prognosis.inspection", "InspectionPolicy"),

@@ -739,9 +739,15 @@ def test_kernels_are_cached_under_a_digest_of_every_model_source(tmp_path):
     assert _jit.sources_digest(tmp_path) != before
     assert _jit.SOURCES_DIGEST == _jit.sources_digest()
     assert _jit.CACHE_DIR is not None and _jit.CACHE_DIR.name == f"kernels-{_jit.SOURCES_DIGEST}"
-    for kernel in (monitoring._kernel, monitoring_simd._kernel, reference._rm_kernel):
+    kernels = [*monitoring._VARIANTS.values(), *monitoring_simd._VARIANTS.values(),
+               reference._rm_kernel]
+    for kernel in kernels:
         path = kernel._cache._cache_path                     # Numba's locator, chosen at declaration
         assert path.startswith(str(_jit.CACHE_DIR)), (kernel, path)
+    # each variant of a kernel is cached under its own name
+    names = {(k.py_func.__code__.co_filename, k.py_func.__qualname__) for k in kernels}
+    assert len(names) == len(kernels)
+    assert "_kernel_plain_ideal" in {q for _, q in names}
     assert numba.config.CACHE_DIR in ("", None) or not numba.config.CACHE_DIR.startswith(
         str(_jit.CACHE_DIR))                                  # other libraries' setting restored
 

@@ -204,8 +204,10 @@ _INDEX_KEY = ".index-key"
 
 #: The modules whose code shapes a page or a figure: a change in any of them makes every
 #: page again.
-_PAGE_CODE = ("emaphm.plots", "emaphm.prognosis.history", "emaphm.prognosis.plots",
-              "emaphm.prognosis.trends",
+_PAGE_CODE = ("emaphm.plots", "emaphm.faults", "emaphm.prognosis.history",
+              "emaphm.prognosis.plots", "emaphm.prognosis.trends", "emaphm.prognosis.shapes",
+              "emaphm.prognosis.fits", "emaphm.prognosis.predictor", "emaphm.prognosis.states",
+              "emaphm.prognosis.choices",
               "emaphm.prognosis.thresholds", "emaphm.prognosis.inspection",
               "emaphm.fleet.status", "emaphm.fleet.site",
               "emaphm.fleet.markup", "emaphm.fleet.figures", "emaphm.fleet.svgplot")

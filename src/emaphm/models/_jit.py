@@ -34,6 +34,7 @@ import os
 import re
 import shutil
 import time
+import types
 from pathlib import Path
 from typing import Any, Callable, Iterator
 
@@ -172,3 +173,16 @@ def cached_njit(**options: Any) -> Callable[[Callable], Any]:
 
 #: Compile a scalar physics function or a kernel: nopython, cached (:func:`cached_njit`).
 jit = cached_njit(nogil=True)
+
+
+def specialised(func: Callable, name: str, compile_with: Callable[[Callable], Any],
+                **globals_: Any) -> Any:
+    """``func``'s code under ``name``, compiled by ``compile_with`` (a :func:`cached_njit`),
+    with the named globals it calls replaced: one variant of a kernel, compiled the first
+    time it is called and cached apart from the others (under its own name)."""
+    g = dict(func.__globals__)
+    g.update(globals_)
+    f = types.FunctionType(func.__code__, g, name, func.__defaults__, func.__closure__)
+    f.__qualname__ = name
+    f.__doc__ = func.__doc__
+    return compile_with(f)

@@ -7,10 +7,14 @@ them."""
 
 from __future__ import annotations
 
-from ._jit import jit
-from .layout import P_DT, P_T_S
+import numpy as np
 
-__all__ = ["I_DIVERGED", "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED"]
+from ._jit import jit
+from .controller import N_CTL, plain
+from .layout import C_V_DT, P_CTL, P_DT, P_T_S
+
+__all__ = ["I_DIVERGED", "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED",
+           "variant_key"]
 
 #: A candidate whose phase current exceeds this [A] has diverged (frozen, fitness inf).
 I_DIVERGED = 1e4
@@ -30,3 +34,11 @@ def _check_step(P, n_sub):
     if P[P_DT] != P[P_T_S] / n_sub:
         raise ValueError("CP holds the winding step for another n_sub: pack the population "
                          "with the n_sub the kernel runs")
+
+
+def variant_key(P: np.ndarray, CP: np.ndarray) -> tuple[bool, bool]:
+    """Which compiled variant of a kernel runs a population: ``(plain, ideal)``, the drive's
+    options all at their defaults (:func:`emaphm.models.controller.plain`) and no candidate's
+    inverter losing a volt to dead time (its step then skips their work: the same numbers)."""
+    return (bool(plain.py_func(P[P_CTL:P_CTL + N_CTL])),
+            not bool(np.any(np.asarray(CP)[:, C_V_DT] != 0.0)))

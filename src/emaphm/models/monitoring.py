@@ -48,15 +48,16 @@ import numpy as np
 from ..faults import as_k, check_fault_model
 from ..params import ActuatorParams, siemens_1fk7060
 from ..profiles import Profile, diagnostic
-from ._jit import jit
+from ._jit import jit, specialised
+from .compiling import wait_for
 from . import step
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
-                                 STATUS_TRIPPED, _check_step)
+                                 STATUS_TRIPPED, _check_step, variant_key)
 from .controller import N_CTL, feedforward
-from .layout import (C_ECC, C_ECC_PHASE, C_V_DT, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0,
+from .layout import (C_ECC, C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0,
                      P_J_L, P_J_M,
                      P_K_C, P_POLES, P_I_TRIP, P_T_S, P_THETA0, pack, PopulationPacker)
-from .step import (N_Q, N_X, control_inline, control_plain_inline, healthy_inline, plain_inline,
+from .step import (N_Q, N_X, control_inline, control_plain_inline, healthy_inline,
                    substep_ideal_inline, initial_q, initial_x,
                    initial_x_inline, row_reader, row_writer, sincos_inline, substep_inline,
                    vector_reader)
@@ -106,7 +107,6 @@ _write_q_plain = row_writer(6, "write_q_plain")
 _read_ctl = vector_reader(N_CTL, "read_ctl")
 
 
-@jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             out_i, out_theta, out_omega, out_torque, fitness, status, out_f, fdlibm=False):
     """Simulate ``CP.shape[0]`` candidates over ``theta_ref.shape[0]`` control periods,
@@ -121,7 +121,20 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     (n_pop, n, 3)`` the fault loops' currents, or zero-sized (the SIMD kernel has no such
     output). ``fitness`` accumulates ``sum_k sum_j weights[k, j] (i_j - i_target[k, j])^2``.
     ``P, CP`` must be packed for ``n_sub`` (ValueError otherwise).
+
+    Runs the compiled variant of :func:`_kernel_body` for the drive (its options at their
+    defaults or not) and the inverter (no candidate losing a volt to dead time, or some):
+    each variant is compiled the first time it is needed.
     """
+    key = variant_key(P, CP)
+    wait_for(key)                      # a child compiling it (emaphm.models.warm)
+    _VARIANTS[key](P, CP, theta_ref, T_load, n_sub, i_target, weights, out_i, out_theta,
+                   out_omega, out_torque, fitness, status, out_f, fdlibm)
+
+
+def _kernel_body(P, CP, theta_ref, T_load, n_sub, i_target, weights,
+                 out_i, out_theta, out_omega, out_torque, fitness, status, out_f, fdlibm=False):
+    """:func:`_kernel`'s loop, its steps named by the variant (:data:`_VARIANTS`)."""
     _check_step(P, n_sub)
     n_pop = CP.shape[0]
     n = theta_ref.shape[0]
@@ -135,10 +148,6 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     K_c, D_c = P[P_K_C], P[P_D_C]
     ctl = _read_ctl(P, P_CTL)
     I_trip = P[P_I_TRIP]
-    no_options = plain_inline(ctl)
-    ideal = True                       # no candidate's inverter loses a volt to dead time
-    for j in range(n_pop):
-        ideal &= CP[j, C_V_DT] == 0.0
     # state: the plant's x (:data:`~emaphm.models.step.X_FIELDS`) and the drive's q
     X = np.zeros((n_pop, N_X))
     Q = np.zeros((n_pop, N_Q))
@@ -162,12 +171,8 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             x = _read_x(X, 0, j)
             ecc, ecc_phase = c[C_ECC], c[C_ECC_PHASE]
             s_e, c_e, s_g, c_g = _trig(x[0], ecc, ecc_phase, p, fdlibm)
-            if no_options:
-                q, u_a, u_b, u_c = control_plain_inline(x, _read_q(Q, 0, j), c, ctl, I_trip,
-                                                        period, s_e, c_e)
-            else:
-                q, u_a, u_b, u_c = control_inline(x, _read_q(Q, 0, j), c, ctl, I_trip, period,
-                                                  s_e, c_e)
+            q, u_a, u_b, u_c = control_inline(x, _read_q(Q, 0, j), c, ctl, I_trip, period,
+                                              s_e, c_e)
             for s in range(n_sub):
                 if s > 0:
                     s_e, c_e, s_g, c_g = _trig(x[0], ecc, ecc_phase, p, fdlibm)
@@ -181,10 +186,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                     out_f[j, k, 0] = x[6]
                     out_f[j, k, 1] = x[7]
                     out_f[j, k, 2] = x[8]
-                if ideal:
-                    x, tq = substep_ideal_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
-                else:
-                    x, tq = substep_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
+                x, tq = substep_inline(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c)
                 if s == 0 and store:
                     out_torque[j, k] = tq
             if not healthy_inline(x[9], x[10], x[11], x[1], x[0]):
@@ -194,11 +196,20 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             fitness[j] = q[1]
             if q[0] != 0.0:
                 status[j] = STATUS_TRIPPED
-            if no_options:
-                _write_q_plain(Q, 0, j, q)
-            else:
-                _write_q(Q, 0, j, q)
+            _write_q(Q, 0, j, q)
             _write_x(X, 0, j, x)
+
+
+#: The compiled variants of :func:`_kernel_body` by ``(plain drive, ideal inverter)``
+#: (:func:`~emaphm.models._monitoring_common.variant_key`), each cached under its own name.
+_VARIANTS = {
+    (plain, ideal): specialised(
+        _kernel_body, f"_kernel_{'plain' if plain else 'options'}_{'ideal' if ideal else 'dead_time'}",
+        jit,
+        control_inline=control_plain_inline if plain else control_inline,
+        _write_q=_write_q_plain if plain else _write_q,
+        substep_inline=substep_ideal_inline if ideal else substep_inline)
+    for plain in (True, False) for ideal in (True, False)}
 
 
 def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1,

@@ -59,14 +59,16 @@ import math
 
 import numpy as np
 
-from ._jit import cached_njit
+from ._jit import cached_njit, specialised
+from .compiling import wait_for
 from .controller import N_CTL, feedforward
-from .layout import (C_ECC_PHASE, C_V_DT, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0, P_I_TRIP,
+from .layout import (C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0, P_I_TRIP,
                      P_J_L, P_J_M, P_K_C, P_POLES, P_T_S, P_THETA0)
-from ._monitoring_common import STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, _check_step
+from ._monitoring_common import (STATUS_DIVERGED, STATUS_OK, STATUS_TRIPPED, _check_step,
+                                 variant_key)
 from .step import (N_Q, N_X, TRIG_LIMIT, control_inline, control_plain_inline, healthy_inline,
                    substep_ideal_inline,
-                   initial_x_inline, inline, inlined, lane_reader, plain_inline, lane_writer, llvm_select as select,
+                   initial_x_inline, inline, inlined, lane_reader, lane_writer, llvm_select as select,
                    sincos_inline as sincos, substep_inline, vector_reader)
 
 #: The kernel: IEEE division (``error_model="numpy"``), as a ZeroDivisionError check on
@@ -213,7 +215,6 @@ _commit_stage_plain = inlined(_commit_stage, N_STATE=N_X + N_Q_PLAIN)
 _commit_stage = inlined(_commit_stage)
 
 
-@kernel_jit
 def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             out_i, out_theta, out_omega, out_torque, fitness, status, out_f):
     """Drop-in for :func:`emaphm.models.monitoring._kernel` (same arguments, same results;
@@ -224,7 +225,20 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     (n_pop, n, 3)``, ``out_theta, out_omega, out_torque (n_pop, n)`` or
     zero-sized for no traces; ``fitness, status (n_pop,)`` written in place.
     ``P, CP`` must be packed for ``n_sub`` (ValueError otherwise).
+
+    Runs the compiled variant of :func:`_kernel_body` for the drive (its options at their
+    defaults or not) and the inverter (no candidate losing a volt to dead time, or some):
+    each variant is compiled the first time it is needed, so a job compiles only its own.
     """
+    key = variant_key(P, CP)
+    wait_for(key)                      # a child compiling it (emaphm.models.warm)
+    _VARIANTS[key](P, CP, theta_ref, T_load, n_sub, i_target, weights, out_i, out_theta,
+                   out_omega, out_torque, fitness, status, out_f)
+
+
+def _kernel_body(P, CP, theta_ref, T_load, n_sub, i_target, weights,
+                 out_i, out_theta, out_omega, out_torque, fitness, status, out_f):
+    """:func:`_kernel`'s loop, its stages named by the variant (:data:`_VARIANTS`)."""
     _check_step(P, n_sub)
     n_pop = CP.shape[0]
     n = theta_ref.shape[0]
@@ -242,10 +256,6 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
     K_c, D_c = P[P_K_C], P[P_D_C]
     ctl = _read_ctl(P, P_CTL)
     I_trip = P[P_I_TRIP]
-    no_options = plain_inline(ctl)
-    ideal = True                       # no candidate's inverter loses a volt to dead time
-    for j in range(n_pop):
-        ideal &= CP[j, C_V_DT] == 0.0
     n_blk = (n_pop + LANES - 1) // LANES
     B = np.zeros((n_blk, N_ROWS, LANES))
     x0 = initial_x_inline(P[P_THETA0])
@@ -267,21 +277,12 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
         ref, w_ff, T_ff = feedforward(theta_ref[k], theta_ref[max(k - 1, 0)],
                                       theta_ref[max(k - 2, 0)], ctl)
         period = (ta, tb, tc, wa, wb, wc, ref, w_ff, T_ff)
-        if no_options:
-            _control_stage_plain(B, ctl, I_trip, period)
-        else:
-            _control_stage(B, ctl, I_trip, period)
+        _control_stage(B, ctl, I_trip, period)
         mech = (T_load[k], J_m, C_m, J_l, C_l, K_c, D_c, dt, P[P_INV_I0])
-        if ideal:
-            _plant_stage_ideal(B, True, mech)
-        else:
-            _plant_stage(B, True, mech)
+        _plant_stage(B, True, mech)
         for s in range(1, n_sub):
             _trig_stage(B, p)
-            if ideal:
-                _plant_stage_ideal(B, False, mech)
-            else:
-                _plant_stage(B, False, mech)
+            _plant_stage(B, False, mech)
         if store:
             for j in range(n_pop):
                 b = j // LANES
@@ -293,10 +294,7 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
                     out_theta[j, k] = B[b, R_X, l]
                     out_omega[j, k] = B[b, R_X + 1, l]
                     out_torque[j, k] = B[b, R_TQ, l]
-        if no_options:
-            _commit_stage_plain(B)
-        else:
-            _commit_stage(B)
+        _commit_stage(B)
     for j in range(n_pop):
         b = j // LANES
         l = j - b * LANES
@@ -305,3 +303,15 @@ def _kernel(P, CP, theta_ref, T_load, n_sub, i_target, weights,
             status[j] = STATUS_DIVERGED
         elif B[b, R_Q + Q_TRIP, l] != 0.0:
             status[j] = STATUS_TRIPPED
+
+
+#: The compiled variants of :func:`_kernel_body` by ``(plain drive, ideal inverter)``
+#: (:func:`~emaphm.models._monitoring_common.variant_key`), each cached under its own name.
+_VARIANTS = {
+    (plain, ideal): specialised(
+        _kernel_body, f"_kernel_{'plain' if plain else 'options'}_{'ideal' if ideal else 'dead_time'}",
+        kernel_jit,
+        _control_stage=_control_stage_plain if plain else _control_stage,
+        _commit_stage=_commit_stage_plain if plain else _commit_stage,
+        _plant_stage=_plant_stage_ideal if ideal else _plant_stage)
+    for plain in (True, False) for ideal in (True, False)}
