@@ -18,8 +18,9 @@ recorded-voltage path of issue 32), healthy and the 10 % short.
 Also reported: the identification's share of the verdict (``identify`` alone, timed on its
 own), and what the verdict read.
 
-Run: ``python benchmarks/bench_end_to_end.py [--seeds 2]`` ->
-``benchmarks/results/end_to_end.md`` and ``.json``.
+Run: ``python benchmarks/bench_end_to_end.py [--seeds 2] [--tag TAG]`` ->
+``benchmarks/results/end_to_end[-TAG].md`` and ``.json`` (the emaphm imported: another
+version with ``PYTHONPATH=<its src>``, its commit in the report).
 """
 
 from __future__ import annotations
@@ -118,6 +119,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=2)
     ap.add_argument("--traces", default=",".join(TRACES),
                     help="comma-separated labels (default: all)")
+    ap.add_argument("--tag", default="",
+                    help="write end_to_end-TAG.md (another version on PYTHONPATH, say)")
     args = ap.parse_args()
     labels = args.traces.split(",")
     t0 = time.time()
@@ -134,9 +137,10 @@ def main() -> None:
                   f"{a['named']}), identify {a['identify_cpu_s']:.2f} s, SciPy DE "
                   f"{b['cpu_s']:.2f} s: {rows[-1]['ratio']:.2f}x", flush=True)
     RESULTS.mkdir(exist_ok=True)
-    (RESULTS / "end_to_end.json").write_text(json.dumps(rows, indent=1))
-    (RESULTS / "end_to_end.md").write_text(report(rows, args, time.time() - t0))
-    print((RESULTS / "end_to_end.md").read_text())
+    stem = "end_to_end" + (f"-{args.tag}" if args.tag else "")
+    (RESULTS / f"{stem}.json").write_text(json.dumps(rows, indent=1))
+    (RESULTS / f"{stem}.md").write_text(report(rows, args, time.time() - t0))
+    print((RESULTS / f"{stem}.md").read_text())
 
 
 def _span(xs) -> str:
@@ -145,7 +149,10 @@ def _span(xs) -> str:
 
 
 def report(rows: list[dict], args, wall: float) -> str:
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
+    import emaphm
+
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], text=True,
+                            cwd=Path(emaphm.__file__).parent,
                             capture_output=True).stdout.strip() or "unknown"
     load = os.getloadavg()[0]
     ratios = [r["ratio"] for r in rows]

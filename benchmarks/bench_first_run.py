@@ -39,7 +39,7 @@ def run(cache: Path, prefetch: bool, plot: Path) -> tuple[float, float]:
     env = dict(os.environ, EMAPHM_CACHE_DIR=str(cache), EMAPHM_PREFETCH="1" if prefetch else "0")
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
-    done = subprocess.run([sys.executable, "-m", "emaphm", *COMMAND, str(plot)], env=env,
+    done = subprocess.run([str(Path(sys.executable).with_name("emaphm")), *COMMAND, str(plot)], env=env,
                           capture_output=True, text=True)
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
