@@ -186,3 +186,16 @@ def specialised(func: Callable, name: str, compile_with: Callable[[Callable], An
     f.__qualname__ = name
     f.__doc__ = func.__doc__
     return compile_with(f)
+
+
+def variants(body: Callable, compile_with: Callable[[Callable], Any],
+             drive: dict[bool, dict[str, Any]], inverter: dict[bool, dict[str, Any]]) -> dict:
+    """The compiled variants of a kernel's loop ``body`` by ``(plain drive, ideal
+    inverter)`` (:func:`emaphm.models._monitoring_common.variant_key`): ``drive[plain]`` and
+    ``inverter[ideal]`` name the steps each swaps in (:func:`specialised`), each cached as
+    ``<body's name without _body>_<plain|options>_<ideal|dead_time>``."""
+    stem = body.__name__.removesuffix("_body")
+    return {(plain, ideal): specialised(
+        body, f"{stem}_{'plain' if plain else 'options'}_{'ideal' if ideal else 'dead_time'}",
+        compile_with, **drive[plain], **inverter[ideal])
+        for plain in (True, False) for ideal in (True, False)}

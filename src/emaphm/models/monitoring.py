@@ -48,7 +48,7 @@ import numpy as np
 from ..faults import as_k, check_fault_model
 from ..params import ActuatorParams, siemens_1fk7060
 from ..profiles import Profile, diagnostic
-from ._jit import jit, specialised
+from ._jit import jit, variants
 from .compiling import wait_for
 from . import step
 from ._monitoring_common import (I_DIVERGED, OMEGA_DIVERGED, STATUS_DIVERGED, STATUS_OK,
@@ -202,14 +202,12 @@ def _kernel_body(P, CP, theta_ref, T_load, n_sub, i_target, weights,
 
 #: The compiled variants of :func:`_kernel_body` by ``(plain drive, ideal inverter)``
 #: (:func:`~emaphm.models._monitoring_common.variant_key`), each cached under its own name.
-_VARIANTS = {
-    (plain, ideal): specialised(
-        _kernel_body, f"_kernel_{'plain' if plain else 'options'}_{'ideal' if ideal else 'dead_time'}",
-        jit,
-        control_inline=control_plain_inline if plain else control_inline,
-        _write_q=_write_q_plain if plain else _write_q,
-        substep_inline=substep_ideal_inline if ideal else substep_inline)
-    for plain in (True, False) for ideal in (True, False)}
+_VARIANTS = variants(
+    _kernel_body, jit,
+    drive={True: dict(control_inline=control_plain_inline, _write_q=_write_q_plain),
+           False: dict(control_inline=control_inline, _write_q=_write_q)},
+    inverter={True: dict(substep_inline=substep_ideal_inline),
+              False: dict(substep_inline=substep_inline)})
 
 
 def simulate_reference(params: ActuatorParams, k, profile: Profile, n_sub: int = 1,

@@ -59,7 +59,7 @@ import math
 
 import numpy as np
 
-from ._jit import cached_njit, specialised
+from ._jit import cached_njit, variants
 from .compiling import wait_for
 from .controller import N_CTL, feedforward
 from .layout import (C_ECC_PHASE, N_CP, P_C_L, P_C_M, P_CTL, P_D_C, P_INV_I0, P_I_TRIP,
@@ -307,11 +307,8 @@ def _kernel_body(P, CP, theta_ref, T_load, n_sub, i_target, weights,
 
 #: The compiled variants of :func:`_kernel_body` by ``(plain drive, ideal inverter)``
 #: (:func:`~emaphm.models._monitoring_common.variant_key`), each cached under its own name.
-_VARIANTS = {
-    (plain, ideal): specialised(
-        _kernel_body, f"_kernel_{'plain' if plain else 'options'}_{'ideal' if ideal else 'dead_time'}",
-        kernel_jit,
-        _control_stage=_control_stage_plain if plain else _control_stage,
-        _commit_stage=_commit_stage_plain if plain else _commit_stage,
-        _plant_stage=_plant_stage_ideal if ideal else _plant_stage)
-    for plain in (True, False) for ideal in (True, False)}
+_VARIANTS = variants(
+    _kernel_body, kernel_jit,
+    drive={True: dict(_control_stage=_control_stage_plain, _commit_stage=_commit_stage_plain),
+           False: dict(_control_stage=_control_stage, _commit_stage=_commit_stage)},
+    inverter={True: dict(_plant_stage=_plant_stage_ideal), False: dict(_plant_stage=_plant_stage)})

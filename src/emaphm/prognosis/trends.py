@@ -5,17 +5,8 @@ at inspection times ``t``, trend models are fitted by least squares, all
 written relative to the last inspection ``t_ref`` (so the first parameter is
 the current level, well conditioned whatever the time unit). Each shape is a class of
 :mod:`emaphm.prognosis.shapes` (its value, Jacobian, fit, crossing and growth), registered
-in :data:`~emaphm.prognosis.shapes.SHAPES`; this module fits, compares and samples them
-without knowing which is which:
-
-===========  ====================================  ==========================
-model        y(t), tau = t - t_ref                 parameters theta
-===========  ====================================  ==========================
-linear       a + b tau                             (a, b)
-exponential  exp(alpha + b tau)                    (alpha = ln a, b)
-quadratic    a + b tau + c tau^2                   (a, b, c)
-onset        a + b max(tau, c)                     (a, b, c = t_onset - t_ref)
-===========  ====================================  ==========================
+in :data:`~emaphm.prognosis.shapes.SHAPES` (linear, exponential, quadratic, onset: the
+table there); this module fits, compares and samples them without knowing which is which.
 
 Linear growth (wear) and exponential growth (self-accelerating damage) are the
 two classic degradation shapes; the quadratic is a local second-order trend
