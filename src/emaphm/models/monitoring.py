@@ -364,20 +364,25 @@ class MonitoringModel:
         out_f = np.zeros(((n_pop, n) if loops else (0, 0)) + (3,))
         fitness = np.zeros(n_pop)
         status = np.zeros(n_pop, dtype=np.int64)
+        # the compiled variant of both kernels for this drive and inverter (_kernel does the
+        # same per call; here once for the population's parts)
+        key = variant_key(P, CP)
+        wait_for(key)
+        scalar = (_VARIANTS[key], (False,))    # libm's sines, as _kernel passes them
         if self.kernel == "scalar" or loops:     # the loops' currents: the scalar kernel's
-            parts = [(slice(0, n_pop), _kernel)]
+            parts = [(slice(0, n_pop), scalar)]
         else:
-            from .monitoring_simd import LANES, _kernel as simd
+            from .monitoring_simd import LANES, _VARIANTS as SIMD
             # full blocks of LANES in vector lanes; a remainder of SCALAR_TAIL or fewer
             # candidates one by one (a block costs about as much as two of them alone)
             tail = n_pop % LANES
             split = n_pop - tail if tail <= SCALAR_TAIL else n_pop
-            parts = [(slice(0, split), simd), (slice(split, n_pop), _kernel)]
-        for rows, kernel in parts:
+            parts = [(slice(0, split), (SIMD[key], ())), (slice(split, n_pop), scalar)]
+        for rows, (kernel, extra) in parts:
             if rows.stop > rows.start:
                 kernel(P, CP[rows], self._ref, self._load, self.n_sub, i_target, weights,
                        out_i[rows] if store else out_i, *(o[rows] if store else o for o in outs),
-                       fitness[rows], status[rows], out_f[rows] if loops else out_f)
+                       fitness[rows], status[rows], out_f[rows] if loops else out_f, *extra)
         return (out_i, outs, fitness, status) + ((out_f,) if loops else ())
 
     def simulate_population(self, K) -> PopulationResult:
