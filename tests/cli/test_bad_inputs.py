@@ -780,6 +780,15 @@ def _(d, b):
                                      b"\xff" * 4), False)
 
 
+@case("import-tdms-property-of-an-unknown-type", "bench.tdms: not a readable TDMS file (a value "
+      "of data type code 248, which TDMS does not define); the file is damaged")
+def _(d, b):                         # it said "(KeyError: 248)", no cause
+    path, _ = _bench(b, d, "tdms")
+    name = b"unit_string"
+    return _import_bench(d, _changed(path, path.read_bytes().find(name) + len(name),
+                                     (248).to_bytes(4, "little")), False)
+
+
 @case("import-mat-truncated", "bench_v5.mat: the file is truncated", "variable 5 (at byte",
       "the 4 variable(s) before it are whole", "--inspect` lists what of it can be read")
 def _(d, b):
