@@ -922,6 +922,13 @@ def _(d, b):
                    _MAP.replace('theta_m = {name = "pos"', 'theta_m = {name = "t"'))
 
 
+@case("import-theta-m-on-the-time-column-of-a-rate", "bench.csv: channel 't' (theta_m) rises by "
+      "0.000125 rad at every sample, 1 times the time step: it is a time column")
+def _(d, b):                         # t from [time] rate, theta_m on the t column: HEALTHY
+    return _import(d, _bench_csv(b, d / "bench.csv"), "[time]\nrate = 8000\n"
+                   + _MAP_RATE.replace('theta_m = {name = "pos"', 'theta_m = {name = "t"'))
+
+
 @case("import-truncated-mdf", "bench.mf4: the file is truncated")
 def _(d, b):                         # asammdf printed "Exception ignored in MDF4.__del__"
     path, _ = _bench(b, d, "mdf4")
