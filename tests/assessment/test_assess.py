@@ -341,6 +341,30 @@ def test_a_second_assessment_into_the_same_folder_is_refused_at_once(tmp_path, c
     assert sorted(p.name for p in work.iterdir()) == ["lock"]
 
 
+def test_a_second_assessment_started_as_the_first_writes_its_outputs_is_refused(
+        tmp_path, capsys, monkeypatch):
+    """The first run let its lock go before it wrote --out: a second run started then ran
+    (every unit resumed), wrote --out and removed the work folder, and the first failed at
+    its end. Now the second is refused at once and the first writes its assessment."""
+    import emaphm.assessment.report as report
+
+    out = tmp_path / "a"
+    real = report.write_outputs
+    second = []
+
+    def write_then_start_another(summary, folder):
+        second.append(main(["assess", "--out", str(out), *TINY]))
+        second.append(capsys.readouterr().err)
+        return real(summary, folder)
+
+    monkeypatch.setattr(report, "write_outputs", write_then_start_another)
+    assert main(["assess", "--out", str(out), *TINY]) == 0
+    rc, err = second
+    assert rc == 2 and err.count("\n") == 1, err
+    assert f"--out {out}: another emaphm assess is running into it" in err
+    assert (out / "assessment.json").is_file() and not (tmp_path / ".a.assessing").exists()
+
+
 def test_an_actuator_whose_simulation_diverges_is_not_said_to_have_a_nan_error(monkeypatch):
     import numpy as np
 

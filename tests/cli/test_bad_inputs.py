@@ -780,6 +780,15 @@ def _(d, b):
                                      b"\xff" * 4), False)
 
 
+@case("import-tdms-property-of-an-unknown-type", "bench.tdms: not a readable TDMS file (a value "
+      "of data type code 248, which TDMS does not define); the file is damaged")
+def _(d, b):                         # it said "(KeyError: 248)", no cause
+    path, _ = _bench(b, d, "tdms")
+    name = b"unit_string"
+    return _import_bench(d, _changed(path, path.read_bytes().find(name) + len(name),
+                                     (248).to_bytes(4, "little")), False)
+
+
 @case("import-mat-truncated", "bench_v5.mat: the file is truncated", "variable 5 (at byte",
       "the 4 variable(s) before it are whole", "--inspect` lists what of it can be read")
 def _(d, b):
@@ -911,6 +920,13 @@ def _(d, b):
 def _(d, b):
     return _import(d, _bench_csv(b, d / "bench.csv"),
                    _MAP.replace('theta_m = {name = "pos"', 'theta_m = {name = "t"'))
+
+
+@case("import-theta-m-on-the-time-column-of-a-rate", "bench.csv: channel 't' (theta_m) rises by "
+      "0.000125 rad at every sample, 1 times the time step: it is a time column")
+def _(d, b):                         # t from [time] rate, theta_m on the t column: HEALTHY
+    return _import(d, _bench_csv(b, d / "bench.csv"), "[time]\nrate = 8000\n"
+                   + _MAP_RATE.replace('theta_m = {name = "pos"', 'theta_m = {name = "t"'))
 
 
 @case("import-truncated-mdf", "bench.mf4: the file is truncated")

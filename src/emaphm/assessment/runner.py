@@ -65,11 +65,16 @@ def check_tracking(params: Any) -> dict[str, float]:
 
 def _lock(work: Path, out: Path):
     """An exclusive lock on the work folder ``work`` for this process (released when it
-    ends, however): a second assessment into the same ``out`` is refused at once, not
-    after all its work when the first has written ``out``."""
+    ends, however), held until ``out`` is written: a second assessment into the same
+    ``out`` is refused at once, not after all its work when the first has written ``out``
+    (nor when it starts as the first writes ``out``)."""
     import fcntl
 
-    fh = open(work / "lock", "a+b")
+    try:
+        fh = open(work / "lock", "a+b")
+    except OSError as exc:                      # the folder went with a run that finished
+        raise AssessmentError(f"--out {out}: cannot open the lock of its work folder {work} "
+                              f"({exc.strerror or exc}); run the command again") from None
     try:
         fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
@@ -159,8 +164,7 @@ def assess(spec: AssessmentSpec, out: str | os.PathLike[str], *, executor: Any =
     """
     from .. import __version__
     from ..campaign.executors import SerialExecutor
-    from ..params import save_params
-    from .report import summarize, write_outputs
+    from .report import summarize
 
     out = Path(out)
     if out.exists():
@@ -176,32 +180,57 @@ def assess(spec: AssessmentSpec, out: str | os.PathLike[str], *, executor: Any =
         raise AssessmentError(f"--out {out}: cannot make its work folder {work} "
                               f"({exc.strerror or exc}); free some space or fix the folder's "
                               "permissions") from None
-    lock = _lock(work, out)
-    ran = resumed = 0
-    with lock, AssessmentStore.open(work / "units.sqlite", spec) as store:
-        for phase in ("tune", "assess"):
-            if phase == "tune" and not spec.tune:
-                continue
-            if phase == "assess":
-                tune_results = list(store.results("tune").values())
-                values, tuned = _thresholds(spec, tune_results)
-                tasks = [t.with_thresholds(values) for t in spec.tasks("assess")]
-            else:
-                tasks = spec.tasks("tune")
-            bar = progress(phase) if progress is not None else None
-            try:
-                n_ran, n_old = _run_phase(tasks, store, executor, bar)
-            finally:
-                if bar is not None:
-                    bar.close()
-            ran, resumed = ran + n_ran, resumed + n_old
-        assessed = list(store.results("assess").values())
+    with _lock(work, out):                     # held until --out is written and work gone
+        if out.exists():                       # written by the run this one came after
+            shutil.rmtree(work, ignore_errors=True)
+            raise AssessmentError(f"--out {out} exists (another emaphm assess wrote it while "
+                                  "this one started); give a new folder")
+        with AssessmentStore.open(work / "units.sqlite", spec) as store:
+            ran, resumed, values, tuned = _run_units(spec, store, executor, progress)
+            tune_results = list(store.results("tune").values())
+            assessed = list(store.results("assess").values())
         failed = [u for u in (*tune_results, *assessed) if "error" in u]
-    if failed:
-        raise AssessmentIncomplete(failed, work)
-    summary = summarize(spec, tuned, values, tune_results, assessed,
-                        wall_s=time.perf_counter() - t0, version=__version__, tracking=tracking)
-    params = replace(spec.actuator(), thresholds=tuple(sorted(values.items())))
+        if failed:
+            raise AssessmentIncomplete(failed, work)
+        summary = summarize(spec, tuned, values, tune_results, assessed,
+                            wall_s=time.perf_counter() - t0, version=__version__, tracking=tracking)
+        params = replace(spec.actuator(), thresholds=tuple(sorted(values.items())))
+        paths = _write(out, work, summary, params)
+        shutil.rmtree(work, ignore_errors=True)
+    return Outcome(summary, [out / p.name for p in paths] + [out / "units.sqlite"], ran, resumed)
+
+
+def _run_units(spec: AssessmentSpec, store: AssessmentStore, executor: Any,
+               progress: Callable[[str], Any] | None) -> tuple[int, int, dict, dict]:
+    """Run the units ``store`` lacks, the tuning's first: ``(ran, resumed, thresholds,
+    the tuning's account)``."""
+    ran = resumed = 0
+    values: dict = {}
+    tuned: dict = {}
+    for phase in ("tune", "assess"):
+        if phase == "tune" and not spec.tune:
+            continue
+        if phase == "assess":
+            values, tuned = _thresholds(spec, list(store.results("tune").values()))
+            tasks = [t.with_thresholds(values) for t in spec.tasks("assess")]
+        else:
+            tasks = spec.tasks("tune")
+        bar = progress(phase) if progress is not None else None
+        try:
+            n_ran, n_old = _run_phase(tasks, store, executor, bar)
+        finally:
+            if bar is not None:
+                bar.close()
+        ran, resumed = ran + n_ran, resumed + n_old
+    return ran, resumed, values, tuned
+
+
+def _write(out: Path, work: Path, summary: dict, params: Any) -> list[Path]:
+    """The assessment's files, written into a new folder beside ``out`` and renamed to it
+    whole; a failure removes that folder and says every unit is kept in ``work``."""
+    from ..params import save_params
+    from .report import write_outputs
+
     tmp = out.parent / f".{out.name}.{secrets.token_hex(4)}.tmp"
     try:
         tmp.mkdir()
@@ -216,5 +245,4 @@ def assess(spec: AssessmentSpec, out: str | os.PathLike[str], *, executor: Any =
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    shutil.rmtree(work, ignore_errors=True)
-    return Outcome(summary, [out / p.name for p in paths] + [out / "units.sqlite"], ran, resumed)
+    return paths

@@ -326,6 +326,7 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
     where = str(path)
     for target, x in cols.items():
         _nan_runs(chans[target].label, target, x, t, where)
+    _not_a_clock(cols["theta_m"], t, chans["theta_m"].label, where)
     if not np.all(np.isfinite(t)):
         _nan_runs(chans["t"].label if "t" in chans else "t", "t", t, t, where)
     cols, notes = derive_missing(cols, t)
@@ -363,6 +364,25 @@ def _trace(path: Path, info: SourceInfo, cmap: ChannelMap, chans: dict[str, Chan
     except TraceError as exc:
         raise TraceError(f"{where}: imported, but {exc}") from None
     return trace
+
+
+def _not_a_clock(x: np.ndarray, t: np.ndarray, label: str, where: str) -> None:
+    """Refuse a measured position that is the time base in s, ms, us or ns (read as rad or
+    deg) to the rounding: a time column (the file's own, the time taken from [time] rate),
+    which a diagnosis reads as a motion and finds healthy."""
+    if x.size < 100:
+        return
+    step = (x[-1] - x[0]) / (x.size - 1)
+    dt = (t[-1] - t[0]) / (t.size - 1)
+    if step == 0 or not dt > 0 or np.max(np.abs(x - x[0] - step * np.arange(x.size))) > \
+            1e-9 * np.max(np.abs(x)):
+        return
+    units = [f * u for f in (1, 1e3, 1e6, 1e9) for u in (1, np.pi / 180)]   # s..ns; rad, deg
+    if any(abs(step / (dt * u) - 1) < 1e-6 for u in units):
+        raise TraceError(f"{where}: channel {label!r} (theta_m) rises by {step:.4g} rad at every "
+                         f"sample, {step / dt:g} times the time step: it is a time column, not a "
+                         "measured position; map theta_m to the position the encoder measured "
+                         "(`emaphm import FILE --inspect` lists the channels)")
 
 
 def _time_text(base: _TimeBase, cmap: ChannelMap, chans: dict[str, ChannelInfo]) -> str:

@@ -59,6 +59,14 @@ def segments(path: Path) -> tuple[int, str]:
         return k, ""
 
 
+def _cause(exc: BaseException) -> str:
+    """npTDMS's exception as a cause: it looks a value's data type code up in its table, so
+    a damaged code is a bare ``KeyError: 248``."""
+    if isinstance(exc, KeyError) and exc.args and isinstance(exc.args[0], int):
+        return f"a value of data type code {exc.args[0]}, which TDMS does not define"
+    return cause(exc)
+
+
 class TdmsSource:
     """A TDMS file, opened for reading in slices."""
 
@@ -70,7 +78,8 @@ class TdmsSource:
             self.file = nptdms.TdmsFile.open(self.path)
             groups = self.file.groups()
         except (ValueError, KeyError, OSError, EOFError, TypeError) as exc:
-            raise TraceError(f"{self.path}: not a readable TDMS file ({cause(exc)})") from None
+            raise TraceError(f"{self.path}: not a readable TDMS file ({_cause(exc)}); the file is "
+                             "damaged: export it again") from None
         chans = []
         self.handles = {}
         for g in groups:
