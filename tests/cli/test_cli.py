@@ -427,6 +427,18 @@ def test_emaphm_help_imports_no_numpy():
         {"numpy", "scipy", "pandas", "pyarrow"} & mods)
 
 
+def test_python_dash_m_emaphm_is_the_command_line():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "emaphm", "--version"], capture_output=True,
+                          text=True)
+    assert done.returncode == 0 and done.stdout.startswith("emaphm "), done
+    bad = subprocess.run([sys.executable, "-m", "emaphm", "no-such-command"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+
+
 def test_the_error_boundary_names_the_path_of_an_os_error_and_exits_2(monkeypatch, capsys):
     # what no check foresaw (a disk that fills, a permission lost mid-run) still reaches
     # the user as one line naming the path (the corpus of malformed inputs is in
