@@ -35,7 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import machine  # noqa: E402
-from bench_versions import _extract  # noqa: E402
+from _versions import extract_src  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "drive_cost.md"
@@ -93,7 +93,7 @@ def main() -> None:
                         folder / f"{name}.parquet")
         write_trace(simulate(scenario="nominal", sensors=DEFAULT_SENSORS, seed=2, drive_signals=True),
                     folder / "warm.parquet")
-        base_src = _extract(args.base, Path(tmp))
+        base_src = extract_src(args.base, Path(tmp))
         now_src = ROOT / "src"
         _run(base_src, folder), _run(now_src, folder)          # compile both caches
         rounds: dict[str, list[dict]] = {"base": [], **{p: [] for p in PATHS}}

@@ -41,12 +41,12 @@ import resource
 import shutil
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
 
 from _machine import machine as _machine  # the scripts run from benchmarks/
+from _versions import extract_src
 
 ROOT = Path(__file__).resolve().parent
 
@@ -78,15 +78,6 @@ def _cli(*args: str, src: Path | None = None) -> dict:
         answer = {}
     return {"wall_s": wall, "cpu_s": cpu, "load_before": load0, "load_after": os.getloadavg()[0],
             "drawn": answer.get("drawn"), "written": answer.get("written")}
-
-
-def _extract(rev: str, dest: Path) -> Path:
-    archive = dest / "src.tar"
-    with open(archive, "wb") as f:
-        subprocess.run(["git", "archive", rev, "src"], cwd=ROOT.parent, stdout=f, check=True)
-    with tarfile.open(archive) as t:
-        t.extractall(dest, filter="data")
-    return dest / "src"
 
 
 def _add_inspection(db: Path) -> str:
@@ -241,7 +232,7 @@ def main() -> None:
 
     tmp = Path(tempfile.mkdtemp(prefix="emaphm-bench-fleet-"))
     try:
-        base = _extract(args.base, tmp) if args.base else None
+        base = extract_src(args.base, tmp) if args.base else None
         fleets, parts = [], {}
         for n in sizes:
             fleets.append(_fleet(n, tmp, args.workers, base if n == 300 else None,

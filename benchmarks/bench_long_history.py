@@ -34,6 +34,7 @@ import time
 from pathlib import Path
 
 from _machine import machine as _machine  # the scripts run from benchmarks/
+from _versions import extract_src
 
 ROOT = Path(__file__).resolve().parent
 #: The commit before the prognosis became linear in the inspections.
@@ -78,22 +79,11 @@ def _run(args: list[str], src: Path | None = None) -> dict:
             "load_after": os.getloadavg()[0]}
 
 
-def _extract(rev: str, dest: Path) -> Path:
-    import tarfile
-
-    archive = dest / "src.tar"
-    with open(archive, "wb") as f:
-        subprocess.run(["git", "archive", rev, "src"], cwd=ROOT.parent, stdout=f, check=True)
-    with tarfile.open(archive) as t:
-        t.extractall(dest, filter="data")
-    return dest / "src"
-
-
 def measure(sizes: list[int], base: str | None, base_max: int) -> list[dict]:
     rows = []
     with tempfile.TemporaryDirectory(prefix="emaphm-long-history-") as tmp:
         tmp = Path(tmp)
-        src = _extract(base, tmp) if base else None
+        src = extract_src(base, tmp) if base else None
         for n in sizes:
             db = tmp / f"h{n}.sqlite"
             t0 = time.perf_counter()

@@ -31,7 +31,6 @@ import json
 import os
 import subprocess
 import sys
-import tarfile
 import tempfile
 from pathlib import Path
 
@@ -39,6 +38,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _machine import machine  # noqa: E402
+from _versions import extract_src  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results" / "versions.md"
@@ -107,16 +107,6 @@ json.dump(out, sys.stdout)
 '''
 
 
-def _extract(rev: str, dest: Path) -> Path:
-    """``src/`` of git revision ``rev`` under ``dest``."""
-    archive = dest / "src.tar"
-    with open(archive, "wb") as f:
-        subprocess.run(["git", "archive", rev, "src"], cwd=ROOT, stdout=f, check=True)
-    with tarfile.open(archive) as t:
-        t.extractall(dest, filter="data")
-    return dest / "src"
-
-
 def _run(src: Path) -> dict:
     env = dict(os.environ, PYTHONPATH=str(src), OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
     r = subprocess.run([sys.executable, "-c", WORKLOAD], env=env, capture_output=True, text=True,
@@ -132,7 +122,7 @@ def main() -> None:
     ap.add_argument("--rounds", type=int, default=5)
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        base_src = _extract(args.base, Path(tmp))
+        base_src = extract_src(args.base, Path(tmp))
         now_src = ROOT / "src"
         _run(base_src), _run(now_src)                       # compile both kernel caches
         rounds = {"base": [], "now": []}
