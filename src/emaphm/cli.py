@@ -318,21 +318,16 @@ def _prefetch_drive_check(params: Any, trace: Any) -> None:
     are not cached (:func:`emaphm.models.warm.prefetch`): on the modelled controller its
     drive's own variant, and on a data sheet the one with options its drive check runs."""
     from .firmware import MODELLED
-    from .models.warm import prefetch
+    from .models.warm import diagnosis_variants, prefetch
+    from .params import siemens_1fk7060
     from .recorded import drive_model_of
     from .verdict import needs_mismatch_check
 
     try:                               # a speed-up only: what it cannot tell, the run will say
         if trace is not None and drive_model_of(trace, None) != MODELLED:
             return
-        from .models.controller import plain as plain_drive
-        from .models.layout import drive_settings
-        from .params import siemens_1fk7060
-
-        sheet = siemens_1fk7060() if params is None else params
-        ideal = sheet.inverter.V_lost == 0.0
-        plain = bool(plain_drive.py_func(drive_settings(sheet)))
-        prefetch([(plain, ideal)] + ([(False, ideal)] if needs_mismatch_check(params) else []))
+        prefetch(diagnosis_variants(siemens_1fk7060() if params is None else params,
+                                    drive_check=needs_mismatch_check(params)))
     except Exception:                  # noqa: BLE001
         return
 

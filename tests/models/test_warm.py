@@ -75,3 +75,20 @@ def test_the_child_compiles_or_loads_a_variant():
     done = subprocess.run([sys.executable, "-m", "emaphm.models.warm", "11"], timeout=600,
                           capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+def test_a_diagnosis_asks_for_the_variants_its_populations_run():
+    from dataclasses import replace
+
+    from emaphm.models._monitoring_common import variant_key
+    from emaphm.params import siemens_1fk7060
+
+    sheet = siemens_1fk7060()
+    lagged = replace(sheet, controller=replace(sheet.controller, speed_filter_s=1e-3),
+                     inverter=replace(sheet.inverter, dead_time=1e-6))
+    for params in (sheet, lagged):
+        key = variant_key(*MonitoringModel(params).pack(np.tile([0, 0, 0, 0, 0, 0, .5, .5],
+                                                                (2, 1))))
+        assert warm.diagnosis_variants(params, drive_check=False) == [key]
+        assert warm.diagnosis_variants(params, drive_check=True) == [key, (False, key[1])]
+    assert warm.diagnosis_variants(lagged, drive_check=False) == [(False, False)]

@@ -11,10 +11,10 @@ import numpy as np
 
 from ._jit import jit
 from .controller import N_CTL, plain
-from .layout import C_V_DT, P_CTL, P_DT, P_T_S
+from .layout import C_V_DT, P_CTL, P_DT, P_T_S, drive_settings
 
 __all__ = ["I_DIVERGED", "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED",
-           "variant_key"]
+           "variant_key", "variant_of"]
 
 #: A candidate whose phase current exceeds this [A] has diverged (frozen, fitness inf).
 I_DIVERGED = 1e4
@@ -42,3 +42,9 @@ def variant_key(P: np.ndarray, CP: np.ndarray) -> tuple[bool, bool]:
     inverter losing a volt to dead time (its step then skips their work: the same numbers)."""
     return (bool(plain.py_func(P[P_CTL:P_CTL + N_CTL])),
             not bool(np.any(np.asarray(CP)[:, C_V_DT] != 0.0)))
+
+
+def variant_of(params) -> tuple[bool, bool]:
+    """:func:`variant_key` of the actuator ``params`` itself (every candidate at its
+    inverter's loss): the variant a population of it runs."""
+    return bool(plain.py_func(drive_settings(params))), params.inverter.V_lost == 0.0

@@ -21,9 +21,11 @@ import subprocess
 import sys
 from typing import Iterable
 
+from ._monitoring_common import variant_of
 from .compiling import PENDING, stop_children, wait_for
 
-__all__ = ["prefetch", "wait_for", "cached", "compile_variants", "stop_children"]
+__all__ = ["prefetch", "diagnosis_variants", "wait_for", "cached", "compile_variants",
+           "stop_children"]
 
 
 def _kernels(key: tuple[bool, bool]) -> list:
@@ -61,6 +63,13 @@ def prefetch(keys: Iterable[tuple[bool, bool]]) -> list[tuple[bool, bool]]:
             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             env=env)
     return todo
+
+
+def diagnosis_variants(params, drive_check: bool) -> list[tuple[bool, bool]]:
+    """The variants a diagnosis of ``params`` on the modelled controller runs: its drive's
+    own, and with ``drive_check`` (a data sheet's verdict) the one with options."""
+    plain, ideal = variant_of(params)
+    return [(plain, ideal)] + ([(False, ideal)] if drive_check else [])
 
 
 def compile_variants(keys: Iterable[tuple[bool, bool]]) -> None:
