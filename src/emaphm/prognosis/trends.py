@@ -156,9 +156,7 @@ class Prognosis:
         """``(times, values)`` of the readings ``indicator``'s trend used
         (:func:`indicator_series` of the inspections that could see it)."""
         m = self.observed(indicator)
-        if not m.any():
-            return self.times[m], np.empty(0)
-        return self.times[m], indicator_series(self.K[m])[indicator]
+        return self.times[m], _seen_series(self.K, m, indicator)
 
     @property
     def first(self) -> RULPrediction | None:
@@ -259,7 +257,7 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
             unobserved[name] = tuple(int(i) for i in np.flatnonzero(~masks[name]))
             if int(masks[name].sum()) < MIN_INSPECTIONS:
                 continue
-            t, y = times[masks[name]], indicator_series(np.asarray(K)[masks[name]])[name]
+            t, y = times[masks[name]], _seen_series(K, masks[name], name)
         preds[name] = predict_rul(t, y, thresholds.for_indicator(name),
                                   seed=np.random.default_rng(ss), t_now=t_now,
                                   sigma_floor=sigma_floor, indicator=name,
@@ -270,6 +268,13 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
                      times=times, K=np.atleast_2d(np.asarray(K, dtype=float)),
                      options={"sigma_floor": sigma_floor, **kwargs}, unobserved=unobserved)
+
+
+def _seen_series(K: Any, mask: np.ndarray, indicator: str) -> np.ndarray:
+    """``indicator``'s series (:func:`indicator_series`) over the inspections of ``mask``
+    alone: the gain drift's sign is that of the last inspection that saw it."""
+    K = np.atleast_2d(np.asarray(K, dtype=float))[mask]
+    return indicator_series(K)[indicator] if K.shape[0] else np.empty(0)
 
 
 def _observed_masks(observed: Mapping[str, Any] | None, n: int) -> dict[str, np.ndarray]:
