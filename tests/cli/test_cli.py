@@ -627,3 +627,14 @@ def test_a_trace_of_another_actuator_says_whose_it_is(tmp_path, capsys):
     assert main(["diagnose", str(path), "--quiet", "--json", "--params",
                  str(root / "examples" / "actuators" / "ema-270v-750w.toml")]) == 0
     assert "metadata says" not in capsys.readouterr().err
+
+
+def test_the_history_commands_offer_every_built_in_algorithm():
+    """`history add --algorithm` lists the built-in names without importing NumPy (a copy of
+    them in the parser's module): the copy must be the optimizers' own list."""
+    from emaphm.identify import ALGORITHM_NAMES
+    from emaphm.optim.registry import RESERVED, registered
+    from emaphm.prognosis.cli import _algorithm_choices
+
+    built_in = set(_algorithm_choices()) - set(registered())     # others' own, where any
+    assert built_in == set(ALGORITHM_NAMES) == set(RESERVED)
