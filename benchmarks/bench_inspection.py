@@ -77,7 +77,7 @@ TUNE_GRID = ((200.0, 150.0, 400.0), (200.0, 200.0, 400.0), (250.0, 150.0, 500.0)
              (250.0, 150.0, 800.0), (200.0, 150.0, 600.0), (300.0, 100.0, 600.0),
              (200.0, 50.0, 400.0))
 LAWS = {"linear": (("friction", 1), ("backlash", 1), ("eccentricity", 1), ("gain_drift", -1)),
-        "power": (("friction", 1),), "exponential": (("short_a", 1), ("short_b", 1))}
+        "power": (("friction", 1),), "exponential": (("short_circuit_a", 1), ("short_circuit_b", 1))}
 
 
 # ----------------------------------------------------------------------------- the actuators

@@ -341,3 +341,56 @@ def test_seeds_are_checked_only_by_emaphm_seeds():
              if name != "emaphm.seeds" and (lines := seed_checks(path))}
     assert found == {}, f"seeds checked by hand (use emaphm.seeds.check_seed): {found}"
     assert seed_checks(SRC / "emaphm" / "seeds.py"), "the seed rule no longer sees the one check"
+
+
+# ----------------------------------------------------------------------------- one vocabulary
+#: Where a mode's or an indicator's name may stand as a string outside its own module, and
+#: why: each is a parameter or the paper's scenario vocabulary that shares the word, not the
+#: mode (issue 33's rule).
+VOCABULARY_EXCEPTIONS = {
+    # the paper's fault vector: its components' names ("friction", "backlash", "short_a")
+    # name the parameters k1.. of Eq. 1, and its scenarios ("friction-high") the paper's rows
+    "emaphm/faults.py": {"friction", "backlash", "short_a", "short_b", "short_c",
+                         "eccentricity"},
+    # the paper's Table 3, row by row as it prints them (its scenarios' words)
+    "emaphm/campaign/report.py": {"friction", "backlash", "eccentricity"},
+    # relative deviations of a unit's parameters from its data sheet: the dry friction's
+    "emaphm/calibration.py": {"friction"},
+    "emaphm/units.py": {"friction"},
+    # the transmission's backlash width [rad], a field of Transmission
+    "emaphm/params.py": {"backlash"},
+    # the registry lists its modules by name
+    "emaphm/modes/__init__.py": {"friction", "backlash", "short_circuit", "eccentricity",
+                                 "gain_drift", "demagnetization", "current_sensor"},
+}
+
+
+def vocabulary_literals(path: Path, names: set[str]) -> list[tuple[int, str]]:
+    """The string constants of ``path`` that are one of ``names`` (docstrings and
+    f-string text included: a name written in words is a constant too)."""
+    return [(n.lineno, n.value) for n in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+            if isinstance(n, ast.Constant) and isinstance(n.value, str) and n.value in names]
+
+
+def test_no_mode_or_indicator_name_is_written_outside_its_mode():
+    """The fault vocabulary lives in emaphm.modes: everything else reads it from the
+    registry (a threshold field as an attribute, an indicator from its mode's module)."""
+    from emaphm import modes
+
+    names = set(modes.MODES) | set(modes.INDICATORS) | set(modes.INDICATOR_ALIASES)
+    found = []
+    for path in sorted((SRC / "emaphm").rglob("*.py")):
+        rel = path.relative_to(SRC).as_posix()
+        for line, value in vocabulary_literals(path, names):
+            mode_of = modes.INDICATOR_MODE.get(modes.INDICATOR_ALIASES.get(value, value), value)
+            if rel == f"emaphm/modes/{mode_of}.py" or value in VOCABULARY_EXCEPTIONS.get(rel, ()):
+                continue
+            found.append(f"{rel}:{line}: {value!r}")
+    assert not found, "a mode's name written outside its module:\n" + "\n".join(found)
+
+
+def test_the_vocabulary_rule_finds_a_name(tmp_path):
+    bad = tmp_path / "bad.py"
+    bad.write_text('LABELS = {"gain_drift": "gain", "x": 1}\nif m == "short_circuit_a": pass\n')
+    assert vocabulary_literals(bad, {"gain_drift", "short_circuit_a"}) == [
+        (1, "gain_drift"), (2, "short_circuit_a")]

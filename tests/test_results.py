@@ -287,7 +287,7 @@ def test_degradation_scenario_and_law():
 
     for sc in DEGRADATION_SCENARIOS.values():
         assert assert_round_trip(sc) == sc and assert_round_trip(sc.law) == sc.law
-    own = DegradationScenario("short_b", DegradationLaw("power", 1e-7, 0.01, 2.5, 40.0),
+    own = DegradationScenario("short_circuit_b", DegradationLaw("power", 1e-7, 0.01, 2.5, 40.0),
                               k_base=[0.1] + [0.0] * 5 + [0.5, 0.5], name="own",
                               thresholds=FailureThresholds(short_circuit=0.2, friction=0.4))
     back = assert_round_trip(own)

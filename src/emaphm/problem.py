@@ -31,6 +31,7 @@ from .diagnosis import diagnose
 from .faults import K_NOMINAL, N_K, as_k, error_pct, loop_report, shorted_fraction
 from .fitness import Eq4Objective
 from .logs import announce_compiles
+from .modes import MODES
 from .params import PARAMS_SOURCES, ActuatorParams, resolve_params
 from .recorded import (DRIVE_NUISANCE, DRIVEN, NOT_OBSERVABLE, RecordedVoltageObjective,
                        drive_model_of)
@@ -237,9 +238,10 @@ class IdentificationProblem:
     def _fixed(self, K: np.ndarray) -> np.ndarray:
         """``K`` with the components of the modes this path cannot see at their healthy
         values (k8 at 0.5 where no position loop is modelled)."""
-        if "gain_drift" in self.not_observable:
+        blind = [j for m in self.not_observable for j in MODES[m].k_components]
+        if blind:
             K = np.array(K, dtype=float, copy=True)
-            K[..., 7] = K_NOMINAL[7]
+            K[..., blind] = K_NOMINAL[blind]
         return K
 
     @property

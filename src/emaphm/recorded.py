@@ -51,6 +51,7 @@ import numpy as np
 from .faults import as_k, check_fault_model
 from .firmware import (DRIVE_MODELS, DRIVEN, MODELLED, RECORDED_CURRENT_REFERENCES,
                        RECORDED_SPEED_REFERENCE, RECORDED_VOLTAGES)
+from .modes import CONTROLLER_MODES
 from .fitness import (check_diagnosable, check_load, eq4_weights, on_model_grid,
                       trace_fault_model, white_noise_sigma)
 from .models import driven
@@ -75,9 +76,9 @@ __all__ = ["DRIVE_MODELS", "MODELLED", "RECORDED_VOLTAGES", "RECORDED_CURRENT_RE
 #: state).
 DRIVE_NUISANCE = ("V_dt", "angle", "stribeck")
 
-#: The fault modes a path cannot see, by drive model: the drive's own position gain (k8)
-#: where no position loop is modelled.
-NOT_OBSERVABLE = {MODELLED: (), **{d: ("gain_drift",) for d in DRIVEN}}
+#: The fault modes a path cannot see, by drive model: those in the drive's own position
+#: controller (its gain, k8) where no position loop is modelled.
+NOT_OBSERVABLE = {MODELLED: (), **{d: CONTROLLER_MODES for d in DRIVEN}}
 
 #: What each path needs of the trace: the drive's signals it reads, as the sentence that
 #: names them.

@@ -35,7 +35,7 @@ import numpy as np
 
 from .diagnosis import (Diagnosis, MismatchFit, Refit, Thresholds, Unexplained, diagnose,
                         fit_ratio_of)
-from .modes import MODES, thresholds_for
+from .modes import MODES, short_circuit as _short, thresholds_for
 from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, TRANSIENT_MISFIT,
                       misfit_limit, misfit_p_value, transient_excess)
 from .faults import K_NOMINAL
@@ -271,7 +271,7 @@ def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
     with the range over the fault resistances that fit as well (a mild short's shorted
     fraction and bridge trade off, its ampere-turns stay; each point of the profile
     refits that phase's fraction alone)."""
-    shorts = [f for f in (*diag.faults, *diag.suspected) if f.mode == "short_circuit"]
+    shorts = [f for f in (*diag.faults, *diag.suspected) if f.mode == _short.MODE.name]
     if problem.fault_model != "physical" or not shorts:
         return None
     names = tuple(extra)
@@ -543,7 +543,7 @@ def examine(trace: Trace | list, *, params: Any = None, config: Any = None,
         raise ValueError("workers= shares a list of traces among processes; give a list of "
                          "traces, or drop workers")
     from .identify import IdentificationConfig, identify
-    from .modes.current_sensor import UNOBSERVABLE_NOTE
+    from .modes.current_sensor import UNOBSERVABLE_NOTE, as_findings
 
     config = IdentificationConfig() if config is None else config
     finding, work, ident = screen_sensors(trace, params=params, config=config, seed=seed,
@@ -551,7 +551,7 @@ def examine(trace: Trace | list, *, params: Any = None, config: Any = None,
     if ident is None:
         ident = identify(work, config, seed=seed, params=params, callback=callback)
     diag = diagnose_identification(work, ident, params=params, thresholds=thresholds,
-                                   findings={"current_sensor": finding}, loops=loops)
+                                   findings=as_findings(finding), loops=loops)
     if not finding.observable:
         diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
     return _examination(ident, diag, work, finding)

@@ -57,7 +57,7 @@ def test_the_degradation_demo_simulates_identifies_and_predicts(tmp_path):
     three inspections and a small budget: a growing short read at each, a prediction,
     three figures."""
     r, out = _run("degradation_demo.py", tmp_path)
-    rows = re.findall(r"^t = +(\d+) h  identified short_a = ([\d.]+)  verdict (\w+)$",
+    rows = re.findall(r"^t = +(\d+) h  identified short_circuit_a = ([\d.]+)  verdict (\w+)$",
                       r.stdout, flags=re.M)
     assert [int(t) for t, _, _ in rows] == [0, 475, 950]
     shorts = [float(x) for _, x, _ in rows]

@@ -171,4 +171,4 @@ def test_readme_commands_run_in_order_in_an_empty_folder(tmp_path):
                    if cmd == "emaphm diagnose inspection.parquet --params unit7-assessed.toml"]
     assert "verdict: FAULTY" in assessed and "short circuit" in assessed and "phase A" in assessed
     (prog,) = [out for cmd, out in outputs_of.items() if cmd.startswith("emaphm prognose")]
-    assert "first to fail: short_a" in prog
+    assert "first to fail: short_circuit_a" in prog

@@ -125,7 +125,7 @@ def test_assess_past_threshold_falling_flat_new_and_never_inspected(tmp_path):
     assert flat.trend == 0 and flat.rul_state == "no growth" and flat.verdict == "healthy"
     new = assess(data["NEW"], seed=0)
     assert new.prognosis is None and new.rul_state == "no prediction" and new.trend is None
-    assert new.worst == "short_a" and math.isnan(new.rul_median)
+    assert new.worst == "short_circuit_a" and math.isnan(new.rul_median)
     none = assess(data["NONE"], seed=0)
     assert none.worst is None and none.verdict == "not inspected" and none.n_inspections == 0
     assert [s.id for s in order_fleet([none, new, flat, fall, past])] == \
@@ -143,7 +143,7 @@ def test_a_trend_within_the_noise_is_not_a_predicted_failure(tmp_path):
     t = np.array(unit.times)
     data = _history(tmp_path, {unit.id: (t, _synthetic(unit))})
     s = assess(data[unit.id], seed=0)
-    p = s.prognosis.predictions["short_b"]
+    p = s.prognosis.predictions["short_circuit_b"]
     span = t[-1] - t[0]
     assert math.isfinite(p.median) and not p.no_growth(span)       # prognose sees a crossing
     assert s.rul_state == "no growth" and not s.predicted and s.trend == 0
@@ -250,7 +250,7 @@ def test_the_index_lists_every_actuator_in_attention_order(small_site):
     data = json.loads((site.out / "fleet.json").read_text())
     assert [r["id"] for r in data["actuators"]] == order
     past = data["actuators"][0]
-    assert past["rul_state"] == "past threshold" and past["worst"] == "short_a"
+    assert past["rul_state"] == "past threshold" and past["worst"] == "short_circuit_a"
     soon = data["actuators"][1]
     assert soon["rul_state"] == "predicted" and soon["trend"] == 1 and soon["rul_median"] > 0
     assert soon["rul_lo"] <= soon["rul_median"] <= (soon["rul_hi"] or math.inf)
@@ -590,7 +590,7 @@ def test_fleet_schedule_writes_one_row_per_actuator_soonest_first_linked_to_its_
     assert [r["actuator"] for r in table] == [r["actuator"] for r in rows]
     assert len(table) == 5 and table[0]["due_now"] == "yes"
     assert table[0]["actuator"] == "EMA-PAST" and table[0]["rule"] == "act now"
-    assert table[0]["indicator"] == "short_a"
+    assert table[0]["indicator"] == "short_circuit_a"
     due = [r["inspect_by"] - (r["last_inspection"] or 0.0) for r in rows]
     assert due == sorted(due)
     soon = next(r for r in table if r["actuator"] == "EMA-SOON")     # 0.47 of 0.5, growing
@@ -669,7 +669,7 @@ def test_the_index_shows_when_to_inspect_each_actuator_sortable_and_due_in_red(s
     rows = {r["id"]: r for r in data["actuators"]}
     past, soon, cal = rows["EMA-PAST"], rows["EMA-SOON"], rows["EMA-CAL"]
     assert past["inspect_now"] and past["inspect_rule"] == "act now"
-    assert past["inspect_indicator"] == "short_a" and past["inspect_by"] == 600.0
+    assert past["inspect_indicator"] == "short_circuit_a" and past["inspect_by"] == 600.0
     assert soon["inspect_indicator"] == "friction" and soon["inspect_reason"]
     assert (cal["inspect_rule"], cal["inspect_by"], cal["inspect_now"]) == ("healthy", 900.0, False)
     assert rows["EMA-NEW"]["inspect_rule"] == "too few inspections"
@@ -687,7 +687,7 @@ def test_the_index_shows_when_to_inspect_each_actuator_sortable_and_due_in_red(s
     assert html.count('class="c-inspect"') == 5 + 1           # each row and the heading
     due = re.findall(r'<td class="c-inspect"[^>]*><div><strong class="due" title="([^"]*)">'
                      r'act now</strong><small>([^<]*)</small>', html)
-    assert ("short_a" in {ind for _, ind in due}) and all(t for t, _ in due)
+    assert ("short_circuit_a" in {ind for _, ind in due}) and all(t for t, _ in due)
     assert re.search(r'<td class="c-inspect"[^>]*><div><span title="[^"]*">900 h</span>'
                      r'<small>in 300 h \u00b7 default interval</small>', html)
     assert ".due { color: var(--red); }" in (site.out / "assets" / "fleet.css").read_text()

@@ -427,17 +427,17 @@ def test_a_plan_made_after_the_last_inspection_does_not_act_on_a_jump_carried_fo
     t, K = _one_reading_jump()
     policy = InspectionPolicy(risk=0.01)
     prog, plan = next_inspection(t, K, seed=0, policy=policy, t_now=1900.0)
-    p = prog.predictions["short_b"]
+    p = prog.predictions["short_circuit_b"]
     assert p.median == 0.0 and p.current > 1.0                 # the carried-forward trend
     assert indicator_state(p, 1763.0)[0] == "no growth"
-    assert "short_b" not in taking_part(prog) and prog.first.indicator == "friction"
+    assert "short_circuit_b" not in taking_part(prog) and prog.first.indicator == "friction"
     assert plan.rule != "act now" and plan.indicator == "friction" and plan.at > 1900.0
     _, at_last = next_inspection(t, K, seed=0, policy=policy)
     assert at_last.indicator == "friction" and at_last.at == pytest.approx(plan.at, abs=60.0)
     # a reading past its threshold at the last inspection stays past, whenever planned
     K[-1, 3] = 0.35
     prog, plan = next_inspection(t, K, seed=0, policy=policy, t_now=1900.0)
-    assert indicator_state(prog.predictions["short_b"], 1763.0)[0] == "past threshold"
+    assert indicator_state(prog.predictions["short_circuit_b"], 1763.0)[0] == "past threshold"
     assert plan.rule == "act now"
 
 
@@ -452,14 +452,14 @@ def test_prognose_table_marks_a_trend_carried_past_its_range(tmp_path, capsys):
             h.add("EMA-1", float(ti), k)
     assert main(["prognose", "EMA-1", "--db", db, "--at", "1900", "--risk", "0.01"]) == 0
     out = capsys.readouterr().out
-    row = next(line for line in out.splitlines() if line.startswith("short_b"))
+    row = next(line for line in out.splitlines() if line.startswith("short_circuit_b"))
     assert ">1.000" in row and "no growth" in row and "in the noise" in row
     assert "past the range its indicator can take, shown at the bound" in out
     assert "first to fail: friction" in out and "act now" not in out
     # the JSON says what the table says: each prediction's state
     assert main(["prognose", "EMA-1", "--db", db, "--at", "1900", "--json"]) == 0
     preds = json.loads(capsys.readouterr().out)["predictions"]
-    assert (preds["short_b"]["state"], preds["friction"]["state"]) == ("no growth", "predicted")
+    assert (preds["short_circuit_b"]["state"], preds["friction"]["state"]) == ("no growth", "predicted")
     # at the last inspection a healthy component's fit below 0 is scatter, shown as it is
     assert main(["prognose", "EMA-1", "--db", db]) == 0
     out = capsys.readouterr().out
@@ -468,7 +468,7 @@ def test_prognose_table_marks_a_trend_carried_past_its_range(tmp_path, capsys):
 
     with HealthHistory(db, readonly=True) as h:
         data = h.data("EMA-1")
-    p = prognose(data.times, data.K, seed=0).predictions["short_c"]
+    p = prognose(data.times, data.K, seed=0).predictions["short_circuit_c"]
     assert _now_text(dataclasses.replace(p, current=-0.0012)) == "-0.001"
     assert _now_text(dataclasses.replace(p, current=-0.0012, t_now=1900.0)) == "<0.000"
 

@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from emaphm.prognosis.simulator import (DEGRADATION_SCENARIOS, DegradationLaw, DegradationScenario,
                                         degradation_scenario, inspection_times, synthetic_k_history)
-from emaphm.prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds,
+from emaphm.prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT, INDICATORS, FailureThresholds,
                                          indicator_values, parse_threshold)
 from emaphm.prognosis.trends import (fit_trend, fit_trends, indicator_series, indicator_state,
                                      predict_rul, prognose, rul_track, select)
@@ -258,7 +258,9 @@ def test_prognose_all_indicators_and_subset_independence():
     t = inspection_times(sc.eol, 8)
     K = synthetic_k_history(sc, t, seed=5)
     full = prognose(t, K, seed=9)
-    assert set(full.predictions) == set(INDICATORS)
+    # every indicator of k; the demagnetization's readings are not in k (none given: no
+    # prediction)
+    assert set(full.predictions) == set(INDICATORS) - {"demagnetization"}
     assert full.first.indicator == "friction"
     only = prognose(t, K, seed=9, indicators=("friction",))
     np.testing.assert_array_equal(only.predictions["friction"].samples,
@@ -283,8 +285,8 @@ def test_thresholds_defaults_updates_and_misuse():
     th = DEFAULT_FAILURE_THRESHOLDS
     assert (th.friction, th.backlash, th.short_circuit, th.eccentricity, th.gain_drift) == \
         (0.5, 0.5, 0.3, 0.5, 0.25)
-    assert th.for_indicator("short_b") == 0.3
-    new = th.with_updates(dict([parse_threshold("friction=0.4"), parse_threshold("short-a=0.2")]))
+    assert th.for_indicator("short_circuit_b") == 0.3
+    new = th.with_updates(dict([parse_threshold("friction=0.4"), parse_threshold("short-circuit-a=0.2")]))
     assert new.friction == 0.4 and new.short_circuit == 0.2 and th.friction == 0.5
     with pytest.raises(ValueError, match=r"gain_drift must be in \(0, 0.5\]"):
         FailureThresholds(gain_drift=0.6)
@@ -467,7 +469,8 @@ def test_a_trend_read_beyond_k_1_says_it_is_extrapolated():
 
     K = _growing_friction(T)
     now = prognose(T, K, seed=0)
-    assert {n: p.extrapolated for n, p in now.predictions.items()} == dict.fromkeys(INDICATORS, "")
+    assert {n: p.extrapolated for n, p in now.predictions.items()} == \
+        dict.fromkeys(INDICATOR_COMPONENT, "")
     assert now.predictions["friction"].to_dict()["extrapolated"] is None
     late = prognose(T, K, seed=0, t_now=1500.0).predictions
     f = late["friction"]
@@ -599,7 +602,7 @@ def test_a_history_of_ten_thousand_inspections_is_prognosed_whole():
     K[wrong, 0] += 0.2
     K = np.clip(K, 0.0, 1.0)
     p = prognose(t, K, seed=0)
-    assert set(p.predictions) == set(INDICATORS)
+    assert set(p.predictions) == set(INDICATOR_COMPONENT)       # every indicator of k
     friction = p.predictions["friction"]
     assert set(friction.excluded) >= set(np.flatnonzero(wrong[:-2]))
     assert indicator_state(friction, t[-1])[0] == "predicted"
@@ -612,7 +615,10 @@ def test_the_parsers_names_and_defaults_are_the_modules():
     from emaphm.prognosis import choices, inspection, simulator, thresholds
 
     assert choices.DEGRADATION_SCENARIO_NAMES == tuple(simulator.DEGRADATION_SCENARIOS)
-    assert choices.INDICATORS is thresholds.INDICATORS
+    # the indicators come from the modes' registry, read when the parser checks or shows them
+    assert tuple(choices.INDICATORS) == thresholds.INDICATORS
+    assert "short_a" in choices.INDICATORS and "short_d" not in choices.INDICATORS
+    assert str(choices.FAILURE_DEFAULTS).startswith("friction 0.5, backlash 0.5, short_circuit 0.3")
     assert choices.DEFAULT_RISK == inspection.DEFAULT_RISK == 0.01
     d = inspection.INTERVAL_DEFAULTS["h"]
     assert (d.default, d.min, d.max) == tuple(choices.FLIGHT_HOUR_INTERVALS[k] for k in

@@ -30,6 +30,7 @@ def measures_of(ex: Any, params: Any) -> dict[str, float]:
     """What each threshold is compared with in the examination ``ex`` (every mode's
     :attr:`~emaphm.modes.FaultMode.measure` on the verdict's reading)."""
     from ..modes import MODES, Reading, thresholds_for
+    from ..modes.current_sensor import as_findings
 
     d = ex.diagnosis
     ident = ex.identification
@@ -38,7 +39,7 @@ def measures_of(ex: Any, params: Any) -> dict[str, float]:
         k, extra = d.refit.k, dict(d.refit.nuisance)
     r = Reading(k=k, params=params, fault_model=ident.fault_model,
                 thresholds=thresholds_for(ident.fault_model, params), extra=extra,
-                findings={"current_sensor": ex.sensor})
+                findings=as_findings(ex.sensor))
     out: dict[str, float] = {}
     for m in MODES.values():
         out.update({name: float(v) for name, v in m.measure(r).items()})

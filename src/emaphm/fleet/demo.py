@@ -34,6 +34,8 @@ from typing import Any, Callable, Iterable, Iterator, Sequence
 
 import numpy as np
 
+from ..modes import (backlash as _backlash, eccentricity as _eccentricity, friction as _friction,
+                     gain_drift as _gain_drift, short_circuit as _short)
 from ..prognosis.simulator import DegradationLaw, DegradationScenario
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS
 from ..seeds import check_seed
@@ -52,16 +54,16 @@ MAX_SYNTHETIC = 20_000
 #: The faults of the demo fleet, dealt in this order (``None``: a healthy unit):
 #: (health indicator, degradation law, direction, words).
 FAULT_KINDS: tuple = (
-    ("friction", "linear", 1, "dry friction, wear (linear)"),
-    ("short_a", "exponential", 1, "inter-turn short circuit, phase A (exponential)"),
+    (_friction.INDICATORS[0].name, "linear", 1, "dry friction, wear (linear)"),
+    (_short.INDICATORS[0].name, "exponential", 1, "inter-turn short circuit, phase A (exponential)"),
     None,
-    ("gain_drift", "linear", -1, "position-loop gain drifting down (linear)"),
-    ("friction", "power", 1, "dry friction, accelerating wear (t^2)"),
+    (_gain_drift.INDICATORS[0].name, "linear", -1, "position-loop gain drifting down (linear)"),
+    (_friction.INDICATORS[0].name, "power", 1, "dry friction, accelerating wear (t^2)"),
     None,
-    ("backlash", "linear", 1, "backlash, wear (linear)"),
-    ("short_b", "exponential", 1, "inter-turn short circuit, phase B (exponential)"),
+    (_backlash.INDICATORS[0].name, "linear", 1, "backlash, wear (linear)"),
+    (_short.INDICATORS[1].name, "exponential", 1, "inter-turn short circuit, phase B (exponential)"),
     None,
-    ("eccentricity", "linear", 1, "rotor eccentricity (linear)"),
+    (_eccentricity.INDICATORS[0].name, "linear", 1, "rotor eccentricity (linear)"),
 )
 
 _POSITIONS = ("left aileron", "right aileron", "left elevator", "right elevator", "rudder",

@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 
 from ..faults import K_LABELS
+from ..modes import axis_label
 from ..prognosis.plots import STATE_COLORS, component_status
 from ..prognosis.thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT,
                                     FailureThresholds)
@@ -135,7 +136,7 @@ def _cone_panel(prog: "Prognosis", name: str, last: bool) -> Panel:
                        max(p.threshold * 1.25, float(np.nanmax(y, initial=0.0)) * 1.1)),
                  layers=layers, legend=True, notes=notes,
                  xlabel=f"time [{unit}]" if last else "",
-                 ylabel=name + (" (k8 - 0.5, signed)" if name == "gain_drift" else "") + " [-]")
+                 ylabel=axis_label(name))
 
 
 class PageFigures:

@@ -84,6 +84,7 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
 
+from .. import modes as _modes
 from .._files import atomic_write_text
 from .._text import utf8_text
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
@@ -113,10 +114,8 @@ PAGE_ROWS = 100
 _CSP = ("default-src 'none'; img-src 'self' file:; style-src 'self' file:; "
         "script-src 'self' file:; base-uri 'none'; form-action 'none'")
 
-_INDICATOR_LABEL = {"friction": "friction (k1)", "backlash": "backlash (k2)",
-                    "short_a": "short circuit A (k3)", "short_b": "short circuit B (k4)",
-                    "short_c": "short circuit C (k5)", "eccentricity": "eccentricity (k6)",
-                    "gain_drift": "gain drift (|k8 - 0.5|)"}
+#: Each health indicator's label (:attr:`emaphm.modes.Indicator.label`).
+_INDICATOR_LABEL = {n: i.label for n, i in _modes.INDICATORS.items()}
 
 _DASH = "\u2013"
 
@@ -210,7 +209,10 @@ _PAGE_CODE = ("emaphm.plots", "emaphm.faults", "emaphm.prognosis.history",
               "emaphm.prognosis.choices",
               "emaphm.prognosis.thresholds", "emaphm.prognosis.inspection",
               "emaphm.fleet.status", "emaphm.fleet.site",
-              "emaphm.fleet.markup", "emaphm.fleet.figures", "emaphm.fleet.svgplot")
+              "emaphm.fleet.markup", "emaphm.fleet.figures", "emaphm.fleet.svgplot",
+              # the vocabulary: each indicator's label, threshold and reading
+              "emaphm.modes", "emaphm.modes.base",
+              *sorted({m.read.__module__ for m in _modes.MODES.values()}))
 
 #: Most actuators in one task of a worker process or a Dask worker.
 _BATCH_MAX = 16

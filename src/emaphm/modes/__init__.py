@@ -29,11 +29,13 @@ import math
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from .base import PHASES, Fault, FaultMode, Grid, Injection, Reading
+from .base import PHASES, Fault, FaultMode, Grid, Indicator, Injection, Reading
 
 __all__ = ["MODES", "FAULT_MODES", "PAPER_MODES", "Thresholds", "DEFAULT_THRESHOLDS", "THRESHOLDS_BY_FAULT_MODEL",
            "thresholds_for", "mode", "read_faults", "parse_fault", "fault_specs", "Fault", "FaultMode", "Grid", "Injection", "Reading",
-           "PHASES"]
+           "PHASES", "Indicator", "INDICATORS", "INDICATOR_MODE", "INDICATOR_ALIASES", "indicator",
+           "indicator_name", "FAILURE_FIELDS", "axis_label", "indicator_readings",
+           "CONTROLLER_MODES"]
 
 #: The modules of the modes, in the order a verdict lists their faults.
 _MODULES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift",
@@ -48,6 +50,87 @@ FAULT_MODES: tuple[str, ...] = tuple(MODES)
 
 #: The paper's five modes: those of its fault vector k.
 PAPER_MODES: tuple[str, ...] = tuple(n for n, m in MODES.items() if m.k_components)
+
+
+#: name -> health indicator (:class:`~emaphm.modes.base.Indicator`), every mode's, in the
+#: registry's order (a prognosis spawns each indicator's seed in this order: a new mode's
+#: indicators come after the others').
+INDICATORS: Mapping[str, Indicator] = MappingProxyType(
+    {i.name: i for m in MODES.values() for i in m.indicators})
+
+#: indicator -> the name of its mode.
+INDICATOR_MODE: Mapping[str, str] = MappingProxyType(
+    {i.name: m.name for m in MODES.values() for i in m.indicators})
+
+#: An indicator's older name -> its name (accepted with a DeprecationWarning).
+INDICATOR_ALIASES: Mapping[str, str] = MappingProxyType(
+    {a: i.name for i in INDICATORS.values() for a in i.aliases})
+
+
+def _failure_fields() -> dict[str, tuple[float, float]]:
+    out: dict[str, tuple[float, float]] = {}
+    for i in INDICATORS.values():
+        field_ = (i.failure, i.bounds[1])
+        if out.setdefault(i.threshold, field_) != field_:
+            raise ValueError(f"indicators of failure threshold {i.threshold} disagree on its "
+                             f"default or range: {out[i.threshold]} and {field_}")
+    return out
+
+
+#: The fields of :class:`emaphm.prognosis.FailureThresholds`: name -> (default, the
+#: largest value it may take), one per mode trended (the indicators of a mode's phases
+#: share their mode's).
+FAILURE_FIELDS: Mapping[str, tuple[float, float]] = MappingProxyType(_failure_fields())
+
+
+def indicator_name(name: str, *, stacklevel: int = 2) -> str:
+    """The indicator called ``name``: its name, from an older one with a
+    DeprecationWarning (``short_a`` is ``short_circuit_a``); ValueError naming the known
+    ones."""
+    if name in INDICATORS:
+        return name
+    if name in INDICATOR_ALIASES:
+        import warnings
+
+        new = INDICATOR_ALIASES[name]
+        warnings.warn(f"the health indicator {name} is now called {new}; the old name goes in "
+                      "a later release", DeprecationWarning, stacklevel=stacklevel + 1)
+        return new
+    raise ValueError(f"unknown health indicator {name!r}; choose one of {', '.join(INDICATORS)}")
+
+
+def indicator_readings(diagnosis: Mapping[str, Any] | None,
+                       extra: Mapping[str, Any] | None) -> dict[str, float | None]:
+    """Each indicator beyond k as an inspection measured it, from its stored ``diagnosis``
+    (:meth:`emaphm.diagnosis.Diagnosis.to_dict`) and record (``extra``): name -> value, None
+    where it did not (a malformed record reads as not measured)."""
+    out: dict[str, float | None] = {}
+    for name, ind in INDICATORS.items():
+        if ind.reading is None:
+            continue
+        try:
+            v = ind.reading(diagnosis if isinstance(diagnosis, Mapping) else {},
+                            extra if isinstance(extra, Mapping) else {})
+            v = None if v is None else float(v)
+        except (TypeError, ValueError, KeyError, AttributeError, OverflowError):
+            v = None
+        out[name] = v if v is not None and math.isfinite(v) else None
+    return out
+
+
+def axis_label(name: str) -> str:
+    """The trend axis label of indicator ``name`` (a free name as itself)."""
+    ind = INDICATORS.get(name)
+    return ind.axis if ind is not None else f"{name} [-]"
+
+
+def indicator(name: str) -> Indicator:
+    """The health indicator called ``name`` (an older name with a DeprecationWarning)."""
+    return INDICATORS[indicator_name(name, stacklevel=3)]
+
+
+#: The modes whose fault is in the drive's position controller (:attr:`FaultMode.in_controller`).
+CONTROLLER_MODES: tuple[str, ...] = tuple(n for n, m in MODES.items() if m.in_controller)
 
 
 def mode(name: str) -> FaultMode:

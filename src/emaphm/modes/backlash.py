@@ -4,7 +4,7 @@ data sheet states none, ``BACKLASH_FROM_ZERO k2`` (:func:`emaphm.faults.backlash
 from __future__ import annotations
 
 from ..faults import BACKLASH_FROM_ZERO, backlash_scale, backlash_width
-from .base import Fault, FaultMode, Injection, Reading
+from .base import Fault, FaultMode, Indicator, Injection, Reading
 
 
 def read(r: Reading) -> list[Fault]:
@@ -32,6 +32,13 @@ def measure(r: Reading) -> dict[str, float]:
     return {"backlash": float(r.k[1])}
 
 
+#: Trended by k2. Failure at 0.5: 50.5x nominal, about 10 mrad of lost motion at the motor,
+#: far past what a surface actuator accepts before limit-cycle oscillation (flutter)
+#: concerns. Model discrepancy 0.058 (mean +0.025).
+INDICATORS = (Indicator("backlash", "backlash (k2)", failure=0.5, discrepancy=0.058,
+                        component=1),)
+
 MODE = FaultMode("backlash", "backlash", threshold=0.034, read=read, inject=inject,
                  severity_unit="x nominal backlash", grid=(5.0, 10.0, 25.0, 50.0),
-                 k_components=(1,), measure=measure, magnitude=lambda s: abs(s - 1.0))
+                 k_components=(1,), measure=measure, magnitude=lambda s: abs(s - 1.0),
+                 indicators=INDICATORS)

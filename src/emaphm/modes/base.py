@@ -9,7 +9,7 @@ what to change in the plant to simulate the fault at that severity). The registr
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any, Callable, Mapping
 
 import numpy as np
@@ -17,7 +17,7 @@ import numpy as np
 if TYPE_CHECKING:                   # annotations only: params reads the modes' thresholds
     from ..params import ActuatorParams
 
-__all__ = ["Fault", "Reading", "Injection", "FaultMode", "Grid", "PHASES"]
+__all__ = ["Fault", "Reading", "Injection", "FaultMode", "Grid", "Indicator", "PHASES"]
 
 #: The phases, as faults name them.
 PHASES = ("A", "B", "C")
@@ -115,6 +115,83 @@ def _identity_measure(r: "Reading") -> dict[str, float]:
 
 
 @dataclass(frozen=True)
+class Indicator:
+    """A health indicator a mode is trended by (:mod:`emaphm.prognosis`): 0 on a healthy
+    unit, growing with the fault, read in the mode's severity unit.
+
+    ===============  ================================================================
+    field            meaning
+    ===============  ================================================================
+    name             its name (``--indicator``), the mode's own or ``MODE_PHASE``
+    label            in words, for plots, tables and the fleet site
+    failure          the default failure threshold on it, with the reason in its mode's
+                     module (:class:`emaphm.prognosis.FailureThresholds` field
+                     ``threshold``, default the mode's name)
+    discrepancy      its relative systematic error as identified (one standard
+                     deviation), measured on plant traces; every RUL carries it
+    component        the index of k it is read from (None: read from a stored
+                     inspection by ``reading``)
+    center           where a component's healthy level is not 0 (the gain drift's
+                     k8 = 0.5): the indicator is ``|k - center|``, its series trended
+                     signed along a history
+    bounds           the range the indicator (its signed series) can take
+    phase            the phase it applies to, for a mode of one phase
+    aliases          older names, accepted with a DeprecationWarning
+    reading          ``reading(diagnosis, extra) -> float | None`` of an indicator
+                     beyond k: its value from an inspection's stored diagnosis
+                     (:meth:`emaphm.diagnosis.Diagnosis.to_dict`) and record
+                     (``Inspection.extra``); None where the inspection did not measure
+                     it (distinct from a reading below detection)
+    unmeasured       why an inspection may not have measured it, and what measures it
+                     (for the prognosis' account of the readings it left out)
+    ===============  ================================================================
+    """
+
+    name: str
+    label: str
+    failure: float
+    discrepancy: float = 0.0
+    component: int | None = None
+    center: float | None = None
+    bounds: tuple[float, float] = (0.0, 1.0)
+    phase: str | None = None
+    aliases: tuple[str, ...] = ()
+    threshold: str = ""
+    reading: Callable[[Mapping[str, Any], Mapping[str, Any]], float | None] | None = None
+    unmeasured: str = ""
+
+    def __post_init__(self) -> None:
+        if (self.component is None) == (self.reading is None):
+            raise ValueError(f"indicator {self.name}: give a component of k or a reading, one")
+        if not self.bounds[0] < self.failure <= self.bounds[1]:
+            raise ValueError(f"indicator {self.name}: failure threshold {self.failure} outside "
+                             f"its bounds {self.bounds}")
+
+    @property
+    def axis(self) -> str:
+        """Its trend's axis label (a centred one's signed series says so)."""
+        if self.center is not None:
+            return f"{self.name} (k{self.component + 1} - {self.center:g}, signed) [-]"
+        return f"{self.name} [-]"
+
+    def of_k(self, K: np.ndarray) -> np.ndarray:
+        """Its values of fault vectors ``K`` (..., 8) (a component of k only)."""
+        x = np.asarray(K, dtype=float)[..., self.component]
+        return x.copy() if self.center is None else np.abs(x - self.center)
+
+    def series_of_k(self, K: np.ndarray) -> np.ndarray:
+        """Its series along a k history ``K`` (n, 8): as :meth:`of_k`, except that a
+        centred one keeps its sign, that of the latest reading (near its healthy level the
+        absolute value would fold the identification noise upward and bend the early
+        trend)."""
+        x = np.asarray(K, dtype=float)[:, self.component]
+        if self.center is None:
+            return x.copy()
+        d = x - self.center
+        return d if d.size == 0 or d[-1] >= 0 else -d
+
+
+@dataclass(frozen=True)
 class FaultMode:
     """A fault mode of the registry.
 
@@ -148,6 +225,9 @@ class FaultMode:
                         ``|s - 1|`` for a factor of nominal)
     grids               the assessment's grids, where the mode has more than ``grid``
                         (default: one :class:`Grid` of ``grid`` in ``severity_unit``)
+    indicators          the :class:`Indicator` s it is trended by (prognosis)
+    in_controller       the fault is in the position controller the drive runs (a gain):
+                        a drive path that does not model the controller cannot see it
     ==================  =================================================================
     """
 
@@ -168,6 +248,13 @@ class FaultMode:
     measure: Callable[[Reading], dict[str, float]] = _identity_measure
     magnitude: Callable[[float], float] = abs
     extra_grids: tuple[Grid, ...] = ()
+    indicators: tuple[Indicator, ...] = ()
+    in_controller: bool = False
+
+    def __post_init__(self) -> None:
+        # each indicator's failure threshold field defaults to the mode's name
+        object.__setattr__(self, "indicators", tuple(
+            i if i.threshold else replace(i, threshold=self.name) for i in self.indicators))
 
     def grids(self) -> tuple[Grid, ...]:
         """The grids an assessment runs this mode on (none where it cannot be simulated)."""

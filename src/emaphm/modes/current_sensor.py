@@ -175,8 +175,13 @@ def resolve(trace: Trace, finding: SensorFinding, identify: Callable[[Trace], An
     return placed, correct(trace, placed), ident
 
 
+def as_findings(finding: SensorFinding) -> dict[str, SensorFinding]:
+    """``finding`` as the verdict's ``findings`` keep it (under this mode's name)."""
+    return {MODE.name: finding}
+
+
 def read(r: Reading) -> list[Fault]:
-    f: SensorFinding | None = r.findings.get("current_sensor")
+    f: SensorFinding | None = r.findings.get(MODE.name)
     if f is None or not f.faulty or f.phase is None:
         return []
     ph = PHASES[f.phase]
@@ -227,7 +232,7 @@ def measure(r: Reading) -> dict[str, float]:
     """The single-sensor fit's gain and offset deviations beyond the unit's tolerance,
     what the screen compares with its thresholds (0 where no single sensor explains the
     sum, or with two measured currents)."""
-    f: SensorFinding | None = r.findings.get("current_sensor")
+    f: SensorFinding | None = r.findings.get(MODE.name)
     if f is None or f.fit is None or not f.fit.plausible:
         return {"current_sensor_gain": 0.0, "current_sensor_offset": 0.0}
     tol_gain, tol_offset = tolerance(r.params)

@@ -16,11 +16,11 @@ plus the flux tolerance of the production units (:data:`emaphm.units.DEFAULT_TOL
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any
+from typing import Any, Mapping
 
-from .base import Fault, FaultMode, Injection, Reading
+from .base import Fault, FaultMode, Indicator, Injection, Reading
 
-__all__ = ["MODE", "hypothesis", "tolerance"]
+__all__ = ["MODE", "hypothesis", "tolerance", "flux_loss"]
 
 #: The flux drift searched after a calibration (``"flux"``) sitting this close to its
 #: lower bound asks for the demagnetization hypothesis.
@@ -90,6 +90,36 @@ def measure(r: Reading) -> dict[str, float]:
     return {"demagnetization": loss - tolerance(r.params)}
 
 
+def flux_loss(diagnosis: Mapping[str, Any] | None, extra: Mapping[str, Any] | None) -> float | None:
+    """The fraction of the magnet flux lost, as an inspection measured it: from the refit the
+    verdict was read on where it searched the flux (``"demag"``, or the drift ``"flux"``),
+    else from the identification's own flux drift (searched at every inspection of a
+    calibrated unit, within +-6 %); None where neither searched it (a data sheet's unit
+    whose residual did not ask for the hypothesis: its flux differs from the data sheet by
+    the production tolerance, which no loss can be told from)."""
+    refit = (diagnosis or {}).get("hypothesis_check") or {}
+    for nu in (refit.get("nuisance") or {}, (extra or {}).get("nuisance") or {}):
+        for name in ("demag", "flux"):
+            if nu.get(name) is not None:
+                return -float(nu[name])
+    return None
+
+
+#: Trended by the fraction of the flux lost (:func:`flux_loss`), against the calibrated
+#: unit (on a data sheet, where the refit measured it, against the data sheet). Failure at
+#: 0.2: the drive needs 1/0.8 = 1.25x the current for the same torque, 1.56x the copper
+#: losses, at the edge of a flight actuator's torque and thermal margins, and the larger
+#: current's own field demagnetizes the magnets further. Model discrepancy 0.03: the
+#: relative RMS error of the loss read on plant traces of calibrated units, losses 5-20 %
+#: (``benchmarks/bench_prognosis.py --tune-discrepancy demagnetization``).
+INDICATORS = (Indicator("demagnetization", "demagnetization (flux lost)", failure=0.2,
+                        discrepancy=0.03, bounds=(-0.5, 1.0), reading=flux_loss,
+                        unmeasured="their identification searched no magnet flux: a data "
+                                   "sheet's unit, whose residual did not ask for a "
+                                   "demagnetization; after emaphm calibrate every inspection "
+                                   "measures it"),)
+
 MODE = FaultMode("demagnetization", "demagnetized rotor", threshold=0.08, read=read,
                  inject=inject, severity_unit="fraction of the magnet flux lost",
-                 grid=(0.05, 0.1, 0.15, 0.25), hypothesis=hypothesis, measure=measure)
+                 grid=(0.05, 0.1, 0.15, 0.25), hypothesis=hypothesis, measure=measure,
+                 indicators=INDICATORS)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from ..faults import eccentricity_phase
-from .base import Fault, FaultMode, Injection, Reading
+from .base import Fault, FaultMode, Indicator, Injection, Reading
 
 
 def read(r: Reading) -> list[Fault]:
@@ -28,7 +28,12 @@ def measure(r: Reading) -> dict[str, float]:
     return {"eccentricity": float(r.k[5])}
 
 
+#: Trended by k6. Failure at 0.5, half the air gap: the unbalanced magnetic pull grows and
+#: rotor-stator rub becomes a risk. Model discrepancy 0.0070.
+INDICATORS = (Indicator("eccentricity", "eccentricity (k6)", failure=0.5, discrepancy=0.0070,
+                        component=5),)
+
 MODE = FaultMode("eccentricity", "static eccentricity", threshold=0.015, read=read,
                  inject=inject, severity_unit="fraction of the air gap",
                  grid=(0.02, 0.05, 0.1, 0.25),
-                 k_components=(5, 6), measure=measure)
+                 k_components=(5, 6), measure=measure, indicators=INDICATORS)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..faults import friction_scale
-from .base import Fault, FaultMode, Injection, Reading
+from .base import Fault, FaultMode, Indicator, Injection, Reading
 
 
 def read(r: Reading) -> list[Fault]:
@@ -28,6 +28,16 @@ def measure(r: Reading) -> dict[str, float]:
     return {"friction": float(r.k[0])}
 
 
+#: Trended by k1. Failure at 0.5, twice the nominal dry friction: the position loop still
+#: tracks, but the stick-slip dead zone and the current spent on friction double; beyond it
+#: the torque margin of a flight-control actuator shrinks fast. Model discrepancy 0.053
+#: (mean +0.039): the plant's Stribeck drop, which the monitoring model lacks, reads as
+#: more Coulomb friction, more so as the friction grows (how it was measured:
+#: :data:`emaphm.prognosis.trends.MODEL_DISCREPANCY`).
+INDICATORS = (Indicator("friction", "friction (k1)", failure=0.5, discrepancy=0.053,
+                        component=0),)
+
 MODE = FaultMode("friction", "dry friction", threshold=0.100, read=read, inject=inject,
                  severity_unit="x nominal friction", grid=(1.25, 1.5, 2.0, 2.5),
-                 k_components=(0,), measure=measure, magnitude=lambda s: abs(s - 1.0))
+                 k_components=(0,), measure=measure, magnitude=lambda s: abs(s - 1.0),
+                 indicators=INDICATORS)

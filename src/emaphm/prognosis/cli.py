@@ -297,22 +297,31 @@ def threshold_option(items: list[str] | None):
         raise _usage(f"--threshold: {exc}") from None
 
 
-def _unobserved_lines(prog: Any) -> list[str]:
-    """What the trends left out: inspections whose drive path could not see a mode."""
+def _unobserved_lines(prog: Any, asked: Any = ()) -> list[str]:
+    """What the trends left out: inspections whose drive path could not see a mode, or
+    that did not measure an indicator beyond k."""
+    from ..modes import INDICATORS
     from .trends import MIN_INSPECTIONS
 
     n = prog.times.size
     out = []
     for name, ix in prog.unobserved.items():
         seen = n - len(ix)
+        if not seen and INDICATORS[name].reading is not None and name not in asked:
+            continue                # never measured: said only when asked for
         tail = (f"trended on the other {seen}" if name in prog.predictions else
-                f"no trend (it needs {MIN_INSPECTIONS} inspections that see it)")
-        out.append(f"{name}: not observable on {len(ix)} of {n} inspections (their drive path "
-                   f"cannot see it: its k there is a placeholder); {tail}")
+                f"no trend (it needs {MIN_INSPECTIONS} inspections that measure it)")
+        ind = INDICATORS.get(name)
+        if ind is not None and ind.reading is not None:
+            out.append(f"{name}: not measured on {len(ix)} of {n} inspections "
+                       f"({ind.unmeasured}); {tail}")
+        else:
+            out.append(f"{name}: not observable on {len(ix)} of {n} inspections (their drive "
+                       f"path cannot see it: its k there is a placeholder); {tail}")
     return out
 
 
-def _prognosis_table(prog: Any) -> str:
+def _prognosis_table(prog: Any, asked: Any = ()) -> str:
     from .choices import HEALTHY_SHARE
     from .trends import indicator_state, level_at_last
 
@@ -340,7 +349,7 @@ def _prognosis_table(prog: Any) -> str:
         lines.append(f"(now: > or < marks a trend carried to {prog.t_now:g} {unit} past the range "
                      "its indicator can take, shown at the bound)")
     lines += [f"{n}: {p.extrapolated}" for n, p in prog.predictions.items() if p.extrapolated]
-    lines += _unobserved_lines(prog)
+    lines += _unobserved_lines(prog, asked)
     first = prog.first
     if first is not None and math.isfinite(first.median):
         lines.append(f"\nfirst to fail: {first.indicator}, median RUL {_fmt_time(first.median, unit)} "
@@ -401,6 +410,18 @@ def option_words(text: str) -> str:
     return text
 
 
+def _indicator_arg(name: str) -> str:
+    """``--indicator NAME``: an older name said so on stderr and taken."""
+    from .. import modes
+
+    new = modes.INDICATOR_ALIASES.get(name)
+    if new is None:
+        return name
+    warn("prognose", f"--indicator {name} is now called {new}; the old name goes in a later "
+                     "release")
+    return new
+
+
 def cmd_prognose(args: argparse.Namespace) -> int:
     from .history import HealthHistory
     from .thresholds import INDICATORS
@@ -424,7 +445,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     if data.n < MIN_INSPECTIONS and (policy is None or plot):
         raise _usage(f"{args.actuator} has {data.n} inspection(s); a trend needs at least "
                      f"{MIN_INSPECTIONS}: record more with emaphm history add")
-    indicators = args.indicator or INDICATORS
+    indicators = [_indicator_arg(n) for n in args.indicator] if args.indicator else INDICATORS
     prog, plan = _prognose_and_plan(data, args, thresholds, indicators, policy)
     if args.json:
         out = prog.to_dict() if prog is not None else _no_trend_dict(data, args, thresholds)
@@ -433,7 +454,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
         print(json.dumps(out))
     else:
         if prog is not None:
-            print(_prognosis_table(prog))
+            print(_prognosis_table(prog, indicators if args.indicator else ()))
         if plan is not None:
             print(plan.summary(data.actuator.id))
             print(f"(risk {plan.target:g}; intervals: default {plan.intervals.default:g}, min "
@@ -442,7 +463,7 @@ def cmd_prognose(args: argparse.Namespace) -> int:
     if plot:
         from .plots import plot_prognosis
 
-        plot_prognosis(prog, path=plot, indicators=args.indicator)
+        plot_prognosis(prog, path=plot, indicators=indicators if args.indicator else None)
         print(f"wrote {plot}", file=sys.stderr)
     return 0
 
@@ -454,7 +475,8 @@ def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, ind
 
     common = dict(seed=args.seed, thresholds=thresholds, indicators=indicators, t_now=args.at,
                   actuator=data.actuator.id, time_unit=data.actuator.time_unit,
-                  level=args.level, selection=args.selection, observed=data.observed)
+                  level=args.level, selection=args.selection, observed=data.observed,
+                  readings=data.readings)
     if policy is None:
         return prognose(data.times, data.K, **common), None
     from .inspection import n_samples_for, plan_inspection
@@ -465,7 +487,8 @@ def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, ind
     t_now = args.at if args.at is not None else None
     return prog, plan_inspection(data.times, prog, policy=policy, t_now=t_now,
                                  time_unit=data.actuator.time_unit, K=data.K,
-                                 thresholds=thresholds, indicators=indicators)
+                                 thresholds=thresholds, indicators=indicators,
+                                 observed=data.observed, readings=data.readings)
 
 
 def _no_trend_dict(data: Any, args: argparse.Namespace, thresholds: Any) -> dict:
@@ -654,16 +677,16 @@ def _register_add(hs: Any) -> None:
 
 
 def _register_prognose(subparsers: Any) -> None:
-    from .choices import INDICATORS, SELECTION_RULES
+    from .choices import FAILURE_DEFAULTS, INDICATORS, SELECTION_RULES
 
     p = subparsers.add_parser("prognose", help="fault trends and remaining useful life of an actuator")
     p.add_argument("actuator", type=actuator_id)
-    p.add_argument("--threshold", action="append", metavar="MODE=VALUE",
-                   help="failure threshold of a fault mode (repeatable), e.g. friction=0.4; "
-                        "defaults friction 0.5, backlash 0.5, short_circuit 0.3, "
-                        "eccentricity 0.5, gain_drift 0.25")
-    p.add_argument("--indicator", action="append", choices=INDICATORS,
-                   help="predict only these health indicators (repeatable)")
+    a = p.add_argument("--threshold", action="append", metavar="MODE=VALUE",
+                       help="failure threshold of a fault mode (repeatable), e.g. friction=0.4; "
+                            "defaults %(failure_defaults)s")
+    a.failure_defaults = FAILURE_DEFAULTS     # read from the modes when the help is printed
+    p.add_argument("--indicator", action="append", choices=INDICATORS, metavar="INDICATOR",
+                   help="predict only these health indicators (repeatable): %(choices)s")
     p.add_argument("--plot", help="write trend, threshold and prediction cone (.png/.svg/.pdf)")
     p.add_argument("--seed", type=_seed, default=0, help="seed of the Monte Carlo draws (default 0)")
     p.add_argument("--level", type=float, default=0.9, help="probability of the RUL interval (default 0.9)")

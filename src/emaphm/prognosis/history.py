@@ -73,7 +73,7 @@ __all__ = ["SCHEMA_VERSION", "TIME_UNITS", "MAX_TIME", "HistoryError", "UnknownA
            "CalibrationRecord", "HealthHistory", "trace_fingerprint", "DEFAULT_DB",
            "check_registration"]
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 TIME_UNITS = ("h", "cycles")
 
 #: Latest time a history holds, per time unit (times start at 0, entry into service).
@@ -117,6 +117,7 @@ CREATE TABLE inspections (
     source TEXT,
     recorded_utc TEXT NOT NULL,
     extra TEXT NOT NULL DEFAULT '{}',
+    readings TEXT NOT NULL DEFAULT '{}',
     UNIQUE (actuator, time)
 );
 CREATE INDEX inspections_fingerprint ON inspections(actuator, fingerprint);
@@ -205,7 +206,9 @@ class Inspection:
     (``spread_method`` at probability ``level``); ``diagnosis`` the
     :meth:`emaphm.diagnosis.Diagnosis.to_dict`; ``fingerprint`` the SHA-256
     of the trace's signals (:func:`trace_fingerprint`); ``source`` where the
-    trace came from (a path); ``extra`` free JSON.
+    trace came from (a path); ``extra`` free JSON; ``readings`` the health indicators
+    beyond k as the inspection measured them (:func:`emaphm.modes.indicator_readings`:
+    name -> value, None where it did not).
     """
 
     id: int
@@ -226,6 +229,7 @@ class Inspection:
     source: str | None
     recorded_utc: str
     extra: dict = field(default_factory=dict)
+    readings: dict = field(default_factory=dict)
 
     @property
     def fault_model(self) -> str:
@@ -248,6 +252,7 @@ class Inspection:
         for name in ("k", "k_lo", "k_hi"):
             d[name] = np.asarray(d[name], dtype=float)
         d["extra"] = dict(d.get("extra") or {})
+        d["readings"] = dict(d.get("readings") or {})
         return cls(**d)
 
 
@@ -330,6 +335,15 @@ class HistoryData:
         blind = [frozenset((i.extra or {}).get("not_observable") or ()) for i in self.inspections]
         return {n: np.fromiter((m not in b for b in blind), dtype=bool, count=len(blind))
                 for n, m in INDICATOR_MODE.items()}
+
+    @property
+    def readings(self) -> dict[str, np.ndarray]:
+        """Health indicator beyond k -> its readings over ``times`` (NaN where an inspection
+        did not measure it: :attr:`Inspection.readings`)."""
+        from ..modes import INDICATORS
+
+        return {n: np.array([_reading(i.readings.get(n)) for i in self.inspections], dtype=float)
+                for n, ind in INDICATORS.items() if ind.reading is not None}
 
     def skipped_note(self) -> str | None:
         """One sentence on the inspections left out of the analyses (None when none was):
@@ -459,6 +473,7 @@ class HealthHistory:
             if problem is not None:
                 raise ReadOnlyHistoryError(self._readonly_message(problem))
         self._has_calibrations = True
+        self._has_readings = True
         created = journal_files(self.path) if exists else []
         try:
             self._open(create, timeout_s)
@@ -513,6 +528,7 @@ class HealthHistory:
             if self.readonly:
                 self.journal_mode = str(self._con.execute("PRAGMA journal_mode").fetchone()[0])
                 self._has_calibrations = version >= 2
+                self._has_readings = version >= 3
                 return
             self._con.execute("PRAGMA foreign_keys = ON")
             self.journal_mode = enable_wal(self._con, timeout_s)
@@ -564,12 +580,20 @@ class HealthHistory:
                     for statement in _statements(_SCHEMA):
                         con.execute(statement)
                     con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
-        elif version == 1:                           # before calibrations were recorded
+        elif version < SCHEMA_VERSION:
             with self._transaction() as con:
-                if con.execute("PRAGMA user_version").fetchone()[0] == 1:
+                now = con.execute("PRAGMA user_version").fetchone()[0]
+                if now == 1:                         # before calibrations were recorded
                     for statement in _statements(_SCHEMA):
                         if statement.startswith("CREATE TABLE calibrations"):
                             con.execute(statement)
+                if now in (1, 2):                    # before the readings beyond k
+                    if "readings" not in {r[1] for r in con.execute(
+                            "PRAGMA table_info(inspections)")}:
+                        con.execute("ALTER TABLE inspections ADD COLUMN readings TEXT NOT NULL "
+                                    "DEFAULT '{}'")
+                    _fill_readings(con)
+                if now < SCHEMA_VERSION:
                     con.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
 
     # ------------------------------------------------------------------ plumbing
@@ -764,10 +788,14 @@ class HealthHistory:
             diagnosis: dict | None = None, fingerprint: str | None = None,
             algorithm: str | None = None, seed: int | None = None, fitness: float | None = None,
             evaluations: int | None = None, source: str | None = None,
-            extra: dict | None = None) -> Inspection:
+            extra: dict | None = None, readings: Mapping[str, float | None] | None = None
+            ) -> Inspection:
         """Record one inspection in one transaction; on any error nothing is recorded.
 
-        ``k`` (8 values in [0, 1]); ``k_lo``/``k_hi`` its interval (default ``k``).
+        ``k`` (8 values in [0, 1]); ``k_lo``/``k_hi`` its interval (default ``k``);
+        ``readings``: the health indicators beyond k (name -> value, None where not
+        measured), by default read from ``diagnosis`` and ``extra``
+        (:func:`emaphm.modes.indicator_readings`).
         """
         try:
             kk = as_k(k)
@@ -778,9 +806,11 @@ class HealthHistory:
         if np.any(lo > kk + 1e-12) or np.any(hi < kk - 1e-12):
             raise HistoryError("the interval [k_lo, k_hi] must contain k")
         healthy = None if diagnosis is None else bool(diagnosis.get("healthy"))
+        read = _readings(diagnosis, extra, readings)
         try:
             payload = (_json(kk.tolist()), _json(lo.tolist()), _json(hi.tolist()),
-                       None if diagnosis is None else _json(diagnosis), _json(extra or {}))
+                       None if diagnosis is None else _json(diagnosis), _json(extra or {}),
+                       _json(read))
         except (TypeError, ValueError) as exc:
             raise HistoryError(f"cannot record the inspection: {exc}") from None
         try:
@@ -789,15 +819,16 @@ class HealthHistory:
                 cur = con.execute(
                     "INSERT INTO inspections (actuator, time, k, k_lo, k_hi, spread_method, level, "
                     "healthy, diagnosis, fingerprint, algorithm, seed, fitness, evaluations, "
-                    "source, recorded_utc, extra) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
-                    "?, ?, ?, ?)",
+                    "source, recorded_utc, extra, readings) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
+                    "?, ?, ?, ?, ?, ?, ?, ?)",
                     (actuator_id, float(time), payload[0], payload[1], payload[2], spread_method,
                      None if level is None else float(level),
                      None if healthy is None else int(healthy), payload[3], fingerprint,
                      algorithm, None if seed is None else int(seed),
                      None if fitness is None else float(fitness),
                      None if evaluations is None else int(evaluations),
-                     None if source is None else utf8_text(str(source)), _now(), payload[4]))
+                     None if source is None else utf8_text(str(source)), _now(), payload[4],
+                     payload[5]))
                 row_id = cur.lastrowid
                 self._touch(con, actuator_id)
         except sqlite3.IntegrityError as exc:       # the schema's own guard (e.g. a racing writer)
@@ -810,18 +841,29 @@ class HealthHistory:
     _COLS = ("id, actuator, time, k, k_lo, k_hi, spread_method, level, healthy, diagnosis, "
              "fingerprint, algorithm, seed, fitness, evaluations, source, recorded_utc, extra")
 
+    @property
+    def _cols(self) -> str:
+        """The columns an inspection is read from (a history opened read-only before its
+        migration to schema 3 has no readings: they are read from its diagnoses)."""
+        return self._COLS + (", readings" if self._has_readings else ", NULL")
+
     @staticmethod
     def _row(r: Sequence[Any]) -> Inspection:
+        diagnosis = None if r[9] is None else json.loads(r[9])
+        extra = json.loads(r[17])
+        readings = json.loads(r[18]) if r[18] is not None else _readings(diagnosis, extra, None)
+        if not isinstance(readings, dict):
+            raise ValueError(f"readings are not a JSON object: {str(r[18])[:40]}")
         return Inspection(
             id=r[0], actuator=r[1], time=float(r[2]), k=np.array(json.loads(r[3])),
             k_lo=np.array(json.loads(r[4])), k_hi=np.array(json.loads(r[5])),
             spread_method=r[6], level=r[7], healthy=None if r[8] is None else bool(r[8]),
-            diagnosis=None if r[9] is None else json.loads(r[9]), fingerprint=r[10],
+            diagnosis=diagnosis, fingerprint=r[10],
             algorithm=r[11], seed=r[12], fitness=r[13], evaluations=r[14], source=r[15],
-            recorded_utc=r[16], extra=json.loads(r[17]))
+            recorded_utc=r[16], extra=extra, readings=readings)
 
     def _inspection(self, row_id: int) -> Inspection:
-        r = self._con.execute(f"SELECT {self._COLS} FROM inspections WHERE id = ?", (row_id,)).fetchone()
+        r = self._con.execute(f"SELECT {self._cols} FROM inspections WHERE id = ?", (row_id,)).fetchone()
         return self._row(r)
 
     def _read(self, actuator_id: str) -> tuple[list[Inspection], list[SkippedInspection]]:
@@ -883,7 +925,7 @@ class HealthHistory:
 
     def _iter(self, actuator_id: str) -> Iterator[Sequence[Any]]:
         return iter(self._con.execute(
-            f"SELECT {self._COLS} FROM inspections WHERE actuator = ? ORDER BY time",
+            f"SELECT {self._cols} FROM inspections WHERE actuator = ? ORDER BY time",
             (actuator_id,)).fetchall())
 
     def frame(self, actuator_id: str):
@@ -932,6 +974,50 @@ class HealthHistory:
             K = lo = hi = np.empty((0, 8))
         return HistoryData(actuator=act, times=np.array([i.time for i in ins], dtype=float),
                            K=K, K_lo=lo, K_hi=hi, inspections=tuple(ins), skipped=tuple(skipped))
+
+
+def _readings(diagnosis: Any, extra: Any, given: Mapping[str, Any] | None) -> dict[str, float | None]:
+    """The readings an inspection stores: ``given`` checked (known indicators beyond k,
+    finite numbers or None), else read from its diagnosis and record."""
+    from ..modes import INDICATORS, indicator_readings
+
+    if given is None:
+        return indicator_readings(diagnosis, extra)
+    out: dict[str, float | None] = {}
+    for name, v in given.items():
+        if name not in INDICATORS or INDICATORS[name].reading is None:
+            raise HistoryError(f"cannot record the inspection: readings: {shown(name)} is not a "
+                               "health indicator beyond k; choose from " + ", ".join(
+                                   n for n, i in INDICATORS.items() if i.reading is not None))
+        if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
+                                  and math.isfinite(v)):
+            raise HistoryError(f"cannot record the inspection: readings[{name!r}] must be a "
+                               f"finite number or None (not measured), got {v!r}")
+        out[name] = None if v is None else float(v)
+    return out
+
+
+def _fill_readings(con: sqlite3.Connection) -> None:
+    """Schema 2 to 3: each stored inspection's readings beyond k from its diagnosis and
+    record, where they have them (a record that cannot be read keeps none)."""
+    rows = con.execute("SELECT id, diagnosis, extra FROM inspections").fetchall()
+    for row_id, diagnosis, extra in rows:
+        try:
+            d = None if diagnosis is None else json.loads(diagnosis)
+            e = json.loads(extra) if isinstance(extra, str) else {}
+        except (TypeError, ValueError, RecursionError):
+            d, e = None, {}
+        con.execute("UPDATE inspections SET readings = ? WHERE id = ?",
+                    (_json(_readings(d, e, None)), row_id))
+
+
+def _reading(x: Any) -> float:
+    """A stored reading as a number, NaN where it is missing or not a finite number."""
+    try:
+        v = float(x)
+    except (TypeError, ValueError, OverflowError):
+        return math.nan
+    return v if math.isfinite(v) else math.nan
 
 
 def _as_time(x: Any) -> float:

@@ -373,14 +373,19 @@ def plan_inspection(times: Any, prognosis: "Prognosis | None" = None, *,
                     policy: InspectionPolicy = InspectionPolicy(), t_now: float | None = None,
                     time_unit: str | None = None, K: Any = None,
                     thresholds: "FailureThresholds | None" = None,
-                    indicators: Sequence[str] | None = None) -> NextInspection:
+                    indicators: Sequence[str] | None = None,
+                    observed: Mapping[str, Any] | None = None,
+                    readings: Mapping[str, Any] | None = None) -> NextInspection:
     """The next inspection (module docstring) of an actuator inspected at ``times`` (n,),
     from its ``prognosis`` (required from :data:`~emaphm.prognosis.trends.MIN_INSPECTIONS`
     inspections on; its draws must resolve ``policy.risk``: :func:`n_samples_for`).
     ``t_now`` (default: the prognosis's, else the last inspection, else 0) and
-    ``time_unit`` (default: the prognosis's, else ``"h"``). Under three inspections, the
-    last row of the k history ``K`` (n, 8) is compared with the ``thresholds`` of the
-    ``indicators`` (default: all): one at or past its threshold is acted on now."""
+    ``time_unit`` (default: the prognosis's, else ``"h"``). Under three inspections, each
+    indicator's latest reading in the k history ``K`` (n, 8) and the ``readings`` beyond k
+    (of an inspection that could see it, ``observed``:
+    :func:`~emaphm.prognosis.thresholds.latest_values`) is compared with the
+    ``thresholds`` of the ``indicators`` (default: all): one at or past its threshold is
+    acted on now."""
     from .trends import MIN_INSPECTIONS
 
     times = np.atleast_1d(np.asarray(times, dtype=float))
@@ -398,7 +403,7 @@ def plan_inspection(times: Any, prognosis: "Prognosis | None" = None, *,
         if times.size >= MIN_INSPECTIONS:
             raise ValueError(f"a plan from {times.size} inspections needs their prognosis "
                              "(emaphm.prognosis.prognose)")
-        past = _past_at_last(K, thresholds, indicators)
+        past = _past_at_last(K, thresholds, indicators, observed, readings)
         if past is not None:
             return NextInspection(at=t_now, risk=None, indicator=past[0], rule="act now",
                                   reason=f"{past[0]} past its failure threshold at the last "
@@ -422,18 +427,21 @@ def plan_inspection(times: Any, prognosis: "Prognosis | None" = None, *,
     return _risk_plan(preds, part, t_star, policy, base, int(times.size), prognosis)
 
 
-def _past_at_last(K: Any, thresholds: Any, indicators: Sequence[str] | None):
-    """``(indicator, value, threshold)`` of the indicator furthest past its threshold in the
-    last row of ``K``, or None (also without ``K``)."""
+def _past_at_last(K: Any, thresholds: Any, indicators: Sequence[str] | None,
+                  observed: Mapping[str, Any] | None = None,
+                  readings: Mapping[str, Any] | None = None):
+    """``(indicator, value, threshold)`` of the indicator furthest past its threshold at the
+    last inspection that read it (:func:`~emaphm.prognosis.thresholds.latest_values`), or
+    None (also without ``K``)."""
     if K is None:
         return None
-    from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, indicator_values
+    from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, latest_values
 
     K = np.atleast_2d(np.asarray(K, dtype=float))
     if K.shape[0] == 0:
         return None
     thr = thresholds or DEFAULT_FAILURE_THRESHOLDS
-    now = indicator_values(K[-1])
+    now = latest_values(K, observed, readings)
     past = [(float(now[n]) / thr.for_indicator(n), n) for n in (indicators or INDICATORS)
             if float(now[n]) >= thr.for_indicator(n)]
     if not past:
@@ -472,6 +480,7 @@ def _new_since_last(prognosis: "Prognosis", part: Mapping[str, str]) -> set[str]
     options = {"n_samples": int(p0.samples.size), **prognosis.options}
     observed = {n: prognosis.observed(n)[:-1] for n in prognosis.unobserved}
     before = prognose(prognosis.times[:-1], prognosis.K[:-1], observed=observed,
+                      readings={n: r[:-1] for n, r in prognosis.beyond_k.items()},
                       seed=0 if p0.seed is None else int(p0.seed),
                       thresholds=prognosis.thresholds, indicators=list(part),
                       discrepancy={m: prognosis.predictions[m].discrepancy for m in part},
@@ -568,7 +577,8 @@ def next_inspection(times: Any, K: Any, *, seed: int, policy: InspectionPolicy =
         prog = prognose(times, K, seed=seed, t_now=t_now, time_unit=time_unit, **kwargs)
     return prog, plan_inspection(times, prog, policy=policy, t_now=t_now, time_unit=time_unit,
                                  K=K, thresholds=kwargs.get("thresholds"),
-                                 indicators=kwargs.get("indicators"))
+                                 indicators=kwargs.get("indicators"),
+                                 observed=kwargs.get("observed"), readings=kwargs.get("readings"))
 
 
 # ----------------------------------------------------------------------------- a policy, simulated

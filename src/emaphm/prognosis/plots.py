@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 import numpy as np
 
 from ..faults import K_LABELS
+from ..modes import INDICATORS, axis_label
 from ..plots import save_figure
 from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT, FailureThresholds
 
@@ -82,6 +83,7 @@ def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT
     axes = grid[:len(shown)]
     t = data.times
     thr = {INDICATOR_COMPONENT[n]: thresholds.for_indicator(n) for n in INDICATOR_COMPONENT}
+    center = {i.component: i.center for i in INDICATORS.values() if i.center is not None}
     status = component_status(data)
     for j, ax in zip(shown, axes):
         if data.n:
@@ -99,8 +101,8 @@ def plot_history(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT
                 if sel.any():
                     ax.plot(t[sel], data.K[sel, j], "o", color=color, ms=4, label=state)
         if j in thr:
-            if j == 7:
-                for y in (0.5 - thr[j], 0.5 + thr[j]):
+            if j in center:                  # |k - c| at its threshold on either side
+                for y in (center[j] - thr[j], center[j] + thr[j]):
                     ax.axhline(y, color="C3", ls="--", lw=1.0)
             else:
                 ax.axhline(thr[j], color="C3", ls="--", lw=1.0, label="failure threshold")
@@ -139,8 +141,8 @@ def moved_components(data: "HistoryData", thresholds: FailureThresholds = DEFAUL
     if data.n:
         status = component_status(data)
         for name, c in INDICATOR_COMPONENT.items():
-            x = data.K[:, c] - (0.5 if c == 7 else 0.0)
-            if np.any(np.abs(x) >= MOVED_SHARE * thresholds.for_indicator(name)) \
+            x = INDICATORS[name].of_k(data.K)
+            if np.any(x >= MOVED_SHARE * thresholds.for_indicator(name)) \
                     or np.any(status[:, c] == "faulty"):
                 out.add(c)
     if 5 in out:
@@ -239,7 +241,7 @@ def plot_prognosis(prog: "Prognosis", *, indicators: Sequence[str] | None = None
                      fontsize=9)
         top = max(p.threshold * 1.25, float(np.nanmax(y, initial=0.0)) * 1.1)
         ax.set_ylim(min(0.0, float(np.nanmin(y, initial=0.0)) - 0.01), top)
-        ax.set_ylabel(name + (" (k8 - 0.5, signed)" if name == "gain_drift" else "") + " [-]")
+        ax.set_ylabel(axis_label(name))
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="upper left")
     axes[-1].set_xlabel(f"time [{_unit(prog.time_unit)}]")

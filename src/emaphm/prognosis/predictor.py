@@ -15,7 +15,7 @@ from ..seeds import as_generator
 from .choices import SELECTION_RULES
 from .fits import DEFAULT_MODELS, TrendFit, _inliers, fit_trends, select
 from .shapes import SHAPES
-from .thresholds import INDICATOR_COMPONENT
+from .. import modes as _modes
 
 __all__ = ["RULPrediction", "predict_rul"]
 
@@ -163,9 +163,10 @@ def _json_float(x: float) -> float | None:
 
 def _bound_note(indicator: str, side: str, bounds: tuple) -> str:
     """"extrapolated beyond k = 1" and its kin, in the words of ``indicator``."""
-    if indicator == "gain_drift":
-        return "extrapolated beyond k8 = 0 or 1"
-    if indicator in INDICATOR_COMPONENT:
+    ind = _modes.INDICATORS.get(indicator)
+    if ind is not None and ind.component is not None:
+        if ind.center is not None:          # a signed series, |k - c| folded
+            return f"extrapolated beyond k{ind.component + 1} = 0 or 1"
         return "extrapolated beyond k = 1" if side == "hi" else "extrapolated below k = 0"
     lo, hi = bounds
     return f"extrapolated beyond {hi:g}" if side == "hi" else f"extrapolated below {lo:g}"

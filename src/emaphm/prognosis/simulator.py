@@ -40,10 +40,11 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from .. import modes as _modes
 from ..faults import K_NOMINAL, as_k
+from ..modes import friction as _friction, gain_drift as _gain_drift, short_circuit as _short
 from ..seeds import check_seed
-from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPONENT,
-                         FailureThresholds)
+from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATOR_COMPONENT, FailureThresholds
 
 __all__ = ["LAWS", "DegradationLaw", "DegradationScenario", "DEGRADATION_SCENARIOS",
            "degradation_scenario", "inspection_times", "synthetic_k_history",
@@ -148,9 +149,11 @@ class DegradationScenario:
     thresholds: FailureThresholds = field(default=DEFAULT_FAILURE_THRESHOLDS)
 
     def __post_init__(self) -> None:
-        if self.indicator not in INDICATORS:
-            raise ValueError(f"unknown health indicator {self.indicator!r}; choose one of "
-                             f"{', '.join(INDICATORS)}")
+        name = _modes.indicator_name(self.indicator, stacklevel=4)
+        if name not in INDICATOR_COMPONENT:
+            raise ValueError(f"a degradation scenario grows a component of k; {name} is read "
+                             f"beyond k: choose one of {', '.join(INDICATOR_COMPONENT)}")
+        object.__setattr__(self, "indicator", name)
         if self.direction not in (1, -1):
             raise ValueError(f"direction must be +1 or -1, got {self.direction!r}")
         object.__setattr__(self, "k_base", tuple(float(x) for x in as_k(self.k_base)))
@@ -169,9 +172,10 @@ class DegradationScenario:
         t_arr = np.asarray(t, dtype=float)
         d = np.atleast_1d(self.law.value(t_arr))
         K = np.tile(np.asarray(self.k_base), (d.size, 1))
-        j = INDICATOR_COMPONENT[self.indicator]
-        if self.indicator == "gain_drift":
-            K[:, j] = 0.5 + self.direction * d
+        ind = _modes.INDICATORS[self.indicator]
+        j = ind.component
+        if ind.center is not None:
+            K[:, j] = ind.center + self.direction * d
         else:
             K[:, j] = K[:, j] + d
         if np.any(K < 0) or np.any(K > 1):
@@ -202,23 +206,24 @@ class DegradationScenario:
 
 
 def _presets() -> dict[str, DegradationScenario]:
-    thr = DEFAULT_FAILURE_THRESHOLDS
     life = 1000.0
+    friction, = _friction.INDICATORS
+    gain, = _gain_drift.INDICATORS
+    short_a = _short.INDICATORS[0]
+
+    def scenario(name: str, ind: _modes.Indicator, law: str, direction: int = 1):
+        return DegradationScenario(ind.name, DegradationLaw.reaching(law, ind.failure, life),
+                                   direction=direction, name=name)
+
     return {
         # wear of the sliding surfaces: friction grows linearly with use (Archard)
-        "friction-growth": DegradationScenario(
-            "friction", DegradationLaw.reaching("linear", thr.friction, life), name="friction-growth"),
+        "friction-growth": scenario("friction-growth", friction, "linear"),
         # inter-turn insulation breakdown accelerates: exponential from a 1.2 % short
-        "short-circuit-growth": DegradationScenario(
-            "short_a", DegradationLaw.reaching("exponential", thr.short_circuit, life),
-            name="short-circuit-growth"),
+        "short-circuit-growth": scenario("short-circuit-growth", short_a, "exponential"),
         # slow drift of the position-loop gain downward (component ageing)
-        "gain-drift": DegradationScenario(
-            "gain_drift", DegradationLaw.reaching("linear", thr.gain_drift, life), direction=-1,
-            name="gain-drift"),
+        "gain-drift": scenario("gain-drift", gain, "linear", direction=-1),
         # friction with accelerating wear (d ~ t^2): neither trend model is exact
-        "friction-power": DegradationScenario(
-            "friction", DegradationLaw.reaching("power", thr.friction, life), name="friction-power"),
+        "friction-power": scenario("friction-power", friction, "power"),
     }
 
 

@@ -1,119 +1,98 @@
 """Health indicators and failure thresholds: when a growing fault counts as a failure.
 
-A *health indicator* is the quantity of the fault vector ``k`` whose growth a
-prognosis follows; it is 0 on a healthy actuator and grows with the fault.
-There is one per fault component:
+A *health indicator* is the quantity a prognosis follows for a fault mode; it is 0 on a
+healthy actuator and grows with the fault, in the mode's severity unit. The fault modes
+declare them (:class:`emaphm.modes.Indicator`, each in its mode's module, with the reason
+for its failure threshold and how its model discrepancy was measured); this module reads
+them from the registry (:data:`emaphm.modes.INDICATORS`):
 
-==============  ==============  =============  ==================================================
-indicator       fault mode      from k         default failure threshold (design default)
-==============  ==============  =============  ==================================================
-friction        friction        k1             0.5: dry friction 2x nominal (FSJ, FDJ x (1 + 2 k1))
-backlash        backlash        k2             0.5: backlash 50.5x nominal (about 10 mrad)
-short_a         short_circuit   k3             0.3: 30 % of phase A turns shorted
-short_b         short_circuit   k4             0.3: same, phase B
-short_c         short_circuit   k5             0.3: same, phase C
-eccentricity    eccentricity    k6             0.5: static eccentricity of half the air gap
-gain_drift      gain_drift      abs(k8 - 0.5)  0.25: proportional gain 25 % off nominal
-==============  ==============  =============  ==================================================
+================  ===============  ======================  =========================================
+indicator         fault mode       read from               default failure threshold
+================  ===============  ======================  =========================================
+friction          friction         k1                      0.5: dry friction 2x nominal
+backlash          backlash         k2                      0.5: backlash 50.5x nominal (about 10 mrad)
+short_circuit_a   short_circuit    k3                      0.3: 30 % of phase A turns shorted
+short_circuit_b   short_circuit    k4                      0.3: same, phase B
+short_circuit_c   short_circuit    k5                      0.3: same, phase C
+eccentricity      eccentricity     k6                      0.5: static eccentricity of half the gap
+gain_drift        gain_drift       abs(k8 - 0.5)           0.25: proportional gain 25 % off nominal
+demagnetization   demagnetization  the flux lost, as the   0.2: a fifth of the magnet flux lost
+                                   inspection searched it
+================  ===============  ======================  =========================================
 
-The paper (Baldo et al. 2023) gives detection scenarios (k = 0.25 and 0.75) but
-no failure criterion; the thresholds are ours, chosen as the point where the
-fault starts to cost the actuator its function, and kept parameters
-(:class:`FailureThresholds`, ``emaphm prognose --threshold MODE=VALUE``):
+(``short_a`` to ``short_c`` are the short circuit's indicators' names before 0.7; they are
+accepted with a DeprecationWarning.) An indicator beyond k is read from each inspection's
+stored diagnosis; where an inspection did not measure it, its reading is missing (NaN),
+not healthy, and its trend leaves that inspection out.
 
-* friction 0.5: twice the nominal dry friction. The position loop still
-  tracks, but the stick-slip dead zone and the current spent on friction
-  double; beyond it the torque margin of a flight-control actuator shrinks fast.
-* backlash 0.5: about 10 mrad of lost motion at the motor, far past what a
-  surface actuator accepts before limit-cycle oscillation (flutter) concerns.
-* short circuit 0.3: 30 % of a phase's turns shorted (R x 0.7, L x 0.49, that
-  phase's back-EMF x 0.7). Inter-turn shorts heat and spread quickly, so the
-  threshold sits lower than the mechanical ones.
-* eccentricity 0.5: half the air gap; the unbalanced magnetic pull grows and
-  rotor-stator rub becomes a risk.
-* gain drift 0.25: the proportional gain 25 % off (the paper's fault
-  magnitudes 0.25 and 0.75 around the nominal 0.5); the position loop's
-  damping and bandwidth change enough to miss its specification.
-
-All thresholds lie well above the detection thresholds of
-:data:`emaphm.diagnosis.DEFAULT_THRESHOLDS` (0.02-0.05), so a fault is
-detected long before it is predicted to fail.
+The paper (Baldo et al. 2023) gives detection scenarios (k = 0.25 and 0.75) but no
+failure criterion; the thresholds are ours, chosen as the point where the fault starts
+to cost the actuator its function, and kept parameters (:class:`FailureThresholds`,
+``emaphm prognose --threshold MODE=VALUE``). All lie well above the detection thresholds
+of :data:`emaphm.modes.DEFAULT_THRESHOLDS`, so a fault is detected long before it is
+predicted to fail.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, field as dc_field, make_dataclass, replace
 from types import MappingProxyType
-from typing import Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
+from .. import modes as _modes
 from .._text import shown
 
 __all__ = ["INDICATORS", "INDICATOR_MODE", "INDICATOR_COMPONENT", "FailureThresholds",
            "DEFAULT_FAILURE_THRESHOLDS", "indicator_values", "latest_values", "parse_threshold"]
 
-#: Health indicators in the order of k.
-from .choices import INDICATORS  # noqa: E402  (the CLI's parser reads it there)
+#: Health indicators, in the registry's order (the paper's k first).
+INDICATORS: tuple[str, ...] = tuple(_modes.INDICATORS)
 
-#: The fault mode (:data:`emaphm.diagnosis.FAULT_MODES`) of each indicator.
-INDICATOR_MODE: Mapping[str, str] = MappingProxyType({
-    "friction": "friction", "backlash": "backlash", "short_a": "short_circuit",
-    "short_b": "short_circuit", "short_c": "short_circuit", "eccentricity": "eccentricity",
-    "gain_drift": "gain_drift"})
+#: The fault mode (:data:`emaphm.modes.FAULT_MODES`) of each indicator.
+INDICATOR_MODE: Mapping[str, str] = _modes.INDICATOR_MODE
 
-#: The index in k each indicator is read from.
-INDICATOR_COMPONENT: Mapping[str, int] = MappingProxyType({
-    "friction": 0, "backlash": 1, "short_a": 2, "short_b": 3, "short_c": 4,
-    "eccentricity": 5, "gain_drift": 7})
+#: The index in k of each indicator read from k (those beyond k are read from the
+#: inspections' stored diagnoses).
+INDICATOR_COMPONENT: Mapping[str, int] = MappingProxyType(
+    {n: i.component for n, i in _modes.INDICATORS.items() if i.component is not None})
 
 
-@dataclass(frozen=True)
-class FailureThresholds:
-    """Failure thresholds per fault mode, on the health indicator (see the module docstring).
-
-    =============  =======  =====================================================
-    field          default  indicator it applies to
-    =============  =======  =====================================================
-    friction       0.5      k1
-    backlash       0.5      k2
-    short_circuit  0.3      each of k3, k4, k5
-    eccentricity   0.5      k6
-    gain_drift     0.25     abs(k8 - 0.5) (at most 0.5)
-    =============  =======  =====================================================
-    """
-
-    friction: float = 0.5
-    backlash: float = 0.5
-    short_circuit: float = 0.3
-    eccentricity: float = 0.5
-    gain_drift: float = 0.25
+class _FailureThresholds:
+    """Failure thresholds per fault mode, on its health indicators (see the module
+    docstring): one field per mode trended (:data:`emaphm.modes.FAILURE_FIELDS`), which
+    the indicators of a mode's phases share; each in (0, its indicator's upper bound]."""
 
     def __post_init__(self) -> None:
         for name, v in asdict(self).items():
-            hi = 0.5 if name == "gain_drift" else 1.0
+            hi = _modes.FAILURE_FIELDS[name][1]
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) \
                     or not 0.0 < v <= hi:
                 raise ValueError(f"failure threshold {name} must be in (0, {hi:g}], got {v!r}")
             object.__setattr__(self, name, float(v))
 
     def for_indicator(self, indicator: str) -> float:
-        """The threshold on ``indicator`` (one of :data:`INDICATORS`)."""
-        if indicator not in INDICATOR_MODE:
+        """The threshold on ``indicator`` (one of :data:`INDICATORS`; an older name with a
+        DeprecationWarning)."""
+        try:
+            name = _modes.indicator_name(indicator, stacklevel=3)
+        except ValueError:
             raise ValueError(f"unknown health indicator {shown(indicator)}; choose one of "
-                             f"{', '.join(INDICATORS)}")
-        return getattr(self, INDICATOR_MODE[indicator])
+                             f"{', '.join(INDICATORS)}") from None
+        return getattr(self, _modes.INDICATORS[name].threshold)
 
     def with_updates(self, updates: Mapping[str, float]) -> "FailureThresholds":
         """A copy with some modes changed; names may be modes or indicators."""
         fields = {}
         for name, value in updates.items():
-            mode = INDICATOR_MODE.get(name, name)
-            if mode not in asdict(self):
+            if name in _modes.INDICATORS or name in _modes.INDICATOR_ALIASES:
+                name = _modes.INDICATORS[_modes.indicator_name(name, stacklevel=3)].threshold
+            if name not in _modes.FAILURE_FIELDS:
                 raise ValueError(f"unknown fault mode {shown(name)} for a failure threshold; choose "
-                                 f"one of {', '.join(asdict(self))}")
-            fields[mode] = value
+                                 f"one of {', '.join(_modes.FAILURE_FIELDS)}")
+            fields[name] = value
         return replace(self, **fields)
 
     def to_dict(self) -> dict[str, float]:
@@ -121,39 +100,60 @@ class FailureThresholds:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, float]) -> "FailureThresholds":
+        """The thresholds :meth:`to_dict` wrote (a mode it did not know, added since, at
+        its default)."""
         return cls(**dict(data))
 
+
+FailureThresholds = make_dataclass(
+    "FailureThresholds", [(n, float, dc_field(default=v))
+                          for n, (v, _) in _modes.FAILURE_FIELDS.items()],
+    bases=(_FailureThresholds,), frozen=True,
+    namespace={"__module__": __name__, "__doc__": _FailureThresholds.__doc__})
 
 DEFAULT_FAILURE_THRESHOLDS = FailureThresholds()
 
 
-def indicator_values(K: np.ndarray) -> dict[str, np.ndarray]:
-    """Health indicators of fault vectors ``K`` (n, 8) or (8,): name -> (n,) or scalar."""
+def indicator_values(K: np.ndarray, readings: Mapping[str, Any] | None = None
+                     ) -> dict[str, np.ndarray]:
+    """Health indicators of fault vectors ``K`` (n, 8) or (8,): name -> (n,) or scalar; an
+    indicator beyond k from ``readings`` (name -> its values, as ``K``'s rows; NaN where
+    not measured), NaN without them."""
     K = np.asarray(K, dtype=float)
     if K.shape[-1] != 8:
         raise ValueError(f"fault vectors need 8 components, got shape {K.shape}")
     out = {}
-    for name in INDICATORS:
-        j = INDICATOR_COMPONENT[name]
-        out[name] = np.abs(K[..., j] - 0.5) if name == "gain_drift" else K[..., j].copy()
+    for name, ind in _modes.INDICATORS.items():
+        if ind.component is not None:
+            out[name] = ind.of_k(K)
+        else:
+            r = None if readings is None else readings.get(name)
+            out[name] = np.full(K.shape[:-1], np.nan) if r is None else \
+                np.asarray(r, dtype=float).reshape(K.shape[:-1])
     return out
 
 
-def latest_values(K: np.ndarray, observed: Mapping[str, np.ndarray] | None = None) -> dict[str, float]:
+def latest_values(K: np.ndarray, observed: Mapping[str, np.ndarray] | None = None,
+                  readings: Mapping[str, Any] | None = None) -> dict[str, float]:
     """Each health indicator at the last inspection of ``K`` (n, 8) that could see its
     fault mode (``observed``: :attr:`~emaphm.prognosis.history.HistoryData.observed`;
-    default every inspection); 0 (healthy) where none could."""
-    values = indicator_values(np.atleast_2d(K))
+    default every inspection) and measured it (``readings``, for an indicator beyond k:
+    :attr:`~emaphm.prognosis.history.HistoryData.readings`); 0 (healthy) where none
+    did."""
+    values = indicator_values(np.atleast_2d(K), readings)
     out = {}
     for name, v in values.items():
         m = None if observed is None else observed.get(name)
-        seen = np.flatnonzero(m) if m is not None else np.arange(v.size)
-        out[name] = float(v[seen[-1]]) if seen.size else 0.0
+        seen = np.ones(v.size, dtype=bool) if m is None else np.asarray(m, dtype=bool).copy()
+        seen &= np.isfinite(v)
+        ix = np.flatnonzero(seen)
+        out[name] = float(v[ix[-1]]) if ix.size else 0.0
     return out
 
 
 def parse_threshold(text: str) -> tuple[str, float]:
-    """Parse ``MODE=VALUE`` (e.g. ``friction=0.4``) as given to ``--threshold``."""
+    """Parse ``MODE=VALUE`` (e.g. ``friction=0.4``) as given to ``--threshold``; an
+    indicator's name stands for its mode's threshold."""
     name, sep, value = text.partition("=")
     name = name.strip().replace("-", "_")
     if not sep:
@@ -163,8 +163,8 @@ def parse_threshold(text: str) -> tuple[str, float]:
     except ValueError:
         raise ValueError(f"threshold {shown(text)}: {shown(value)} is not a number; write e.g. "
                          "friction=0.4") from None
-    valid = set(asdict(DEFAULT_FAILURE_THRESHOLDS)) | set(INDICATORS)
+    valid = set(_modes.FAILURE_FIELDS) | set(INDICATORS) | set(_modes.INDICATOR_ALIASES)
     if name not in valid:
         raise ValueError(f"threshold {shown(text)}: unknown fault mode {shown(name)}; choose one of "
-                         f"{', '.join(asdict(DEFAULT_FAILURE_THRESHOLDS))}")
+                         f"{', '.join(_modes.FAILURE_FIELDS)}")
     return name, v

@@ -69,8 +69,8 @@ from .fits import (DEFAULT_MODELS, MIN_INSPECTIONS, TREND_MODELS, TrendFit, _che
                    fit_trend, fit_trends, select)
 from .predictor import RULPrediction, _json_float, predict_rul
 from .states import growth_rate, indicator_state, level_at_last
-from .thresholds import (DEFAULT_FAILURE_THRESHOLDS, INDICATORS, INDICATOR_COMPONENT,
-                         INDICATOR_MODE, FailureThresholds)
+from .. import modes as _modes
+from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 
 __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_trends", "select",
            "RULPrediction", "predict_rul", "Prognosis", "prognose", "indicator_series",
@@ -79,49 +79,48 @@ __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_tren
 
 from .choices import SELECTION_RULES  # noqa: E402  (the CLI reads it without SciPy)
 
-#: The range each health indicator can take: a component of k lies in [0, 1] by
-#: definition, the gain drift's signed series s (k8 - 0.5) (:func:`indicator_series`) in
-#: [-0.5, 0.5]. A trend extrapolated past it predicts a k that cannot exist.
+#: The range each health indicator can take (:attr:`emaphm.modes.Indicator.bounds`): a
+#: component of k lies in [0, 1] by definition, the gain drift's signed series s (k8 - 0.5)
+#: (:func:`indicator_series`) in [-0.5, 0.5]. A trend extrapolated past it predicts a value
+#: that cannot exist.
 INDICATOR_BOUNDS: Mapping[str, tuple[float, float]] = MappingProxyType(
-    {name: (-0.5, 0.5) if name == "gain_drift" else (0.0, 1.0) for name in INDICATORS})
+    {n: i.bounds for n, i in _modes.INDICATORS.items()})
 
 #: Relative systematic error of each health indicator as identified on a calibrated unit
-#: (one standard deviation), which every RUL interval carries (:func:`predict_rul`): the
-#: RMS of ``(identified - true) / true`` over the inspections where the true indicator is
-#: at least a quarter of its failure threshold, in degradation histories on the reference
-#: plant, each unit calibrated first (``benchmarks/bench_prognosis.py
-#: --tune-discrepancy``, seeds 100+, apart from the reported 0-2). The plant has physics
-#: the monitoring model lacks (the Stribeck drop reads as more Coulomb friction, more so
-#: as the friction grows); the three phases share the short circuit's value.
-#: Measured (5 histories of each, 20-35 inspections): friction 0.053 (mean +0.039),
-#: backlash 0.058 (+0.025), short circuit 0.020 (+0.012), eccentricity 0.0070, gain drift
-#: 0.0051.
-MODEL_DISCREPANCY: Mapping[str, float] = MappingProxyType({
-    "friction": 0.053, "backlash": 0.058, "short_a": 0.020, "short_b": 0.020, "short_c": 0.020,
-    "eccentricity": 0.0070, "gain_drift": 0.0051})
+#: (one standard deviation, :attr:`emaphm.modes.Indicator.discrepancy`), which every RUL
+#: interval carries (:func:`predict_rul`): the RMS of ``(identified - true) / true`` over
+#: the inspections where the true indicator is at least a quarter of its failure
+#: threshold, in degradation histories on the reference plant, each unit calibrated first
+#: (``benchmarks/bench_prognosis.py --tune-discrepancy``, seeds 100+, apart from the
+#: reported 0-2). The plant has physics the monitoring model lacks (the Stribeck drop
+#: reads as more Coulomb friction, more so as the friction grows); the three phases share
+#: the short circuit's value. Each mode's module gives its figure.
+MODEL_DISCREPANCY: Mapping[str, float] = MappingProxyType(
+    {n: i.discrepancy for n, i in _modes.INDICATORS.items()})
 
 
 # ----------------------------------------------------------------------------- all indicators
-def indicator_series(K: Any) -> dict[str, np.ndarray]:
-    """Health indicator series of a k history ``K`` (n, 8): name -> (n,).
+def indicator_series(K: Any, readings: Mapping[str, Any] | None = None) -> dict[str, np.ndarray]:
+    """Health indicator series of a k history ``K`` (n, 8): name -> (n,); an indicator
+    beyond k from ``readings`` (name -> (n,), NaN where an inspection did not measure it;
+    all NaN without them).
 
-    Like :func:`emaphm.prognosis.thresholds.indicator_values`, except that the
-    gain drift keeps its sign along the series, ``s (k8 - 0.5)`` with ``s`` the
-    sign of the latest drift: near zero the absolute value would fold the
+    Like :func:`emaphm.prognosis.thresholds.indicator_values`, except that a centred
+    indicator (the gain drift) keeps its sign along the series, ``s (k8 - 0.5)`` with ``s``
+    the sign of the latest drift: near zero the absolute value would fold the
     identification noise upward and bend the early trend.
     """
     K = np.atleast_2d(np.asarray(K, dtype=float))
     if K.ndim != 2 or K.shape[1] != 8:
         raise ValueError(f"a k history must have shape (n, 8), got {K.shape}")
     out = {}
-    for name in INDICATORS:
-        j = INDICATOR_COMPONENT[name]
-        if name == "gain_drift":
-            d = K[:, j] - 0.5
-            s = 1.0 if d[-1] >= 0 else -1.0
-            out[name] = s * d
+    for name, ind in _modes.INDICATORS.items():
+        if ind.component is not None:
+            out[name] = ind.series_of_k(K)
         else:
-            out[name] = K[:, j].copy()
+            r = None if readings is None else readings.get(name)
+            out[name] = np.full(K.shape[0], np.nan) if r is None else \
+                np.asarray(r, dtype=float).reshape(K.shape[0]).copy()
     return out
 
 
@@ -145,6 +144,9 @@ class Prognosis:
     #: placeholder, :attr:`emaphm.identify.Identification.not_observable`). An indicator
     #: seen on fewer than :data:`MIN_INSPECTIONS` has no prediction.
     unobserved: Mapping[str, tuple] = field(default_factory=dict, repr=False)
+    #: indicator beyond k -> its readings along ``times`` (NaN where an inspection did not
+    #: measure it), as :func:`prognose` was given them
+    beyond_k: Mapping[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     def observed(self, indicator: str) -> np.ndarray:
         """Which inspections ``indicator``'s trend used (a boolean mask over ``times``)."""
@@ -156,7 +158,7 @@ class Prognosis:
         """``(times, values)`` of the readings ``indicator``'s trend used
         (:func:`indicator_series` of the inspections that could see it)."""
         m = self.observed(indicator)
-        return self.times[m], _seen_series(self.K, m, indicator)
+        return self.times[m], _seen_series(self.K, m, indicator, self.beyond_k)
 
     @property
     def first(self) -> RULPrediction | None:
@@ -181,21 +183,24 @@ class Prognosis:
                                 for n, p in self.predictions.items()},
                 "times": self.times.tolist(), "K": self.K.tolist(),
                 "options": json.loads(json.dumps(dict(self.options), default=str)),
-                "unobserved": {n: [int(i) for i in ix] for n, ix in self.unobserved.items()}}
+                "unobserved": {n: [int(i) for i in ix] for n, ix in self.unobserved.items()},
+                "beyond_k": {n: [_json_float(x) for x in v] for n, v in self.beyond_k.items()}}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Prognosis":
         """The prognosis :meth:`to_dict` wrote (each prediction's draws where it kept
         them)."""
         return cls(actuator=data["actuator"], t_now=data["t_now"], time_unit=data["time_unit"],
-                   predictions={n: RULPrediction.from_dict(p)
+                   predictions={_modes.indicator_name(n): _renamed(RULPrediction.from_dict(p))
                                 for n, p in data["predictions"].items()},
                    thresholds=FailureThresholds.from_dict(data["thresholds"]),
                    times=np.asarray(data.get("times", []), dtype=float),
                    K=np.asarray(data.get("K", []), dtype=float).reshape(-1, 8),
                    options=dict(data.get("options") or {}),
-                   unobserved={n: tuple(int(i) for i in ix)
-                               for n, ix in (data.get("unobserved") or {}).items()})
+                   unobserved={_modes.indicator_name(n): tuple(int(i) for i in ix)
+                               for n, ix in (data.get("unobserved") or {}).items()},
+                   beyond_k={n: np.array([np.nan if x is None else x for x in v], dtype=float)
+                             for n, v in (data.get("beyond_k") or {}).items()})
 
     def to_frame(self) -> Any:
         """One row per health indicator: its threshold, state, median RUL and interval,
@@ -215,8 +220,16 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
              indicators: Sequence[str] = INDICATORS, t_now: float | None = None,
              actuator: str | None = None, time_unit: str = "h", sigma_floor: float = 0.003,
              discrepancy: Mapping[str, float] | None = None,
-             observed: Mapping[str, Any] | None = None, **kwargs: Any) -> Prognosis:
+             observed: Mapping[str, Any] | None = None,
+             readings: Mapping[str, Any] | None = None, **kwargs: Any) -> Prognosis:
     """RUL of each health indicator from a k history ``K`` (n, 8) at ``times`` (n,).
+
+    ``readings`` (indicator beyond k -> (n,), NaN where an inspection did not measure it,
+    :attr:`HistoryData.readings <emaphm.prognosis.history.HistoryData.readings>`): the
+    values of the indicators not read from k (a demagnetization's flux lost); each is
+    trended over the inspections that measured it (those that did not are listed in
+    :attr:`Prognosis.unobserved`, as an unobserved one's), and has no prediction without
+    them.
 
     ``observed`` (indicator -> boolean mask (n,), :attr:`HistoryData.observed
     <emaphm.prognosis.history.HistoryData.observed>`): the inspections whose drive path
@@ -236,28 +249,28 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
     :func:`predict_rul`.
     """
     seed = check_seed(seed)
-    for name in indicators:
-        if name not in INDICATOR_MODE:
-            raise ValueError(f"unknown health indicator {name!r}; choose from {', '.join(INDICATORS)}")
-    discrepancy = MODEL_DISCREPANCY if discrepancy is None else discrepancy
-    unknown = [n for n in discrepancy if n not in INDICATOR_MODE]
-    if unknown:
-        raise ValueError(f"discrepancy: unknown health indicator(s) {unknown}; choose from "
-                         f"{', '.join(INDICATORS)}")
-    series = indicator_series(K)
+    indicators = [_known(name) for name in indicators]
+    discrepancy = MODEL_DISCREPANCY if discrepancy is None else \
+        {_known(n, "discrepancy: "): v for n, v in discrepancy.items()}
     times = np.asarray(times, dtype=float)
+    beyond = _beyond_k(readings, times.size)
+    series = indicator_series(K, beyond)
     masks = _observed_masks(observed, times.size)
+    for name, y in beyond.items():           # an indicator not measured at an inspection
+        if not np.all(np.isfinite(y)):
+            masks[name] = masks.get(name, np.ones(times.size, dtype=bool)) & np.isfinite(y)
     children = np.random.SeedSequence(seed).spawn(len(INDICATORS))
     preds, unobserved = {}, {}
     for name, ss in zip(INDICATORS, children):
-        if name not in indicators:
-            continue
+        if name not in indicators or (_modes.INDICATORS[name].component is None
+                                      and name not in beyond):
+            continue                # not asked for, or a reading beyond k not given
         t, y = times, series[name]
         if name in masks:
             unobserved[name] = tuple(int(i) for i in np.flatnonzero(~masks[name]))
             if int(masks[name].sum()) < MIN_INSPECTIONS:
                 continue
-            t, y = times[masks[name]], _seen_series(K, masks[name], name)
+            t, y = times[masks[name]], _seen_series(K, masks[name], name, beyond)
         preds[name] = predict_rul(t, y, thresholds.for_indicator(name),
                                   seed=np.random.default_rng(ss), t_now=t_now,
                                   sigma_floor=sigma_floor, indicator=name,
@@ -267,23 +280,55 @@ def prognose(times: Any, K: Any, *, seed: int, thresholds: FailureThresholds = D
     return Prognosis(actuator=actuator, t_now=float(times[-1] if t_now is None else t_now),
                      time_unit=time_unit, predictions=preds, thresholds=thresholds,
                      times=times, K=np.atleast_2d(np.asarray(K, dtype=float)),
-                     options={"sigma_floor": sigma_floor, **kwargs}, unobserved=unobserved)
+                     options={"sigma_floor": sigma_floor, **kwargs}, unobserved=unobserved,
+                     beyond_k=beyond)
 
 
-def _seen_series(K: Any, mask: np.ndarray, indicator: str) -> np.ndarray:
+def _known(name: str, what: str = "") -> str:
+    """``name`` as a health indicator (an older name with a DeprecationWarning)."""
+    try:
+        return _modes.indicator_name(name, stacklevel=4)
+    except ValueError:
+        raise ValueError(f"{what}unknown health indicator {name!r}; choose from "
+                         f"{', '.join(INDICATORS)}") from None
+
+
+def _renamed(p: RULPrediction) -> RULPrediction:
+    """A prediction stored under an indicator's older name, under its name."""
+    name = _modes.INDICATOR_ALIASES.get(p.indicator)
+    return p if name is None else replace(p, indicator=name)
+
+
+def _beyond_k(readings: Mapping[str, Any] | None, n: int) -> dict[str, np.ndarray]:
+    """:func:`prognose`'s ``readings`` checked: indicators beyond k, one value (or NaN) per
+    inspection."""
+    out = {}
+    for name, r in (readings or {}).items():
+        name = _known(name, "readings: ")
+        if _modes.INDICATORS[name].component is not None:
+            raise ValueError(f"readings: {name} is read from k, not given beside it")
+        r = np.asarray(r, dtype=float)
+        if r.shape != (n,):
+            raise ValueError(f"readings[{name!r}] must have one entry per inspection ({n}), "
+                             f"got shape {r.shape}")
+        out[name] = r
+    return out
+
+
+def _seen_series(K: Any, mask: np.ndarray, indicator: str,
+                 readings: Mapping[str, np.ndarray] | None = None) -> np.ndarray:
     """``indicator``'s series (:func:`indicator_series`) over the inspections of ``mask``
     alone: the gain drift's sign is that of the last inspection that saw it."""
     K = np.atleast_2d(np.asarray(K, dtype=float))[mask]
-    return indicator_series(K)[indicator] if K.shape[0] else np.empty(0)
+    r = {n: np.asarray(v)[mask] for n, v in (readings or {}).items()}
+    return indicator_series(K, r)[indicator] if K.shape[0] else np.empty(0)
 
 
 def _observed_masks(observed: Mapping[str, Any] | None, n: int) -> dict[str, np.ndarray]:
     """The masks of :func:`prognose`'s ``observed`` that leave an inspection out."""
     masks = {}
     for name, m in (observed or {}).items():
-        if name not in INDICATOR_MODE:
-            raise ValueError(f"observed: unknown health indicator {name!r}; choose from "
-                             f"{', '.join(INDICATORS)}")
+        name = _known(name, "observed: ")
         m = np.asarray(m, dtype=bool)
         if m.shape != (n,):
             raise ValueError(f"observed[{name!r}] must have one entry per inspection ({n}), "

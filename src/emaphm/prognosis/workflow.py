@@ -55,7 +55,7 @@ def record_inspection(history: HealthHistory, actuator_id: str, trace: Any, at: 
     """
     from ..fitness import trace_fault_model
     from ..identify import DEFAULT_ALGORITHM, IdentificationConfig
-    from ..modes.current_sensor import UNOBSERVABLE_NOTE
+    from ..modes.current_sensor import UNOBSERVABLE_NOTE, as_findings
     from ..params import as_params
     from ..traces import validate
     from ..verdict import diagnose_identification, screen_sensors
@@ -89,7 +89,7 @@ def record_inspection(history: HealthHistory, actuator_id: str, trace: Any, at: 
         ident = replace(ident, params_source="calibration")
         a = replace(a, identification=ident)
     diag = diagnose_identification(work, ident, params=params, thresholds=thresholds, k=a.k,
-                                   findings={"current_sensor": finding})
+                                   findings=as_findings(finding))
     if not finding.observable:
         diag = replace(diag, notes=diag.notes + (UNOBSERVABLE_NOTE,))
     extra = {"elapsed_s": a.elapsed_s, "error_pct": ident.error_pct,
