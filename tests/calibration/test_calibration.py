@@ -312,3 +312,21 @@ def test_the_digest_covers_every_value_a_calibration_sets():
     for n in DRIVE_SETTINGS:
         step = -0.1 if n == "speed_reference_weight" else 0.1       # 1, its upper bound
         assert changed({n: step}) == {(CALIBRATED_DRIVE_FIELDS[n], n)}, n
+
+
+def test_an_inertia_read_per_flux_is_checked_against_both_tolerances():
+    """With the flux kept at the data sheet (not separable on the profile), the inertia
+    estimate is J / flux of the unit: a unit of inertia +9 % and flux -5 % (both within
+    their tolerances) reads J +14.7 %, which the check must accept; J +25 % it refuses."""
+    from emaphm.calibration import _check_tolerances
+    from emaphm.units import DEFAULT_TOLERANCES as tol
+
+    ratio = 1.09 / 0.95 - 1.0
+    est = {"J": {"value": ratio, "lo95": ratio - 0.02, "hi95": ratio + 0.02, "unit": ""}}
+    assert ratio - 0.02 > tol.J[1]                      # outside the inertia's own tolerance
+    _check_tolerances(est, None, fixed=("flux",))
+    with pytest.raises(CalibrationError, match=r"J \+14\.7 %"):
+        _check_tolerances(est, None)                    # with the flux estimated beside it
+    far = {"J": {"value": 0.25, "lo95": 0.23, "hi95": 0.27, "unit": ""}}
+    with pytest.raises(CalibrationError, match=r"tolerance -14\.\d to \+15\.\d %"):
+        _check_tolerances(far, None, fixed=("flux",))

@@ -693,3 +693,28 @@ def test_the_index_shows_when_to_inspect_each_actuator_sortable_and_due_in_red(s
     assert ".due { color: var(--red); }" in (site.out / "assets" / "fleet.css").read_text()
     page = site.pages["EMA-CAL"].read_text(encoding="utf-8")
     assert "<dt>Inspect by</dt>" in page and "every indicator at its healthy level" in page
+
+
+def test_a_demagnetizing_unit_is_trended_and_shown_on_the_site(tmp_path, capsys):
+    """The flux lost, read at each inspection (a calibrated unit's flux drift), is an
+    indicator like the components of k: its row on the unit's page, its level and
+    remaining life in the index, the next inspection planned before its crossing."""
+    db = tmp_path / "h.sqlite"
+    t = np.arange(6) * 150.0
+    loss = 0.2 * t / 1500.0 + np.array([0.002, -0.001, 0.001, -0.002, 0.0, 0.001])
+    with HealthHistory(db) as h:
+        h.register("EMA-DM")
+        for ti, x in zip(t, loss):     # the readings as record_inspection stores them
+            h.add("EMA-DM", float(ti), _k(), readings={"demagnetization": float(x)},
+                  diagnosis=diagnose(_k(), fault_model="paper").to_dict())
+        from emaphm.prognosis.inspection import InspectionPolicy
+
+        s = assess(h.data("EMA-DM"), seed=0, policy=InspectionPolicy(risk=0.01))
+    assert s.worst == "demagnetization" and s.level == pytest.approx(loss[-1])
+    assert s.predicted and 750 * 0.8 < s.rul_median < 750 * 1.2      # 0.2 at 1500 h
+    assert s.plan.at < 1500.0
+    out = tmp_path / "site"
+    assert main(["fleet", "report", "--db", str(db), "--out", str(out), "--workers", "0",
+                 "--quiet"]) == 0
+    page = next(out.rglob(f"{page_stem('EMA-DM')}.html")).read_text(encoding="utf-8")
+    assert "demagnetization (flux lost)" in page
