@@ -73,11 +73,13 @@ FIRMWARES = ("emaphm", "feed-forwards", "speed-filter", "position-pi", "observer
 DESCRIBABLE = ("emaphm", "feed-forwards", "speed-filter", "position-pi")
 FAULTS = {"healthy": (), "short 10 % A": ("short_circuit:a:0.1:0.15",),
           "friction x2": ("friction:2",), "demagnetization 15 %": ("demagnetization:0.15",),
-          "sensor B gain 0.9": ("current_sensor:b:gain:0.9",)}
+          "sensor B gain 0.9": ("current_sensor:b:gain:0.9",),
+          "connection C x1.3": ("resistance:c:1.3",)}
 EXPECTED = {"healthy": set(), "short 10 % A": {("short_circuit", "A")},
             "friction x2": {("friction", None)},
             "demagnetization 15 %": {("demagnetization", None)},
-            "sensor B gain 0.9": {("current_sensor", "B")}}
+            "sensor B gain 0.9": {("current_sensor", "B")},
+            "connection C x1.3": {("resistance", "C")}}
 #: Part C's undescribed firmwares: [controller] options the data sheet does not state.
 UNDESCRIBED = {"speed filter 0.1 ms": dict(speed_filter_s=1e-4),
                "speed filter 0.25 ms": dict(speed_filter_s=2.5e-4),

@@ -359,9 +359,12 @@ VOCABULARY_EXCEPTIONS = {
     "emaphm/units.py": {"friction"},
     # the transmission's backlash width [rad], a field of Transmission
     "emaphm/params.py": {"backlash"},
+    # the kind of a physical quantity (ohm), as units and data sheets name it
+    "emaphm/quantities.py": {"resistance"},
+    "emaphm/datasheet.py": {"resistance"},
     # the registry lists its modules by name
     "emaphm/modes/__init__.py": {"friction", "backlash", "short_circuit", "eccentricity",
-                                 "gain_drift", "demagnetization", "current_sensor"},
+                                 "gain_drift", "demagnetization", "current_sensor", "resistance"},
 }
 
 

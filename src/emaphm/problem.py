@@ -363,7 +363,8 @@ def apply_extra(params: ActuatorParams, names: tuple[str, ...], values: Any) -> 
     """``params`` with the values of the parameters searched beside k applied as the model's
     packing applies them (:data:`emaphm.models.layout.NUISANCE`): R and the flux scaled
     (``"R"``, ``"flux"``, ``"demag"``: relative deviations), the load added (``"load"``,
-    N m), a phase's fault-bridge resistance scaled by decades (``"Rf_a"``..``"Rf_c"``)."""
+    N m), a phase's fault-bridge resistance scaled by decades (``"Rf_a"``..``"Rf_c"``), one
+    phase's resistance scaled (``"R_a"``..``"R_c"``, relative)."""
     m, ld = params.motor, params.load
     R, c0, R_f, T_0 = list(m.R), list(m.c0), list(m.R_f), ld.T_0
     for name, v in zip(names, np.asarray(values, dtype=float).reshape(-1)):
@@ -376,6 +377,9 @@ def apply_extra(params: ActuatorParams, names: tuple[str, ...], values: Any) -> 
         elif name.startswith("Rf_"):
             j = "abc".index(name[-1])
             R_f[j] = R_f[j] * 10.0 ** float(v)
+        elif name in ("R_a", "R_b", "R_c"):
+            j = "abc".index(name[-1])
+            R[j] = R[j] * (1.0 + float(v))
         elif name not in DRIVE_NUISANCE:       # the inverter's and the encoder's, not the actuator's
             raise ValueError(f"unknown parameter {name!r} beside k")
     return replace(params, motor=replace(m, R=tuple(R), c0=tuple(c0), R_f=tuple(R_f)),

@@ -63,7 +63,7 @@ def build_spec(args: argparse.Namespace) -> Any:
         healthy_datasheet=(min(2, args.healthy) if args.healthy_datasheet is None
                            else args.healthy_datasheet), target_far=args.target_far, seed=args.seed,
         grids=grids, severities=_severities(args.severities),
-        datasheet_faults=args.datasheet_faults)
+        datasheet_faults=args.datasheet_faults, drive_signals=args.drive_signals)
 
 
 def cmd_assess(args: argparse.Namespace) -> int:
@@ -157,6 +157,9 @@ def register(sub: Any) -> None:
                    help="the severities of a grid, replacing its default (repeatable)")
     a.add_argument("--datasheet-faults", action="store_true",
                    help="also diagnose every faulty trace on the data sheet (slow)")
+    a.add_argument("--drive-signals", action="store_true",
+                   help="the traces carry the drive's voltage commands: assess the "
+                        "recorded-voltage path, the drive's controller not modelled")
     a.add_argument("--seed", type=_seed, default=0, help="master seed (default 0)")
     a.add_argument("--workers", type=_workers,
                    help="local worker processes (default: all cores; 0: in this process)")

@@ -105,6 +105,9 @@ class AssessmentSpec:
     severities          grids whose severities replace the registry's, ``{name: (s, ...)}``
     datasheet_faults    also diagnose every faulty trace on the data sheet (slow; off)
     algorithm           the identification's solver (default the least squares)
+    drive_signals       the traces carry the drive's voltage commands and references, so
+                        that the units are diagnosed on the recorded-voltage path (the
+                        drive's controller not modelled); default off: the modelled one
     ==================  ==================================================================
     """
 
@@ -121,6 +124,7 @@ class AssessmentSpec:
     severities: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
     datasheet_faults: bool = False
     algorithm: str = "lsq"
+    drive_signals: bool = False
 
     def __post_init__(self) -> None:
         from ..params import ActuatorParams, as_params
@@ -215,6 +219,8 @@ class AssessmentSpec:
     # ------------------------------------------------------------------ identity
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
+        if not self.drive_signals:          # a spec from before it existed hashes as it did
+            del d["drive_signals"]
         d["grids"] = list(self.grids or ())
         d["severities"] = {k: list(v) for k, v in self.severities.items()}
         return d

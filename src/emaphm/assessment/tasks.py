@@ -105,18 +105,20 @@ def _unit(task: Task) -> tuple[Any, Any, Any, Any]:
     return spec, sheet, unit, IdentificationConfig(spec.algorithm)
 
 
-def _trace(unit: Any, sheet: Any, seed: int, injection: Any = None) -> Any:
+def _trace(unit: Any, sheet: Any, seed: int, injection: Any = None, *,
+           drive_signals: bool = False) -> Any:
     from ..simulate import DEFAULT_SENSORS, simulate
 
     return simulate(unit=unit, params=sheet, faults=[injection] if injection is not None else [],
-                    sensors=DEFAULT_SENSORS, seed=seed)
+                    sensors=DEFAULT_SENSORS, seed=seed, drive_signals=drive_signals)
 
 
 def _calibrated(task: Task, unit: Any, sheet: Any) -> tuple[Any, dict]:
     """The unit calibrated on its two calibration traces, or ``(None, {"error": ...})``."""
     from ..calibration import CalibrationError, calibrate
 
-    traces = [_trace(unit, sheet, task.noise0 + j) for j in CALIBRATION_TRACES]
+    ds = task.spec().drive_signals
+    traces = [_trace(unit, sheet, task.noise0 + j, drive_signals=ds) for j in CALIBRATION_TRACES]
     t0 = time.process_time()
     try:
         cal = calibrate(traces, sheet)
@@ -138,7 +140,8 @@ def _tune(task: Task) -> dict[str, Any]:
     readings = []
     seed = task.noise0 + FIRST_HEALTHY
     for _ in range(spec.tune_healthy):
-        ex, res = _examine(_trace(unit, sheet, seed), cal.params, config)
+        ex, res = _examine(_trace(unit, sheet, seed, drive_signals=spec.drive_signals),
+                           cal.params, config)
         readings.append({**res, "noise_seed": seed,
                          "measures": {} if ex is None else measures_of(ex, cal.params)})
         seed += 1
@@ -151,7 +154,7 @@ def _tune(task: Task) -> dict[str, Any]:
     for gi, case in enumerate(largest.values()):
         if (gi + task.index) % 2:
             continue
-        tr = _trace(unit, sheet, seed, case.injection())
+        tr = _trace(unit, sheet, seed, case.injection(), drive_signals=spec.drive_signals)
         ex, res = _examine(tr, cal.params, config, case.expected)
         crosstalk.append({**res, "case": case.grid, "mode": case.mode, "severity": case.severity,
                           "noise_seed": seed,
@@ -171,7 +174,7 @@ def _assess(task: Task) -> dict[str, Any]:
     out["runs"] = runs
     seed = task.noise0 + FIRST_HEALTHY
     for j in range(spec.healthy):
-        tr = _trace(unit, sheet, seed)
+        tr = _trace(unit, sheet, seed, drive_signals=spec.drive_signals)
         base = {"case": HEALTHY, "mode": None, "severity": 0.0, "magnitude": 0.0,
                 "phase": None, "kwargs": {}, "noise_seed": seed}
         if cal is not None:
@@ -180,14 +183,15 @@ def _assess(task: Task) -> dict[str, Any]:
             runs.append({**base, "path": "datasheet", **_examine(tr, sheet, config)[1]})
         seed += 1
     for case in spec.cases(task.index):
-        runs.extend(_fault_runs(case, unit, sheet, cal, config, seed, spec.datasheet_faults))
+        runs.extend(_fault_runs(case, unit, sheet, cal, config, seed, spec.datasheet_faults,
+                                spec.drive_signals))
         seed += 1
     return out
 
 
 def _fault_runs(case: Case, unit: Any, sheet: Any, cal: Any, config: Any, seed: int,
-                datasheet: bool) -> list[dict[str, Any]]:
-    tr = _trace(unit, sheet, seed, case.injection())
+                datasheet: bool, drive_signals: bool = False) -> list[dict[str, Any]]:
+    tr = _trace(unit, sheet, seed, case.injection(), drive_signals=drive_signals)
     base = {"case": case.grid, "mode": case.mode, "severity": case.severity,
             "magnitude": case.magnitude, "phase": case.phase, "kwargs": dict(case.kwargs),
             "noise_seed": seed}

@@ -289,6 +289,11 @@ NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("Rf_a", -1.5, 1.0, "decades", "fault resistance of phase A"),
     Nuisance("Rf_b", -1.5, 1.0, "decades", "fault resistance of phase B"),
     Nuisance("Rf_c", -1.5, 1.0, "decades", "fault resistance of phase C"),
+    # one phase's resistance (its winding and its connection), a loose or corroded
+    # connection raising it up to 3x (emaphm.modes.resistance)
+    Nuisance("R_a", -0.1, 2.0, "relative", "resistance of phase A"),
+    Nuisance("R_b", -0.1, 2.0, "relative", "resistance of phase B"),
+    Nuisance("R_c", -0.1, 2.0, "relative", "resistance of phase C"),
     Nuisance("V_dt", 0.0, 30.0, "V", "inverter dead time and device drops"),
     Nuisance("angle", -0.2, 0.2, "rad (electrical)", "encoder offset"),
     # a search starts the Stribeck speed at the reference plant's 1 rad/s: at 0 (no drop)
@@ -300,6 +305,9 @@ NUISANCE = tuple(NUISANCE_PARAMETERS)
 
 #: The extra parameters that scale the back-EMF coefficients.
 _FLUX = ("flux", "demag")
+
+#: The extra parameters that scale one phase's resistance, in the order of the phases.
+_PHASE_R = ("R_a", "R_b", "R_c")
 
 
 def pack_population(nominal: ActuatorParams, K: np.ndarray, theta0: float = 0.0,
@@ -378,6 +386,9 @@ class PopulationPacker:
                 if R_f is None:
                     R_f = np.tile(self._R_f, (K.shape[0], 1))
                 R_f[:, "abc".index(name[-1])] *= 10.0 ** NU[:, j]
+                continue
+            if name in _PHASE_R:
+                CP[:, C_R_A + _PHASE_R.index(name)] *= 1.0 + NU[:, j]
                 continue
             cols = slice(C_R_A, C_R_C + 1) if name == "R" else slice(C_C0_A, C_C0_C + 1)
             CP[:, cols] *= 1.0 + NU[:, j:j + 1]

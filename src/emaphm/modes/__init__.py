@@ -12,6 +12,8 @@ demagnetization    :mod:`.demagnetization` (the magnet flux down on every phase,
                    beside k when the residual asks)
 current_sensor     :mod:`.current_sensor` (a phase-current sensor's gain or offset, from
                    the sum of the three measured currents)
+resistance         :mod:`.resistance` (a high-resistance connection of one phase, searched
+                   beside k when the residual asks)
 =================  ========================================================================
 
 Each module defines ``MODE``, a :class:`~emaphm.modes.base.FaultMode`: its reading of an
@@ -39,7 +41,7 @@ __all__ = ["MODES", "FAULT_MODES", "PAPER_MODES", "Thresholds", "DEFAULT_THRESHO
 
 #: The modules of the modes, in the order a verdict lists their faults.
 _MODULES = ("friction", "backlash", "short_circuit", "eccentricity", "gain_drift",
-            "demagnetization", "current_sensor")
+            "demagnetization", "current_sensor", "resistance")
 
 #: name -> mode, in the order a verdict lists their faults.
 MODES: Mapping[str, FaultMode] = MappingProxyType(
