@@ -12,7 +12,7 @@ from pathlib import Path
 ROOT = Path(__file__).parent
 ORDER = ["plant.md", "commissioning.md", "assess.md", "pipeline.md", "identification.md", "identification_twin.md",
          "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
-         "demagnetization.md", "demagnetization-ema-270v-750w.md", "resistance.md",
+         "demagnetization.md", "demagnetization-ema-270v-750w.md", "resistance.md", "sensor_drift.md",
          "inspection.md", "fault_coverage.md", "fleet.md", "long_history.md", "versions.md",
          "import.md", "batch_identify.md", "drives.md", "drives-described-undescribed-references.md",
          "drive_cost.md"]
@@ -54,6 +54,7 @@ functions: it does not depend on the actuator model. Every script re-runs its se
 | prognosis: RUL coverage and error | `benchmarks/bench_prognosis.py` (figures in `docs/prognosis.md`) |
 | demagnetization trended on plant traces: RUL coverage, plans, the flux read | `benchmarks/bench_demagnetization.py` (both actuators) |
 | a high-resistance connection: POD and false alarms, both paths, both actuators | `emaphm assess --grids resistance [--drive-signals]` (commands in the section) |
+| the current sensors' indicators against the plant's sensors (model discrepancy) | `benchmarks/bench_sensor_drift.py` |
 | inspection planning: risk calibration, the risk policy against fixed intervals | `benchmarks/bench_inspection.py` (method in `docs/inspection-planning.md`) |
 | fleet health site: build time | `benchmarks/bench_fleet.py` |
 | prognosis of one actuator as its history grows (time, memory) | `benchmarks/bench_long_history.py` |

@@ -568,7 +568,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "backlash:10, short_circuit:a:0.3[:R_F_OHM] (shorted fraction, fault "
                         "resistance), eccentricity:0.1, gain_drift:0.9 (x nominal), "
                         "demagnetization:0.15 (flux lost), current_sensor:b:gain:0.9 or "
-                        "current_sensor:b:offset:0.2 (A)")
+                        "current_sensor:b:offset:0.2 (A), resistance:b:1.3 (x the phase's "
+                        "resistance: a high-resistance connection)")
     s.add_argument("--seed", type=_seed, help="seed of the sensor noise (enables realistic sensors)")
     s.add_argument("--noise", type=float, help="current noise in A rms (default 0.02 with --seed, else 0)")
     s.add_argument("--params", help="actuator parameters TOML (missing fields from the default preset)")

@@ -97,15 +97,18 @@ def _diag(nuisance=None, refit=None):
 
 
 def test_the_flux_loss_is_read_from_the_refit_or_the_identification_s_drift():
-    read = modes.indicator_readings
-    assert read(_diag(), {"nuisance": {"R": 0.01, "flux": -0.03}}) == {"demagnetization": 0.03}
-    assert read(_diag(refit={"R": 0.0, "demag": -0.12}),
-                {"nuisance": {"flux": -0.06}}) == {"demagnetization": 0.12}
+    def read(d, e):
+        return modes.indicator_readings(d, e)["demagnetization"]
+
+    assert read(_diag(), {"nuisance": {"R": 0.01, "flux": -0.03}}) == 0.03
+    assert read(_diag(refit={"R": 0.0, "demag": -0.12}), {"nuisance": {"flux": -0.06}}) == 0.12
     # a data sheet's unit searched no flux: not measured, which is not healthy
-    assert read(_diag(), {"nuisance": {}}) == {"demagnetization": None}
-    assert read(None, None) == {"demagnetization": None}
-    assert read({"hypothesis_check": "garbage"}, {"nuisance": {"flux": "x"}}) == \
-        {"demagnetization": None}
+    assert read(_diag(), {"nuisance": {}}) is None
+    assert read(None, None) is None
+    assert read({"hypothesis_check": "garbage"}, {"nuisance": {"flux": "x"}}) is None
+    # every indicator beyond k has its entry, None where not measured
+    assert set(modes.indicator_readings(None, None)) == {
+        n for n, i in modes.INDICATORS.items() if i.reading is not None}
 
 
 def _store(path, n=4):
@@ -122,11 +125,13 @@ def test_the_history_stores_the_readings_and_null_where_none_was_measured(tmp_pa
     con = sqlite3.connect(db)
     stored = [json.loads(r[0]) for r in con.execute("SELECT readings FROM inspections ORDER BY time")]
     con.close()
-    assert stored == [{"demagnetization": 0.0}, {"demagnetization": 0.01},
-                      {"demagnetization": None}, {"demagnetization": 0.03}]
+    assert [r["demagnetization"] for r in stored] == [0.0, 0.01, None, 0.03]
+    assert stored[0]["current_sensor_gain_a"] is None          # NULL: not measured
     with HealthHistory(db, readonly=True) as h:
         data = h.data("EMA-D")
-        assert h.inspections("EMA-D")[3].readings == {"demagnetization": 0.03}
+        assert h.inspections("EMA-D")[3].readings["demagnetization"] == 0.03
+    # a series for each indicator measured once at least
+    assert list(data.readings) == ["demagnetization"]
     r = data.readings["demagnetization"]
     assert np.isnan(r[2]) and np.allclose(r[[0, 1, 3]], [0.0, 0.01, 0.03])
     with HealthHistory(db) as h:
@@ -153,8 +158,8 @@ def test_a_schema_2_history_is_read_and_migrated_with_its_readings(tmp_path):
         assert np.allclose(h.data("EMA-D").readings["demagnetization"], r, equal_nan=True)
     con = sqlite3.connect(db)
     assert con.execute("PRAGMA user_version").fetchone()[0] == hist.SCHEMA_VERSION == 3
-    assert json.loads(con.execute("SELECT readings FROM inspections WHERE time = 200").fetchone()[0]) \
-        == {"demagnetization": None}
+    assert json.loads(con.execute("SELECT readings FROM inspections WHERE time = 200")
+                      .fetchone()[0])["demagnetization"] is None
     con.close()
 
 

@@ -260,7 +260,7 @@ def test_prognose_all_indicators_and_subset_independence():
     full = prognose(t, K, seed=9)
     # every indicator of k; the demagnetization's readings are not in k (none given: no
     # prediction)
-    assert set(full.predictions) == set(INDICATORS) - {"demagnetization"}
+    assert set(full.predictions) == set(INDICATOR_COMPONENT)
     assert full.first.indicator == "friction"
     only = prognose(t, K, seed=9, indicators=("friction",))
     np.testing.assert_array_equal(only.predictions["friction"].samples,

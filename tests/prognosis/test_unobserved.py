@@ -100,9 +100,11 @@ def test_cli_says_what_it_left_out(db, capsys):
     assert main(["prognose", "EMA-1", "--db", str(db), "--seed", "1", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     # the flux was searched at none of them (data sheet's units): no demagnetization
-    # reading, which the JSON says and the table leaves unsaid unless asked
-    assert data["unobserved"] == {"gain_drift": list(BLIND), "demagnetization": list(range(8))}
+    # series, which the table says only when it is asked for
+    assert data["unobserved"] == {"gain_drift": list(BLIND)}
     assert "demagnetization" not in out
+    assert main(["prognose", "EMA-1", "--db", str(db), "--indicator", "demagnetization"]) == 0
+    assert "demagnetization: not measured at any of the 8 inspections" in capsys.readouterr().out
 
 
 def test_the_level_now_is_the_last_reading_that_saw_the_mode(db):

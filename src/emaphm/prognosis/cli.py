@@ -299,16 +299,17 @@ def threshold_option(items: list[str] | None):
 
 def _unobserved_lines(prog: Any, asked: Any = ()) -> list[str]:
     """What the trends left out: inspections whose drive path could not see a mode, or
-    that did not measure an indicator beyond k."""
+    that did not measure an indicator beyond k; and an indicator asked for that no
+    inspection measured."""
     from ..modes import INDICATORS
     from .trends import MIN_INSPECTIONS
 
     n = prog.times.size
-    out = []
+    out = [f"{name}: not measured at any of the {n} inspections ({INDICATORS[name].unmeasured})"
+           for name in asked if INDICATORS[name].reading is not None
+           and name not in prog.beyond_k]
     for name, ix in prog.unobserved.items():
         seen = n - len(ix)
-        if not seen and INDICATORS[name].reading is not None and name not in asked:
-            continue                # never measured: said only when asked for
         tail = (f"trended on the other {seen}" if name in prog.predictions else
                 f"no trend (it needs {MIN_INSPECTIONS} inspections that measure it)")
         ind = INDICATORS.get(name)
@@ -326,9 +327,11 @@ def _prognosis_table(prog: Any, asked: Any = ()) -> str:
     from .trends import indicator_state, level_at_last
 
     unit = prog.time_unit
+    seed = next((p.seed for p in prog.predictions.values()), None)
+    w = max([13, *(len(n) for n in prog.predictions)])
     lines = [f"prognosis of {prog.actuator} at {prog.t_now:g} {unit} from {prog.times.size} "
-             f"inspections (seed {next(iter(prog.predictions.values())).seed})",
-             f"{'indicator':13s} {'now':>7s} {'threshold':>9s}  {'trend (Akaike weight)':24s} "
+             f"inspections" + ("" if seed is None else f" (seed {seed})"),
+             f"{'indicator':{w}s} {'now':>7s} {'threshold':>9s}  {'trend (Akaike weight)':24s} "
              f"{'RUL median':>12s}  {'interval':>22s}"]
     for name, p in prog.predictions.items():
         top = max(p.weights, key=p.weights.get)
@@ -343,7 +346,7 @@ def _prognosis_table(prog: Any, asked: Any = ()) -> str:
         else:
             rul = _fmt_time(p.median, unit)
             iv = f"[{_fmt_time(p.lo, unit)}, {_fmt_time(p.hi, unit) if math.isfinite(p.hi) else 'inf'}]"
-        lines.append(f"{name:13s} {_now_text(p):>7s} {p.threshold:9.3f}  {model:24s} {rul:>12s}  "
+        lines.append(f"{name:{w}s} {_now_text(p):>7s} {p.threshold:9.3f}  {model:24s} {rul:>12s}  "
                      f"{iv:>22s}")
     if any(_carried_out(p) for p in prog.predictions.values()):
         lines.append(f"(now: > or < marks a trend carried to {prog.t_now:g} {unit} past the range "

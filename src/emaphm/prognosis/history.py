@@ -339,11 +339,19 @@ class HistoryData:
     @property
     def readings(self) -> dict[str, np.ndarray]:
         """Health indicator beyond k -> its readings over ``times`` (NaN where an inspection
-        did not measure it: :attr:`Inspection.readings`)."""
+        did not measure it: :attr:`Inspection.readings`), for each indicator measured at
+        one inspection at least (one no inspection measured has no series: a prognosis
+        leaves it out as it leaves out one it is not given)."""
         from ..modes import INDICATORS
 
-        return {n: np.array([_reading(i.readings.get(n)) for i in self.inspections], dtype=float)
-                for n, ind in INDICATORS.items() if ind.reading is not None}
+        out = {}
+        for n, ind in INDICATORS.items():
+            if ind.reading is None:
+                continue
+            r = np.array([_reading(i.readings.get(n)) for i in self.inspections], dtype=float)
+            if np.isfinite(r).any():
+                out[n] = r
+        return out
 
     def skipped_note(self) -> str | None:
         """One sentence on the inspections left out of the analyses (None when none was):
