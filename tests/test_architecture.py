@@ -1,9 +1,11 @@
 """The house, read from the source: imports between emaphm's modules (module level and
 inside functions alike) form no loop but the known ones (:data:`KNOWN_LOOPS`), so each
-module can be read (and imported) after the ones it builds on; no function outside the
-numerical kernels is
-over 100 lines; no private name is imported from another package; seeds are checked only
-by :mod:`emaphm.seeds`. Each rule is also run on a small case it must catch."""
+module can be read (and imported) after the ones it builds on, and none reaches a layer
+above its own (:data:`LAYERS`) but the known ones (:data:`KNOWN_UPWARD`); the architecture
+page draws every package; no function outside the numerical kernels is over 100 lines; no
+private name is imported from another package; seeds are checked only by
+:mod:`emaphm.seeds`; a fault mode's name is written only in its own module. Each rule is
+also run on a small case it must catch."""
 
 from __future__ import annotations
 
@@ -397,3 +399,85 @@ def test_the_vocabulary_rule_finds_a_name(tmp_path):
     bad.write_text('LABELS = {"gain_drift": "gain", "x": 1}\nif m == "short_circuit_a": pass\n')
     assert vocabulary_literals(bad, {"gain_drift", "short_circuit_a"}) == [
         (1, "gain_drift"), (2, "short_circuit_a")]
+
+
+# ----------------------------------------------------------------------------- the layers
+#: Each module's layer, as docs/architecture.md draws them (a module takes its longest
+#: prefix's): a module imports only its own layer and those below it, imports inside
+#: functions included (:func:`test_no_upward_import`).
+LAYERS = {
+    # shared infrastructure and the package's lazy index
+    "emaphm": 0, "emaphm._text": 0, "emaphm._files": 0, "emaphm._sqlite": 0, "emaphm._lazy": 0,
+    "emaphm.seeds": 0, "emaphm.logs": 0, "emaphm.quantities": 0, "emaphm.frames": 0,
+    "emaphm.progress": 0,
+    "emaphm.traces": 1,
+    # the vocabulary
+    "emaphm.params": 2, "emaphm.firmware": 2, "emaphm.profiles": 2,
+    "emaphm.faults": 3, "emaphm.datasheet": 3, "emaphm.units": 3, "emaphm.acquisition": 3,
+    "emaphm.modes": 4,
+    "emaphm.traces.importers": 5,       # bench exports: channel maps read parameters
+    "emaphm.optim": 5,
+    "emaphm.models": 6,
+    "emaphm.simulate": 7, "emaphm.diagnosis": 7, "emaphm.fitness": 7, "emaphm.search": 7,
+    "emaphm.calibration": 8, "emaphm.recorded": 8,
+    "emaphm.problem": 9, "emaphm.identify": 10, "emaphm.verdict": 11,
+    "emaphm.campaign.executors": 11.5,  # the worker pools batch and the campaigns share
+    "emaphm.batch": 12, "emaphm.results": 12, "emaphm.plots": 12, "emaphm.mismatch": 12,
+    "emaphm.prognosis": 13, "emaphm.assessment": 14, "emaphm.campaign": 14, "emaphm.fleet": 15,
+    "emaphm._cli_common": 16,
+    "emaphm.cli": 17, "emaphm.prognosis.cli": 17, "emaphm.campaign.cli": 17,
+    "emaphm.fleet.cli": 17, "emaphm.assessment.cli": 17, "emaphm.traces.importers.cli": 17,
+    "emaphm.__main__": 18,
+}
+
+#: The upward imports emaphm keeps, each with its reason (all inside functions); any other
+#: fails :func:`test_no_upward_import`.
+KNOWN_UPWARD = {
+    ("emaphm.identify", "emaphm.batch"): "identify([t1, t2]) is identify_many (KNOWN_LOOPS)",
+    ("emaphm.verdict", "emaphm.batch"): "examine([t1, t2]) is examine_many (KNOWN_LOOPS)",
+    ("emaphm.params", "emaphm.modes"): "a parameter file's [thresholds] are the modes' "
+                                       "Thresholds fields, checked when it is read",
+    ("emaphm.traces.files", "emaphm.traces.importers.registry"):
+        "a refused bench export's suffix points to emaphm import",
+}
+
+
+def layer(module: str) -> float | None:
+    """``module``'s layer: its longest prefix's in :data:`LAYERS` (None: unranked)."""
+    parts = module.split(".")
+    for i in range(len(parts), 0, -1):
+        found = LAYERS.get(".".join(parts[:i]))
+        if found is not None:
+            return found
+    return None
+
+
+def upward(g: dict[str, set[str]]) -> list[tuple[str, str]]:
+    return sorted((a, b) for a, ts in g.items() for b in ts if layer(b) > layer(a))
+
+
+def test_no_upward_import():
+    g = graph("emaphm")
+    assert not [m for m in g if layer(m) is None], "a module of no layer: add it to LAYERS"
+    found = upward(g)
+    gone = [e for e in KNOWN_UPWARD if e not in found]
+    assert not gone, f"{gone} no longer import upward: take them off KNOWN_UPWARD"
+    new = [f"{a} -> {b} ({layer(a):g} -> {layer(b):g})" for a, b in found
+           if (a, b) not in KNOWN_UPWARD]
+    assert not new, "an import upward:\n" + "\n".join(new)
+
+
+def test_the_layer_rule_finds_an_upward_import():
+    g = {"emaphm.models.step": {"emaphm.verdict", "emaphm.optim.de"},
+         "emaphm.verdict": {"emaphm.models.step"}}
+    assert upward(g) == [("emaphm.models.step", "emaphm.verdict")]
+
+
+def test_the_architecture_page_names_every_package():
+    """docs/architecture.md draws every package (a folder of src/emaphm) of the house."""
+    text = (SRC.parents[0] / "docs" / "architecture.md").read_text(encoding="utf-8")
+    packages = sorted(p.parent.relative_to(SRC / "emaphm").as_posix()
+                      for p in (SRC / "emaphm").rglob("__init__.py") if p.parent != SRC / "emaphm")
+    assert len(packages) >= 8
+    missing = [p for p in packages if f"{p.rsplit('/', 1)[-1]}/" not in text]
+    assert not missing, f"docs/architecture.md does not draw {missing}"
