@@ -1,5 +1,5 @@
-"""Fixes from a black-box review of ``emaphm fleet report`` and ``emaphm fleet schedule``:
-full-precision numbers in the schedule, a site folder that is someone else's, the site
+"""The fleet's schedule (``emaphm fleet schedule``: CSV and iCalendar) and the site's
+planning options (``emaphm fleet report``): full-precision numbers in the schedule, a site folder that is someone else's, the site
 planned with the schedule's options, dates past 9999, deadlines rounded down, the index
 sorted by the inspect-by time it shows, the console summary, stable calendar UIDs and
 site URLs, and fleets timed in two units.

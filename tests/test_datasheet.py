@@ -15,7 +15,7 @@ from emaphm.datasheet import Nameplate, convert, load_nameplate
 from emaphm.params import (ParameterError, derive_tuning, load_params,
                            siemens_1fk7060)
 
-EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "actuators"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "actuators"
 
 
 def _plate(**fields) -> Nameplate:

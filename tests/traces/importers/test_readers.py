@@ -1,5 +1,5 @@
-"""``emaphm import`` after a black-box review: CSV exports with text columns and units the
-table lacks, a map's unit or delimiter that contradicts the file, MATLAB structs in
+"""What the importers' readers make of odd exports (``emaphm import``): CSV exports with
+text columns and units the table lacks, a map's unit or delimiter that contradicts the file, MATLAB structs in
 structs, struct arrays and matrices, TDMS channels at two rates, a gap in the time, a
 column named twice, and errors from Python that name the map's file. Each test builds a
 small file and checks the numbers or the message."""
