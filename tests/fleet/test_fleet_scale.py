@@ -101,7 +101,7 @@ def test_without_the_stored_records_the_actuators_are_keyed_by_what_the_history_
         fleet, tmp_path, monkeypatch):
     from emaphm.fleet import site as fleet_site
 
-    monkeypatch.setattr(fleet_site, "_stored_digests", lambda path: None)
+    monkeypatch.setattr(HealthHistory, "record_digests", lambda self: None)
     out = tmp_path / "site"
     assert fleet_site.build_site(fleet, out, workers=0).drawn == 5
     assert fleet_site.build_site(fleet, out, workers=0).drawn == 0

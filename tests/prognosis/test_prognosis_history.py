@@ -727,3 +727,20 @@ def test_a_skipped_inspection_round_trips_through_its_dict():
         assert back.to_dict() == s.to_dict()
     with pytest.raises(KeyError):
         SkippedInspection.from_dict({"id": 1, "actuator": "A", "time": 1.0})
+
+
+def test_record_digests_change_with_an_actuators_records_only(tmp_path):
+    """What the fleet site's cache reads of the store (through HealthHistory, never its
+    tables by name): one digest per actuator, which moves when its records do."""
+    db = tmp_path / "d.sqlite"
+    with HealthHistory(db) as h:
+        for a in ("EMA-1", "EMA-2"):
+            h.register(a)
+            h.add(a, 1.0, K1)
+        before = h.record_digests()
+        h.add("EMA-2", 2.0, K1)
+        after = h.record_digests()
+    assert set(before) == {"EMA-1", "EMA-2"}
+    assert after["EMA-1"] == before["EMA-1"] and after["EMA-2"] != before["EMA-2"]
+    with HealthHistory(db, readonly=True) as h:
+        assert h.record_digests() == after

@@ -1043,40 +1043,6 @@ def _actuators(h: Any, actuators: Sequence[str] | None) -> list:
     return every
 
 
-def _stored_digests(path: Path) -> dict[str, str] | None:
-    """SHA-256 of each actuator's records as the history stores them (its row, its
-    inspections and calibrations, every column), read in one pass in one snapshot without
-    decoding any: what tells an unchanged actuator in a large fleet. None where the file
-    cannot be read that way; the actuators are then keyed by what
-    :meth:`~emaphm.prognosis.HealthHistory.data` returns (:func:`_actuator_key`)."""
-    import sqlite3
-
-    from .._sqlite import connect_readonly
-
-    try:
-        con = connect_readonly(Path(path), 30.0)
-    except (sqlite3.Error, OSError):
-        return None
-    hashes: dict[str, Any] = {}
-    try:
-        con.execute("BEGIN")                   # the three tables as of one moment
-        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master WHERE type = 'table'")}
-        for table, owner in (("actuators", "id"), ("inspections", "actuator"),
-                             ("calibrations", "actuator")):
-            if table not in tables:
-                continue
-            for row in con.execute(f"SELECT {owner}, * FROM {table} ORDER BY {owner}, rowid"):
-                h = hashes.get(row[0])
-                if h is None:
-                    h = hashes[row[0]] = hashlib.sha256()
-                h.update(f"{table}\x00{row[1:]!r}\x00".encode("utf-8", "surrogatepass"))
-    except sqlite3.Error:
-        return None
-    finally:
-        con.close()
-    return {str(k): v.hexdigest() for k, v in hashes.items()}
-
-
 def _skipped_of(entry: dict) -> tuple:
     """The :class:`~emaphm.prognosis.history.SkippedInspection` records a manifest entry
     noted (an unchanged actuator's, for the command's warning)."""
@@ -1248,11 +1214,11 @@ def _plan(h: Any, acts: list, common: dict, digest: str, known: dict, figdir: Pa
     be made, the manifest entries of those whose page is up to date, by id, and the
     ``(Actuator, skipped records)`` of those with records the analyses leave out; ``digest``
     is that of the build's settings. Only the actuators whose records changed are read
-    from the history ``h`` (:func:`_stored_digests`)."""
+    from the history ``h`` (:meth:`~emaphm.prognosis.HealthHistory.record_digests`)."""
     stems = {a.id: page_stem(a.id) for a in acts}
     if len(set(stems.values())) != len(stems):          # a 40-bit hash prefix collided
         stems = {i: page_stem(i, digits=64) for i in stems}
-    stored = _stored_digests(h.path)
+    stored = h.record_digests()
     jobs, reused, skipped = [], {}, []
     for a in acts:
         entry, data = known.get(stems[a.id]), None

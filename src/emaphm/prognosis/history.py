@@ -967,6 +967,38 @@ class HealthHistory:
         df.attrs["actuator"] = self.actuator(actuator_id).to_dict()
         return df
 
+    def record_digests(self) -> dict[str, str] | None:
+        """SHA-256 of each actuator's records as the store holds them (its row, its
+        inspections and calibrations, every column), read in one pass in one snapshot
+        without decoding any: what tells a reader (the fleet site's cache) that an
+        actuator is unchanged, cheaply on a large fleet. None where the file cannot be
+        read that way (the caller then keys each actuator by :meth:`data`)."""
+        import hashlib
+
+        try:
+            con = connect_readonly(self.path, 30.0)
+        except (sqlite3.Error, OSError):
+            return None
+        hashes: dict[Any, Any] = {}
+        try:
+            con.execute("BEGIN")                   # the three tables as of one moment
+            tables = {r[0] for r in con.execute(
+                "SELECT name FROM sqlite_master WHERE type = 'table'")}
+            for table, owner in (("actuators", "id"), ("inspections", "actuator"),
+                                 ("calibrations", "actuator")):
+                if table not in tables:
+                    continue
+                for row in con.execute(f"SELECT {owner}, * FROM {table} ORDER BY {owner}, rowid"):
+                    h = hashes.get(row[0])
+                    if h is None:
+                        h = hashes[row[0]] = hashlib.sha256()
+                    h.update(f"{table}\x00{row[1:]!r}\x00".encode("utf-8", "surrogatepass"))
+        except sqlite3.Error:
+            return None
+        finally:
+            con.close()
+        return {str(k): v.hexdigest() for k, v in hashes.items()}
+
     def data(self, actuator_id: str) -> HistoryData:
         """The k history of ``actuator_id`` as arrays (:class:`HistoryData`): the
         inspections the analyses can use, and in ``skipped`` the others (a time outside
