@@ -213,9 +213,9 @@ def test_a_rebuild_with_nothing_changed_imports_neither_scipy_nor_matplotlib(fle
 
 def test_an_index_longer_than_a_page_holds_the_first_rows_and_all_the_data(fleet, tmp_path,
                                                                             monkeypatch):
-    from emaphm.fleet import site as fleet_site
+    from emaphm.fleet import pages as fleet_pages, site as fleet_site
 
-    monkeypatch.setattr(fleet_site, "PAGE_ROWS", 2)
+    monkeypatch.setattr(fleet_pages, "PAGE_ROWS", 2)
     site = fleet_site.build_site(fleet, tmp_path / "site", workers=0)
     html = site.index.read_text(encoding="utf-8")
     assert re.findall(r"<tr data-i=\"(\d+)\"", html) == ["0", "1"]
