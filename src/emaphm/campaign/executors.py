@@ -129,12 +129,14 @@ def _exit_with_parent(parent: int, period_s: float = 0.5) -> None:
     threading.Thread(target=watch, name="emaphm-parent-watch", daemon=True).start()
 
 
-def _init_worker(parent: int | None = None) -> None:
-    """Process-pool initializer: exit with the parent, leave Ctrl-C to it, then warm up."""
+def _init_worker(parent: int | None = None, warm: bool = True) -> None:
+    """Process-pool initializer: exit with the parent, leave Ctrl-C to it, then warm up
+    (the model kernels; ``warm=False``: work that runs none, the fleet site's drawing)."""
     if parent is not None:
         _exit_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    warm_up()
+    if warm:
+        warm_up()
 
 
 class Executor(Protocol):
@@ -178,15 +180,18 @@ class LocalExecutor:
     ``keep=True`` keeps the pool (its warm workers) from one :meth:`map_unordered` to the
     next, until :meth:`close` (or the end of a ``with`` block); by default each call starts
     a pool of at most as many workers as it has items and shuts it down at its end.
+    ``warm=False``: the workers load no model kernel first (work that runs none: the fleet
+    site's pages and figures).
     """
 
     def __init__(self, workers: int | None = None, *, mp_context: str = "spawn",
-                 keep: bool = False) -> None:
+                 keep: bool = False, warm: bool = True) -> None:
         if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
             raise ValueError(f"workers must be a positive integer, got {workers!r}")
         self.workers = workers or os.cpu_count() or 1
         self.mp_context = mp_context
         self.keep = bool(keep)
+        self.warm = bool(warm)
         self._pool: ProcessPoolExecutor | None = None
 
     def describe(self) -> str:
@@ -216,7 +221,7 @@ class LocalExecutor:
             return self._pool
         pool = ProcessPoolExecutor(max_workers=self.workers if self.keep else min(self.workers, n_items),
                                    mp_context=multiprocessing.get_context(self.mp_context),
-                                   initializer=_init_worker, initargs=(os.getpid(),))
+                                   initializer=_init_worker, initargs=(os.getpid(), self.warm))
         if self.keep:
             self._pool = pool
         return pool

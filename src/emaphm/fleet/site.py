@@ -79,10 +79,11 @@ import time
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
 from .._files import atomic_write_text
 from .._text import utf8_text
+from ..campaign.executors import LocalExecutor
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
 from ..seeds import check_seed
 from .cache import (FIGURE_DPI, _INDEX_KEY, _MANIFEST, _actuator_key, _code_fingerprint,
@@ -209,40 +210,6 @@ def _draw(status: "ActuatorStatus", data: Any, thresholds: FailureThresholds,
         svg, w, h = draw.prognosis(prog, indicators=names[:3])
         files[prog_name], figures["prognosis"] = svg, (prog_name, w, h)
     return files, figures
-
-
-class _LocalPool:
-    """Worker processes on this machine, spawned (they start clean, whatever this process
-    holds, as the campaign's do), with the ``map_unordered`` of
-    :mod:`emaphm.campaign.executors`. Unlike the campaign's pool they load no model
-    kernels: drawing needs none."""
-
-    def __init__(self, workers: int) -> None:
-        self.workers = workers
-
-    def map_unordered(self, fn: Callable[[Any], Any],
-                      items: Iterable[Any]) -> Iterator[tuple[Any, Any]]:
-        import multiprocessing
-        from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
-
-        items = list(items)
-        if not items:
-            return
-        pool = ProcessPoolExecutor(max_workers=min(self.workers, len(items)),
-                                   mp_context=multiprocessing.get_context("spawn"))
-        try:
-            running = {pool.submit(fn, item): item for item in items}
-            while running:
-                done, _ = wait(running, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    item = running.pop(fut)
-                    try:
-                        value = fut.result()
-                    except Exception as exc:        # noqa: BLE001 - yielded as a value
-                        value = exc
-                    yield item, value
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _batches(jobs: list[_Job], workers: int) -> list[list[_Job]]:
@@ -461,7 +428,8 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
     pool = executor is None and n_workers > 1 and len(jobs) > 1
     staging = _Staging()
     try:
-        made, statuses, written = _make(jobs, _LocalPool(n_workers) if pool else executor,
+        made, statuses, written = _make(jobs, LocalExecutor(n_workers, warm=False) if pool
+                                        else executor,
                                         figdir, progress, staging)
         entries.update(made)
         removed = 0 if actuators else _remove_others(figdir, known, set(stems.values()),
