@@ -9,7 +9,9 @@
   operating system decides, root included);
 * :func:`atomic_write`: an output file is written atomically, through an unpredictable
   temporary sibling opened with ``O_EXCL`` (a planted file or symlink of a predictable
-  name cannot be followed), then :func:`os.replace`.
+  name cannot be followed), then :func:`os.replace`;
+* :class:`StagedWrites`: many files written as one (each so staged, all renamed into
+  place together once every one is on disk).
 """
 
 from __future__ import annotations
@@ -20,9 +22,10 @@ import secrets
 import stat
 import tempfile
 from pathlib import Path
-from typing import IO, Callable
+from typing import IO, Callable, Sequence
 
-__all__ = ["atomic_write", "atomic_write_text", "regular_file", "file_kind", "folder_problem"]
+__all__ = ["atomic_write", "atomic_write_text", "StagedWrites", "regular_file", "file_kind",
+           "folder_problem"]
 
 _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
           (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
@@ -140,3 +143,58 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
     """:func:`atomic_write` of a UTF-8 text."""
     data = text.encode("utf-8")
     return atomic_write(path, lambda fh: fh.write(data))
+
+
+class StagedWrites:
+    """Files written as one: each written whole beside its place under an unpredictable
+    temporary name (``O_EXCL``, as :func:`atomic_write`), then renamed into place all
+    together (:meth:`commit`) once every one is written and flushed; a writer that fails
+    on the way (a full disk, a crash) removes them (:meth:`discard`) and leaves the
+    files as they were, never half new and half old (the fleet site's build). A rename
+    needs no room on the disk, and replaces a link in the file's place (never writing
+    through it)."""
+
+    def __init__(self) -> None:
+        self.moves: list[tuple[Path, Path]] = []
+        self.removals: list[Path] = []
+
+    def write(self, path: Path, payload: bytes) -> None:
+        tmp = Path(path).parent / f".{Path(path).name}.{secrets.token_hex(6)}.tmp"
+        try:
+            with open(tmp, "xb") as fh:
+                fh.write(payload)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
+        self.moves.append((tmp, Path(path)))
+
+    def remove(self, path: Path) -> None:
+        self.removals.append(path)
+
+    def commit(self) -> None:
+        if self.moves:
+            _sync_all([tmp for tmp, _ in self.moves])
+        for tmp, path in self.moves:
+            os.replace(tmp, path)
+        self.moves = []
+        for path in self.removals:
+            path.unlink(missing_ok=True)
+
+    def discard(self) -> None:
+        for tmp, _ in self.moves:
+            tmp.unlink(missing_ok=True)
+        self.moves = []
+
+
+def _sync_all(paths: Sequence[Path]) -> None:
+    """Flush ``paths`` to disk: the whole system's buffers at once where the platform can
+    (``os.sync``), else each file."""
+    if hasattr(os, "sync"):
+        os.sync()
+        return
+    for path in paths:                          # pragma: no cover - Windows
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)

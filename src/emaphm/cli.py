@@ -24,6 +24,7 @@ import os
 import sys
 import time
 import warnings
+from pathlib import Path
 from typing import Any, Sequence
 
 from . import __version__

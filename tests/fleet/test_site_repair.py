@@ -134,7 +134,7 @@ def test_a_full_disk_leaves_the_old_site_whole(fleet, capsys, monkeypatch):
         for n in range(3):
             _add_series(h, f"EMA-{n}", [500.0], [_k(friction=0.5)])
     whole = _files(site)
-    real = site_module._Staging.write
+    real = site_module.StagedWrites.write
     count = []
 
     def full(self, path, payload):
@@ -143,7 +143,7 @@ def test_a_full_disk_leaves_the_old_site_whole(fleet, capsys, monkeypatch):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
         return real(self, path, payload)
 
-    monkeypatch.setattr(site_module._Staging, "write", full)
+    monkeypatch.setattr(site_module.StagedWrites, "write", full)
     capsys.readouterr()
     err = _one_line_error(capsys, ["fleet", "report", "--db", str(db), "--out", str(site),
                                    "--workers", "0", "--quiet"], "No space left on device",

@@ -15,8 +15,8 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 from .. import modes as _modes
 
-if TYPE_CHECKING:  # pragma: no cover - a staging of the build's files (emaphm.fleet.site)
-    from .site import _Staging
+if TYPE_CHECKING:  # pragma: no cover - annotations only
+    from .._files import StagedWrites
 
 
 #: Pixels per inch of the figures on the pages: their size is the reference plots' size in
@@ -113,7 +113,7 @@ def _reusable(entry: Any, key: str, folder: Path) -> bool:
     return True
 
 
-def _remove_others(folder: Path, known: dict, keep: set[str], staging: "_Staging") -> int:
+def _remove_others(folder: Path, known: dict, keep: set[str], staging: "StagedWrites") -> int:
     """Remove from ``folder`` (and from the manifest ``known``) the page and figures of
     every actuator an earlier build wrote that is not in ``keep``: a site rebuilt from a
     history without them must not keep serving their pages. Only the files a build

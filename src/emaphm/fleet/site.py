@@ -74,14 +74,13 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import secrets
 import time
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Sequence
 
-from .._files import atomic_write_text
+from .._files import StagedWrites, atomic_write_text
 from .._text import utf8_text
 from ..campaign.executors import LocalExecutor
 from ..prognosis.thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
@@ -245,60 +244,6 @@ def _run(jobs: list[_Job], executor: Any,
             progress(f"{done}/{len(jobs)} {value[-1]['id']}")
 
 
-class _Staging:
-    """The files of a build, each written whole beside its place under a temporary name,
-    then renamed into place all together (:meth:`commit`) once every one is written and
-    flushed: a build that fails on the way (a full disk, a crash of the drawing) removes
-    them (:meth:`discard`) and leaves the site as it was, never half new and half old.
-    A rename needs no room on the disk, and replaces a link in the file's place (never
-    writing through it)."""
-
-    def __init__(self) -> None:
-        self.moves: list[tuple[Path, Path]] = []
-        self.removals: list[Path] = []
-
-    def write(self, path: Path, payload: bytes) -> None:
-        tmp = path.parent / f".{path.name}.{secrets.token_hex(6)}.tmp"
-        try:
-            with open(tmp, "xb") as fh:
-                fh.write(payload)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
-        self.moves.append((tmp, path))
-
-    def remove(self, path: Path) -> None:
-        self.removals.append(path)
-
-    def commit(self) -> None:
-        if self.moves:
-            _sync([tmp for tmp, _ in self.moves])
-        for tmp, path in self.moves:
-            os.replace(tmp, path)
-        self.moves = []
-        for path in self.removals:
-            path.unlink(missing_ok=True)
-
-    def discard(self) -> None:
-        for tmp, _ in self.moves:
-            tmp.unlink(missing_ok=True)
-        self.moves = []
-
-
-def _sync(paths: Sequence[Path]) -> None:
-    """Flush ``paths`` to disk: the whole system's buffers at once where the platform can
-    (``os.sync``), else each file."""
-    if hasattr(os, "sync"):
-        os.sync()
-        return
-    for path in paths:                          # pragma: no cover - Windows
-        fd = os.open(path, os.O_RDONLY | getattr(os, "O_BINARY", 0))
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-
-
 # ----------------------------------------------------------------------------- the build
 #: What a build writes at the top of its folder: anything else there is left alone.
 _SITE_NAMES = ("index.html", "fleet.json", "assets", "actuators")
@@ -426,7 +371,7 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
             h.close()
     n_workers = (os.cpu_count() or 1) if workers is None else workers
     pool = executor is None and n_workers > 1 and len(jobs) > 1
-    staging = _Staging()
+    staging = StagedWrites()
     try:
         made, statuses, written = _make(jobs, LocalExecutor(n_workers, warm=False) if pool
                                         else executor,
@@ -465,7 +410,7 @@ def build_site(history: Any, out: str | os.PathLike[str], *,
 
 
 def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, settings: dict,
-                 staging: _Staging, *, redraw: bool, title: str, source: str,
+                 staging: StagedWrites, *, redraw: bool, title: str, source: str,
                  thresholds: FailureThresholds, seed: int, level: float,
                  policy: InspectionPolicy) -> int:
     """Stage ``index.html`` and ``fleet.json`` of ``rows`` (ranked, in order) unless what
@@ -473,7 +418,6 @@ def _write_index(folder: Path, rows: list[dict], cells: list[dict], keys: list, 
     the same and both are there as they were written (their SHA-256 in the key file:
     emptied, edited or replaced by a link, they are written again), or ``redraw``;
     returns the files written."""
-    index = folder / "index.html"
     meta = {"title": title, "history": source, "seed": seed, "level": level,
             "thresholds": thresholds.to_dict(), "indicators": list(INDICATORS),
             "inspection_policy": policy.to_dict()}
@@ -531,7 +475,7 @@ def _plan(h: Any, acts: list, common: dict, digest: str, known: dict, figdir: Pa
 
 
 def _make(jobs: list[_Job], executor: Any, figdir: Path,
-          progress: Callable[[str], None] | None, staging: _Staging) -> tuple[dict, dict, int]:
+          progress: Callable[[str], None] | None, staging: StagedWrites) -> tuple[dict, dict, int]:
     """Make the pages of ``jobs`` and stage their files as they come (``staging``); returns
     their manifest entries and kept statuses by id, and the files written."""
     made: dict[str, dict] = {}
@@ -553,7 +497,7 @@ def _make(jobs: list[_Job], executor: Any, figdir: Path,
     return made, statuses, written
 
 
-def _write_assets(folder: Path, staging: _Staging) -> int:
+def _write_assets(folder: Path, staging: StagedWrites) -> int:
     """Stage the shipped assets where what is there differs (or is a link); returns how
     many."""
     n = 0

@@ -55,7 +55,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy import stats
@@ -63,6 +63,9 @@ from scipy import stats
 from ..faults import K_NAMES
 from ..seeds import check_seed
 from ..fitness import eq4_weights, effective_samples
+
+if TYPE_CHECKING:  # annotations only
+    from ..fitness import Eq4Objective
 
 __all__ = ["SPREAD_METHODS", "KInterval", "IdentificationSpread", "identify_with_spread",
            "population_interval", "effective_samples",
