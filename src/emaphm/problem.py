@@ -127,6 +127,46 @@ def _sobol(d: int, seed: int):
     return qmc.Sobol(d, scramble=True, seed=seed)  # pragma: no cover - SciPy < 1.15
 
 
+#: Seeds whose Sobol samples :func:`sobol_sample` keeps on disk: a user's own (a campaign's
+#: run seeds, a history's); a 64-bit seed spawned for one run is drawn once.
+SAMPLE_CACHE_SEEDS = 2 ** 16
+
+
+def sobol_sample(d: int, seed: int, n: int = LSQ_SAMPLE) -> np.ndarray:
+    """The first ``n`` points of SciPy's scrambled Sobol sequence in ``d`` dimensions seeded
+    by ``seed`` (:func:`_sobol`): from the kernels' cache folder
+    (:func:`emaphm.models.warm.cache_folder`) where an earlier process drew them, else drawn
+    and kept there (seeds under :data:`SAMPLE_CACHE_SEEDS`). The same numbers either way;
+    what a later process saves is importing ``scipy.stats`` (a third of a second of the
+    quick start's diagnosis) to draw them."""
+    from importlib import metadata
+
+    from ._files import atomic_write
+    from .models.warm import cache_folder
+
+    folder = cache_folder()
+    path = None
+    if folder is not None and seed in range(SAMPLE_CACHE_SEEDS):
+        try:
+            version = metadata.version("scipy")
+        except metadata.PackageNotFoundError:      # pragma: no cover - SciPy is a dependency
+            version = "unknown"
+        path = folder / f"sobol-{d}-{seed}-{n}-scipy-{version}.npy"
+        try:
+            Z = np.load(path, allow_pickle=False)
+            if Z.shape == (n, d) and Z.dtype == np.float64 and np.all((Z >= 0) & (Z < 1)):
+                return Z
+        except (OSError, ValueError):
+            pass
+    Z = _sobol(d, seed).random(n)
+    if path is not None:
+        try:
+            atomic_write(path, lambda fh: np.save(fh, Z, allow_pickle=False))
+        except OSError:
+            pass                                   # a read-only cache: drawn each time
+    return Z
+
+
 @dataclass(frozen=True, eq=False)
 class IdentificationProblem:
     """What an identification searches, and against which trace.
@@ -480,7 +520,7 @@ class SearchView:
         names = self.problem.nuisance
         n_var = self.problem.n_var
         axes = single_fault_points()
-        Z = _sobol(n_var, seed).random(LSQ_SAMPLE)
+        Z = sobol_sample(n_var, seed)
         K = np.vstack([to_k(Z[:, :N_K], default_search(self.problem.fault_model)), axes])
         Z = np.vstack([Z, np.tile(np.concatenate([np.zeros(N_K), self._nu0()[0]]),
                                   (len(axes), 1))])

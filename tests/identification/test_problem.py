@@ -271,3 +271,25 @@ def test_make_solver_has_the_identification_defaults():
     assert pso.restarts == 2 and pso.polish and pso.polish_evaluations == 2000
     assert make_solver("pso", budget=True).restarts == 0
     assert make_solver("pso", polish=False).restarts == 0
+
+
+def test_the_sobol_sample_is_kept_and_read_back_bit_for_bit(tmp_path, monkeypatch):
+    """A later process reads the search's sample instead of importing scipy.stats to draw
+    it: the same numbers; a damaged file is drawn again; a seed spawned for one run (64
+    bits) is not kept."""
+    import numpy as np
+
+    from emaphm import problem as P
+    from emaphm.models import warm
+
+    monkeypatch.setattr(warm, "cache_folder", lambda: tmp_path)
+    drawn = P._sobol(10, 3).random(P.LSQ_SAMPLE)
+    first = P.sobol_sample(10, 3)
+    (kept,) = tmp_path.glob("sobol-10-3-64-scipy-*.npy")
+    assert np.array_equal(first, drawn) and np.array_equal(np.load(kept), drawn)
+    assert np.array_equal(P.sobol_sample(10, 3), drawn)
+    kept.write_bytes(b"not an array")
+    assert np.array_equal(P.sobol_sample(10, 3), drawn)
+    assert np.array_equal(np.load(kept), drawn)                 # written again, whole
+    P.sobol_sample(10, 2 ** 40)
+    assert len(list(tmp_path.glob("sobol-*"))) == 1

@@ -24,8 +24,18 @@ from typing import Iterable
 from ._monitoring_common import variant_of
 from .compiling import PENDING, stop_children, wait_for
 
-__all__ = ["prefetch", "diagnosis_variants", "wait_for", "cached", "compile_variants",
+__all__ = ["prefetch", "diagnosis_variants", "wait_for", "cached", "compile_variants", "cache_folder",
            "stop_children"]
+
+
+def cache_folder():
+    """The folder the kernels are cached in (a :class:`pathlib.Path`; None where nothing
+    is cached), which other work drawn once per environment may share: a search's Sobol
+    sample (:func:`emaphm.problem.sobol_sample`). Emptied with the kernels when their
+    sources change."""
+    from ._jit import CACHE_DIR
+
+    return CACHE_DIR
 
 
 def _kernels(key: tuple[bool, bool]) -> list:
