@@ -87,14 +87,18 @@ def test_a_view_maps_the_box_and_counts_one_search(problem):
                                SCENARIOS["turn-short-5pct"], atol=1e-12)
 
 
-def test_the_sobol_sample_seeds_scipy_with_rng_where_it_has_it(problem, monkeypatch):
+def test_the_sobol_sample_seeds_scipy_with_rng_where_it_has_it(problem, monkeypatch, tmp_path):
     """SciPy 1.15 moved its engines' ``seed=`` to ``rng=`` (SPEC 7; ``seed=`` is to be
-    deprecated): the sample passes ``rng=`` where SciPy takes it, and warns of nothing."""
+    deprecated): the sample passes ``rng=`` where SciPy takes it, and warns of nothing
+    (drawn afresh: an empty cache folder, where a kept sample is read without SciPy)."""
     import warnings
 
     from scipy.stats import qmc
     from support import scipy_rng_keyword, spy_on_init
 
+    from emaphm.models import warm
+
+    monkeypatch.setattr(warm, "cache_folder", lambda: tmp_path)
     calls = spy_on_init(monkeypatch, qmc.Sobol)
     with warnings.catch_warnings():
         warnings.simplefilter("error", DeprecationWarning)
