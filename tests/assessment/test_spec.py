@@ -110,3 +110,17 @@ def test_the_cli_fits_its_defaults_to_what_is_given(capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["assess", "--out", "x", "--healthy", "-1"])
     assert exit_.value.code == 2 and "(healthy traces per unit)" in capsys.readouterr().err
+
+
+def test_the_recorded_voltage_path_is_a_setting_that_keeps_older_specs_hash():
+    """``drive_signals`` (``emaphm assess --drive-signals``) is in a spec's JSON only when
+    on: a spec written before it existed hashes as it did and resumes its store."""
+    from emaphm.assessment import AssessmentSpec
+    from emaphm.params import siemens_1fk7060
+
+    plain = AssessmentSpec(siemens_1fk7060(), units=2)
+    rec = AssessmentSpec(siemens_1fk7060(), units=2, drive_signals=True)
+    assert "drive_signals" not in plain.to_dict() and rec.to_dict()["drive_signals"] is True
+    assert plain.hash() != rec.hash()
+    assert AssessmentSpec.from_dict(rec.to_dict()) == rec
+    assert AssessmentSpec.from_dict(plain.to_dict()) == plain

@@ -227,7 +227,10 @@ def report_md(a: Mapping[str, Any], figures: Mapping[str, str]) -> str:
              f"{spec['seed']}), thresholds "
              + (f"tuned on {spec['tune_units']} other units for a false-alarm rate under "
                 f"{_pct(spec['target_far'])}" if a["thresholds"]["tuned"] else "as given")
-             + f"; {a['cpu_s']['total']:.0f} s of CPU, {a['wall_s']:.0f} s wall.", "",
+             + f"; {a['cpu_s']['total']:.0f} s of CPU, {a['wall_s']:.0f} s wall. Diagnosed "
+             + ("from the drive's recorded voltage commands (the controller not modelled)"
+                if spec.get("drive_signals") else "with the modelled controller")
+             + ".", "",
              "## Conclusions", "", *[f"- {c}" for c in conclusions(a)], "",
              "## False alarms (healthy units)", ""]
     rows = []
