@@ -92,24 +92,31 @@ def _add_inspection(db: Path) -> str:
     return last.id
 
 
-def _fleet(n: int, tmp: Path, workers: int, base: Path | None, dask: bool) -> dict:
+def _fleet(n: int, tmp: Path, workers: int, base: Path | None, dask: bool,
+           rev: str = BASE) -> dict:
     db = tmp / f"demo{n}.sqlite"
     rec = _cli("fleet", "demo", "--db", str(db), "--actuators", str(n), "--synthetic", "--quiet")
+    db_base = tmp / f"demo{n}-{rev}.sqlite"
+    if base is not None:   # the same demo fleet, recorded by the base in its own schema (an
+        # older emaphm refuses a history a newer one wrote)
+        _cli("fleet", "demo", "--db", str(db_base), "--actuators", str(n), "--synthetic",
+             "--quiet", src=base)
     from emaphm.prognosis.history import HealthHistory
 
     with HealthHistory(db, readonly=True) as h:
         n_ins = sum(a.n_inspections for a in h.actuators())
     report = ["fleet", "report", "--db", str(db), "--quiet", "--json"]
+    report_base = ["fleet", "report", "--db", str(db_base), "--quiet", "--json"]
     out, out_base = tmp / f"site{n}", tmp / f"base{n}"
     w = ["--workers", str(workers)]
     rows = {}
     rows["cold"] = _cli(*report, "--out", str(out), *w)
     if base is not None:
-        rows[f"cold, emaphm {BASE}"] = _cli(*report, "--out", str(out_base), *w, src=base)
+        rows[f"cold, emaphm {rev}"] = _cli(*report_base, "--out", str(out_base), *w, src=base)
     rows["rebuild, nothing changed"] = _cli(*report, "--out", str(out), *w)
     if base is not None:
-        rows[f"rebuild, nothing changed, emaphm {BASE}"] = _cli(*report, "--out", str(out_base),
-                                                                *w, src=base)
+        rows[f"rebuild, nothing changed, emaphm {rev}"] = _cli(*report_base, "--out",
+                                                               str(out_base), *w, src=base)
     _add_inspection(db)
     rows["rebuild, one actuator with a new inspection"] = _cli(*report, "--out", str(out), *w)
     if dask:
@@ -236,7 +243,7 @@ def main() -> None:
         fleets, parts = [], {}
         for n in sizes:
             fleets.append(_fleet(n, tmp, args.workers, base if n == 300 else None,
-                                 args.dask and n == 300))
+                                 args.dask and n == 300, rev=args.base or BASE))
             print(json.dumps(fleets[-1]), file=sys.stderr, flush=True)
             if n == 300:
                 parts = _parts(tmp / "demo300.sqlite")
