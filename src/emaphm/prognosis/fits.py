@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 from scipy import stats
@@ -213,6 +213,17 @@ def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_f
     ``h`` the leverages of the fit of all): O(n) per screen instead of a fit per
     inspection (O(n^2), 8 s of the 11 s of a prognosis of 3,000 inspections).
     :func:`_inliers_refit` is the readable reference, fit by fit."""
+    return _screen(t, fits, lambda idx, models: _loo_scores(t[idx], y[idx], models,
+                                                            sigma_floor, p_false))
+
+
+def _screen(t: np.ndarray, fits: Mapping[str, TrendFit],
+            scores: Callable[[np.ndarray, tuple[str, ...]], tuple[np.ndarray, np.ndarray]]
+            ) -> np.ndarray:
+    """The outlier screen's rule (:func:`_inliers`): from six inspections on, at most one in
+    five left out, one at a time, never the last two. ``scores(idx, models)``: the
+    distance and the quantile it is held to of each kept inspection ``idx`` but the last
+    two."""
     keep = np.ones(t.size, dtype=bool)
     if t.size < 6:
         return keep
@@ -222,7 +233,7 @@ def _inliers(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit], sigma_f
         z = np.zeros(t.size)
         crit = np.full(t.size, np.inf)
         head = idx[:-2]
-        z[head], crit[head] = _loo_scores(t[idx], y[idx], models, sigma_floor, p_false)
+        z[head], crit[head] = scores(idx, models)
         worst = int(np.argmax(z / crit))
         if z[worst] <= crit[worst]:
             break
@@ -282,22 +293,14 @@ def _inliers_refit(t: np.ndarray, y: np.ndarray, fits: Mapping[str, TrendFit],
                    sigma_floor: float, p_false: float = 1e-4) -> np.ndarray:
     """:func:`_inliers` as it reads, a fit without each inspection (O(n^2)): the reference
     the tests hold the fast one to."""
-    keep = np.ones(t.size, dtype=bool)
-    if t.size < 6:
-        return keep
-    models = _screen_models(fits)
-    for _ in range(max(1, t.size // 5)):
-        idx = np.flatnonzero(keep)
-        z = np.zeros(t.size)
-        crit = np.full(t.size, np.inf)
-        for i in idx[:-2]:
+    def scores(idx: np.ndarray, models: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+        z, crit = np.zeros(idx.size - 2), np.full(idx.size - 2, np.inf)
+        for j, i in enumerate(idx[:-2]):
             rest = idx[idx != i]
             loo = fit_trends(t[rest], y[rest], models, sigma_floor=sigma_floor)
             best = min(loo.values(), key=lambda f: f.aicc)
-            z[i] = abs(y[i] - best.value(t[i])[0]) / max(best.sigma, sigma_floor, 1e-12)
-            crit[i] = float(stats.t.ppf(1.0 - p_false / 2.0, best.dof))
-        worst = int(np.argmax(z / crit))
-        if z[worst] <= crit[worst]:
-            break
-        keep[worst] = False
-    return keep
+            z[j] = abs(y[i] - best.value(t[i])[0]) / max(best.sigma, sigma_floor, 1e-12)
+            crit[j] = float(stats.t.ppf(1.0 - p_false / 2.0, best.dof))
+        return z, crit
+
+    return _screen(t, fits, scores)

@@ -18,6 +18,12 @@ eccentricity      eccentricity     k6                      0.5: static eccentric
 gain_drift        gain_drift       abs(k8 - 0.5)           0.25: proportional gain 25 % off nominal
 demagnetization   demagnetization  the flux lost, as the   0.2: a fifth of the magnet flux lost
                                    inspection searched it
+current_sensor_   current_sensor   the currents' sum: the  0.1: a sensor 10 % off
+gain_a, _b, _c                     placed sensor's |g - 1|
+current_sensor_   current_sensor   the sum's constant |o|  0.5 A
+offset
+resistance_a,     resistance       a phase's resistance    0.5: a connection at 1.5x its phase's
+_b, _c                             above the median's      resistance
 ================  ===============  ======================  =========================================
 
 (``short_a`` to ``short_c`` are the short circuit's indicators' names before 0.7; they are
@@ -122,14 +128,22 @@ def indicator_values(K: np.ndarray, readings: Mapping[str, Any] | None = None
     K = np.asarray(K, dtype=float)
     if K.shape[-1] != 8:
         raise ValueError(f"fault vectors need 8 components, got shape {K.shape}")
+    return _indicators(K, readings, signed=False)
+
+
+def _indicators(K: np.ndarray, readings: Mapping[str, Any] | None,
+                signed: bool) -> dict[str, np.ndarray]:
+    """Every indicator of fault vectors ``K`` (..., 8), those beyond k from ``readings``
+    (NaN without them); ``signed``: a centred one as its series along a history
+    (:meth:`emaphm.modes.Indicator.series_of_k`), else its value."""
     out = {}
     for name, ind in _modes.INDICATORS.items():
         if ind.component is not None:
-            out[name] = ind.of_k(K)
+            out[name] = ind.series_of_k(K) if signed else ind.of_k(K)
         else:
             r = None if readings is None else readings.get(name)
             out[name] = np.full(K.shape[:-1], np.nan) if r is None else \
-                np.asarray(r, dtype=float).reshape(K.shape[:-1])
+                np.array(r, dtype=float).reshape(K.shape[:-1])
     return out
 
 

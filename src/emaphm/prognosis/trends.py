@@ -70,7 +70,7 @@ from .fits import (DEFAULT_MODELS, MIN_INSPECTIONS, TREND_MODELS, TrendFit, _che
 from .predictor import RULPrediction, _json_float, predict_rul
 from .states import growth_rate, indicator_state, level_at_last
 from .. import modes as _modes
-from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds
+from .thresholds import DEFAULT_FAILURE_THRESHOLDS, INDICATORS, FailureThresholds, _indicators
 
 __all__ = ["TREND_MODELS", "SELECTION_RULES", "TrendFit", "fit_trend", "fit_trends", "select",
            "RULPrediction", "predict_rul", "Prognosis", "prognose", "indicator_series",
@@ -113,15 +113,7 @@ def indicator_series(K: Any, readings: Mapping[str, Any] | None = None) -> dict[
     K = np.atleast_2d(np.asarray(K, dtype=float))
     if K.ndim != 2 or K.shape[1] != 8:
         raise ValueError(f"a k history must have shape (n, 8), got {K.shape}")
-    out = {}
-    for name, ind in _modes.INDICATORS.items():
-        if ind.component is not None:
-            out[name] = ind.series_of_k(K)
-        else:
-            r = None if readings is None else readings.get(name)
-            out[name] = np.full(K.shape[0], np.nan) if r is None else \
-                np.asarray(r, dtype=float).reshape(K.shape[0]).copy()
-    return out
+    return _indicators(K, readings, signed=True)
 
 
 @dataclass(frozen=True)
