@@ -163,8 +163,8 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
                               rul_median=math.nan, rul_lo=math.nan, rul_hi=math.nan,
                               no_growth=False, past_threshold=False, trend=None,
                               growth=math.nan, prognosis=None, plan=plan, **base)
-    readings = data.readings
-    now = latest_values(data.K, data.observed, readings)  # a placeholder k is no reading
+    observed, readings = data.observed, data.readings     # each read from the records once
+    now = latest_values(data.K, observed, readings)  # a placeholder k is no reading
     thr = {n: thresholds.for_indicator(n) for n in INDICATORS}
     ratio = {n: float(now[n]) / thr[n] for n in INDICATORS}
     if prognosis is None and data.n >= MIN_INSPECTIONS:
@@ -173,7 +173,7 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
         draws = {} if policy is None else {"n_samples": n_samples_for(policy.risk)}
         prognosis = prognose(data.times, data.K, seed=seed, thresholds=thresholds,
                              actuator=data.actuator.id, time_unit=data.actuator.time_unit,
-                             level=level, observed=data.observed, readings=readings, **draws)
+                             level=level, observed=observed, readings=readings, **draws)
     preds = prognosis.predictions if prognosis is not None else {}
     past = [n for n in INDICATORS if ratio[n] >= 1.0 or (n in preds and preds[n].median <= 0.0)]
     span = float(data.times[-1] - data.times[0])
@@ -194,7 +194,7 @@ def assess(data: "HistoryData", *, thresholds: FailureThresholds = DEFAULT_FAILU
         trend, rate, rul, flat = None, math.nan, (math.nan,) * 3, False
     plan = None if policy is None else plan_inspection(
         data.times, prognosis, policy=policy, time_unit=data.actuator.time_unit, K=data.K,
-        thresholds=thresholds, observed=data.observed, readings=readings)
+        thresholds=thresholds, observed=observed, readings=readings)
     return ActuatorStatus(worst=worst, level=float(now[worst]), threshold=thr[worst],
                           rul_median=float(rul[0]), rul_lo=float(rul[1]), rul_hi=float(rul[2]),
                           no_growth=bool(flat), past_threshold=bool(past), trend=trend,

@@ -17,7 +17,8 @@ import numpy as np
 if TYPE_CHECKING:                   # annotations only: params reads the modes' thresholds
     from ..params import ActuatorParams
 
-__all__ = ["Fault", "Reading", "Injection", "FaultMode", "Grid", "Indicator", "PHASES"]
+__all__ = ["Fault", "Reading", "Injection", "FaultMode", "Grid", "Indicator", "PHASES",
+           "searched_values"]
 
 #: The phases, as faults name them.
 PHASES = ("A", "B", "C")
@@ -112,6 +113,17 @@ class Grid:
 
 def _identity_measure(r: "Reading") -> dict[str, float]:
     return {}
+
+
+def searched_values(diagnosis: Mapping[str, Any],
+                    extra: Mapping[str, Any]) -> tuple[Mapping[str, Any], ...]:
+    """The values an inspection searched beside k, as it stored them, in the order a
+    reading takes them: the refit its verdict was read on (the diagnosis'
+    ``hypothesis_check``), then its identification's (``extra["nuisance"]``), each empty
+    where absent (a malformed record raises, which a reading takes as not measured:
+    :func:`emaphm.modes.indicator_readings`)."""
+    refit = diagnosis.get("hypothesis_check") or {}
+    return refit.get("nuisance") or {}, extra.get("nuisance") or {}
 
 
 @dataclass(frozen=True)

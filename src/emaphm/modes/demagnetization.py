@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, Mapping
 
-from .base import Fault, FaultMode, Indicator, Injection, Reading
+from .base import Fault, FaultMode, Indicator, Injection, Reading, searched_values
 
 __all__ = ["MODE", "hypothesis", "tolerance", "flux_loss"]
 
@@ -97,8 +97,7 @@ def flux_loss(diagnosis: Mapping[str, Any] | None, extra: Mapping[str, Any] | No
     calibrated unit, within +-6 %); None where neither searched it (a data sheet's unit
     whose residual did not ask for the hypothesis: its flux differs from the data sheet by
     the production tolerance, which no loss can be told from)."""
-    refit = (diagnosis or {}).get("hypothesis_check") or {}
-    for nu in (refit.get("nuisance") or {}, (extra or {}).get("nuisance") or {}):
+    for nu in searched_values(diagnosis or {}, extra or {}):
         for name in ("demag", "flux"):
             if nu.get(name) is not None:
                 return -float(nu[name])

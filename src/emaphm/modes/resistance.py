@@ -32,7 +32,7 @@ from __future__ import annotations
 from dataclasses import replace
 from typing import Any, Mapping
 
-from .base import PHASES, Fault, FaultMode, Indicator, Injection, Reading
+from .base import PHASES, Fault, FaultMode, Indicator, Injection, Reading, searched_values
 
 __all__ = ["MODE", "hypothesis", "imbalance"]
 
@@ -40,28 +40,38 @@ __all__ = ["MODE", "hypothesis", "imbalance"]
 NAMES = tuple(f"R_{p.lower()}" for p in PHASES)
 
 
-def imbalance(extra: Mapping[str, Any]) -> tuple[float, ...] | None:
-    """Each phase's resistance deviation above the median of the three (relative), from
-    the values searched beside k; None where they were not searched."""
+def _deviations(extra: Mapping[str, Any]) -> tuple[list[float], float] | None:
+    """The three phases' relative resistance deviations searched beside k and their
+    median; None where they were not searched."""
     try:
         dev = [float(extra[n]) for n in NAMES]
     except (KeyError, TypeError, ValueError):
         return None
-    mid = sorted(dev)[1]
+    return dev, sorted(dev)[1]
+
+
+def imbalance(extra: Mapping[str, Any]) -> tuple[float, ...] | None:
+    """Each phase's resistance deviation above the median of the three (relative), from
+    the values searched beside k; None where they were not searched."""
+    found = _deviations(extra)
+    if found is None:
+        return None
+    dev, mid = found
     return tuple(d - mid for d in dev)
 
 
 def read(r: Reading) -> list[Fault]:
-    up = imbalance(r.extra)
-    if up is None:
+    found = _deviations(r.extra)
+    if found is None:
         return []
-    j = max(range(3), key=lambda i: up[i])
-    if not up[j] > r.thresholds.resistance:
+    dev, mid = found
+    j = max(range(3), key=lambda i: dev[i])
+    if not dev[j] - mid > r.thresholds.resistance:
         return []
     ph = PHASES[j]
     R = r.params.motor.R[j]
-    factor = (1.0 + float(r.extra[NAMES[j]])) / (1.0 + sorted(float(r.extra[n]) for n in NAMES)[1])
-    return [Fault("resistance", NAMES[j], up[j], up[j],
+    factor = (1.0 + dev[j]) / (1.0 + mid)
+    return [Fault("resistance", NAMES[j], dev[j] - mid, dev[j] - mid,
                   f"high-resistance connection in phase {ph}: its resistance {factor:.2f}x the "
                   f"other phases' ({R * factor * 1e3:.0f} mohm where the winding has "
                   f"{R * 1e3:.0f} mohm): a loose or corroded terminal, crimp or connector",
@@ -84,8 +94,8 @@ def screened_gain(problem: Any, ident: Any) -> float:
     fit along it. The relative gain of the best phase (0 where none curves upward)."""
     import numpy as np
 
-    own = tuple(n for n in problem.nuisance if n not in NAMES)
-    names = own + NAMES
+    names = _searched(problem)
+    own = names[:-len(NAMES)]
     nu = getattr(ident, "nuisance", {}) or {}
     row = np.concatenate([np.asarray(ident.k, dtype=float), [float(nu.get(n, 0.0)) for n in own],
                           np.zeros(3)])
@@ -118,6 +128,11 @@ def hypothesis(problem: Any, ident: Any, diag: Any) -> tuple[str, ...] | None:
         return None
     if screened_gain(problem, ident) < SCREEN_GAIN:
         return None
+    return _searched(problem)
+
+
+def _searched(problem: Any) -> tuple[str, ...]:
+    """The problem's own parameters beside k, then the three phases' resistances."""
     return tuple(n for n in problem.nuisance if n not in NAMES) + NAMES
 
 
@@ -144,11 +159,11 @@ def measure(r: Reading) -> dict[str, float]:
 
 def reading(phase: int):
     def read_one(diagnosis: Mapping[str, Any], extra: Mapping[str, Any]) -> float | None:
-        refit = diagnosis.get("hypothesis_check") or {}
-        up = imbalance(refit.get("nuisance") or {})
-        if up is None:
-            up = imbalance(extra.get("nuisance") or {})
-        return None if up is None else up[phase]
+        for nu in searched_values(diagnosis, extra):
+            up = imbalance(nu)
+            if up is not None:
+                return up[phase]
+        return None
     return read_one
 
 

@@ -476,10 +476,11 @@ def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, ind
     """The prognosis (None under three inspections) and, with a policy, the next inspection."""
     from .trends import MIN_INSPECTIONS, prognose
 
+    observed, readings = data.observed, data.readings     # each read from the records once
     common = dict(seed=args.seed, thresholds=thresholds, indicators=indicators, t_now=args.at,
                   actuator=data.actuator.id, time_unit=data.actuator.time_unit,
-                  level=args.level, selection=args.selection, observed=data.observed,
-                  readings=data.readings)
+                  level=args.level, selection=args.selection, observed=observed,
+                  readings=readings)
     if policy is None:
         return prognose(data.times, data.K, **common), None
     from .inspection import n_samples_for, plan_inspection
@@ -491,7 +492,7 @@ def _prognose_and_plan(data: Any, args: argparse.Namespace, thresholds: Any, ind
     return prog, plan_inspection(data.times, prog, policy=policy, t_now=t_now,
                                  time_unit=data.actuator.time_unit, K=data.K,
                                  thresholds=thresholds, indicators=indicators,
-                                 observed=data.observed, readings=data.readings)
+                                 observed=observed, readings=readings)
 
 
 def _no_trend_dict(data: Any, args: argparse.Namespace, thresholds: Any) -> dict:
