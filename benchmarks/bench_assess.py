@@ -35,19 +35,12 @@ import tempfile  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from _actuators import ACTUATORS, datasheet  # noqa: E402
 from _machine import machine  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = Path(__file__).parent / "results"
-ACTUATORS = {"preset": None, "ema-270v-750w": ROOT / "examples" / "actuators" / "ema-270v-750w.toml"}
 CHECKS = (("short_circuit", 0.1, "10 % short named right"), ("friction", 1.5, "friction x1.5 named right"))
-
-
-def _params(name: str):
-    from emaphm.params import load_params, siemens_1fk7060
-
-    path = ACTUATORS[name]
-    return siemens_1fk7060() if path is None else load_params(path)
 
 
 def run(name: str, workers: int, units: int, fresh: int, work: Path) -> dict:
@@ -56,7 +49,7 @@ def run(name: str, workers: int, units: int, fresh: int, work: Path) -> dict:
     from emaphm.params import load_params
 
     executor = make_executor(workers)
-    spec = AssessmentSpec(_params(name).to_dict(), units=units, seed=0)
+    spec = AssessmentSpec(datasheet(name).to_dict(), units=units, seed=0)
     t0 = time.perf_counter()
     out = assess(spec, work / name, executor=executor)
     wall = time.perf_counter() - t0

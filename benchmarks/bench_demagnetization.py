@@ -45,20 +45,12 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _actuators import datasheet  # noqa: E402
 from _machine import machine  # noqa: E402
 
 RESULTS = Path(__file__).resolve().parent / "results"
 N_INSPECTIONS = 6
 THRESHOLD = 0.2
-
-
-def _params(actuator: str):
-    from emaphm.params import as_params, siemens_1fk7060
-
-    if actuator == "preset":
-        return siemens_1fk7060()
-    return as_params(str(Path(__file__).resolve().parents[1] / "examples" / "actuators"
-                         / f"{actuator}.toml"))
 
 
 def _cli(argv: list[str]) -> tuple[int, str, str]:
@@ -80,7 +72,7 @@ def history(task: tuple[int, str, float]) -> dict:
 
     seed, actuator, reach = task
     rng = np.random.default_rng(seed)
-    design = _params(actuator)
+    design = datasheet(actuator)
     unit = draw_unit(design, seed=seed)                  # the plant: a production unit
     eol = float(rng.uniform(1000.0, 2000.0))             # 0.2 of the flux lost at eol
     rate = THRESHOLD / eol

@@ -61,11 +61,11 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from _actuators import ACTUATORS, datasheet as _datasheet  # noqa: E402
 from _machine import machine  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = Path(__file__).parent / "results"
-ACTUATORS = {"preset": None, "ema-270v-750w": ROOT / "examples" / "actuators" / "ema-270v-750w.toml"}
 UNIT_SEED0 = 70_000
 TUNE_SEED0 = 80_000
 FIRMWARES = ("emaphm", "feed-forwards", "speed-filter", "position-pi", "observer-ip", "deadbeat",
@@ -87,13 +87,6 @@ UNDESCRIBED = {"speed filter 0.1 ms": dict(speed_filter_s=1e-4),
                "a period of delay": dict(delay_periods=1),
                "feed-forwards": dict(velocity_feedforward=1.0, torque_feedforward=1.0),
                "position integrator": "position-pi-integrator"}
-
-
-def _datasheet(name: str):
-    from emaphm.params import load_params, siemens_1fk7060
-
-    path = ACTUATORS[name]
-    return siemens_1fk7060() if path is None else load_params(path)
 
 
 def _firmware(datasheet, firmware: str):

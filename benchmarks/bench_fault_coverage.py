@@ -42,22 +42,15 @@ from concurrent.futures import ProcessPoolExecutor  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _actuators import ACTUATORS, datasheet  # noqa: E402
 from bench_identification import _warm, machine  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = Path(__file__).parent / "results"
-ACTUATORS = {"preset": None, "ema-270v-750w": ROOT / "examples" / "actuators" / "ema-270v-750w.toml"}
 UNIT_SEED0 = 50_000
 TUNE_SEED0 = 60_000
 SHORT_MU = (0.05, 0.1, 0.2, 0.3)
 SHORT_RF = (0.05, 0.15, 0.5)
-
-
-def _params(name: str):
-    from emaphm.params import load_params, siemens_1fk7060
-
-    path = ACTUATORS[name]
-    return siemens_1fk7060() if path is None else load_params(path)
 
 
 def _named(diag) -> list[tuple[str, str | None]]:
@@ -70,7 +63,7 @@ def run_short(task: tuple[str, str, float, float, int]) -> dict:
     from emaphm.verdict import examine
 
     name, ph, mu, rf, seed = task
-    params = _params(name)
+    params = datasheet(name)
     tr = simulate(faults=[f"short_circuit:{ph}:{mu}:{rf}"], params=params,
                   sensors=DEFAULT_SENSORS, seed=seed)
     j = "abc".index(ph)
@@ -125,7 +118,7 @@ def run_unit(task: tuple[str, int]) -> dict:
     from emaphm.verdict import examine
 
     name, seed = task
-    sheet = _params(name)
+    sheet = datasheet(name)
     unit = draw_unit(sheet, seed)
     healthy = [simulate(unit=unit, params=sheet, sensors=DEFAULT_SENSORS, seed=s) for s in (1, 2)]
     t0 = time.process_time()

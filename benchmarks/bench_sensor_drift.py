@@ -32,11 +32,11 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _actuators import ACTUATORS, datasheet  # noqa: E402
 from _machine import machine  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "benchmarks" / "results"
-ACTUATORS = {"preset": None, "ema-270v-750w": ROOT / "examples" / "actuators" / "ema-270v-750w.toml"}
 GAINS = (0.97, 0.95, 0.9, 0.85)
 OFFSETS = (0.1, 0.2, 0.3, 0.5)
 
@@ -44,13 +44,12 @@ OFFSETS = (0.1, 0.2, 0.3, 0.5)
 def one(task: tuple[str, int]) -> dict:
     from emaphm.calibration import CalibrationError, calibrate
     from emaphm.modes import indicator_readings
-    from emaphm.params import load_params, siemens_1fk7060
     from emaphm.simulate import DEFAULT_SENSORS, simulate
     from emaphm.units import draw_unit
     from emaphm.verdict import examine
 
     name, seed = task
-    sheet = siemens_1fk7060() if ACTUATORS[name] is None else load_params(ACTUATORS[name])
+    sheet = datasheet(name)
     unit = draw_unit(sheet, seed)
     kw = dict(unit=unit, params=sheet, sensors=DEFAULT_SENSORS)
     t0 = time.process_time()
