@@ -43,6 +43,8 @@ field                      unit                meaning
 ``Transmission.backlash``  rad                 total backlash width
 ``Transmission.K_c``       N m/rad             torsional stiffness of the backlash contact
 ``Transmission.D_c``       N m s/rad           damping of the backlash contact
+``Transmission.omega_s``   rad/s               Stribeck speed as stated or calibrated
+                                               (0: no drop, Borello's two levels)
 ``Load.J_l``               kg m^2              load inertia behind the backlash
 ``Load.C_l``               N m s/rad           load viscous damping
 ``Plant.omega_s``          rad/s               Stribeck velocity of the dry friction
@@ -54,7 +56,8 @@ field                      unit                meaning
 =========================  ==================  =====================================
 
 ``[plant]`` holds physics that only the reference plant has (the monitoring
-model uses Borello's two-level friction without the Stribeck drop); both models
+model uses Borello's two-level friction, with the Stribeck drop only where
+``Transmission.omega_s`` states or a calibration estimated it); both models
 close the backlash on the compliant contact ``K_c``, ``D_c`` (the monitoring
 model on a rigid one where its step does not resolve the contact, see
 :mod:`emaphm.models.mechanics`); ``Motor.mu``/``Motor.R_f`` describe an inter-turn short
@@ -497,13 +500,20 @@ class Transmission:
     """Dry friction (Borello's discontinuous stick/slip), backlash, and the contact
     that closes it: the gear train's torsional stiffness ``K_c`` and damping ``D_c``
     (defaults ``4000 N m/rad`` and ``0.5 N m s/rad``: a well-damped two-mass
-    resonance near 500 Hz with the preset's inertias)."""
+    resonance near 500 Hz with the preset's inertias).
+
+    ``omega_s`` [rad/s]: the Stribeck speed of the dry friction as the unit's file states
+    it, the sliding friction ``FDJ + (FSJ - FDJ) exp(-(omega/omega_s)^2)``; 0 (the default,
+    what data sheets give) is Borello's two levels, no drop. ``emaphm calibrate`` estimates
+    it per unit where the profile identifies it, and the monitoring model then steps it; the
+    reference plant takes it as its own where stated (else ``Plant.omega_s``)."""
 
     FSJ: float = 0.12
     FDJ: float = 0.08
     backlash: float = 2e-4
     K_c: float = 4000.0
     D_c: float = 0.5
+    omega_s: float = 0.0
 
     def __post_init__(self) -> None:
         o = "Transmission"
@@ -511,6 +521,8 @@ class Transmission:
             object.__setattr__(self, name, _check(o, name, getattr(self, name), lo=0.0, strict_lo=False))
         object.__setattr__(self, "K_c", _check(o, "K_c", self.K_c, lo=0.0))
         object.__setattr__(self, "D_c", _check(o, "D_c", self.D_c, lo=0.0, strict_lo=False))
+        object.__setattr__(self, "omega_s", _check(o, "omega_s", self.omega_s, lo=0.0,
+                                                   strict_lo=False))
         if self.FDJ > self.FSJ:
             raise ParameterError(
                 f"Transmission.FDJ [N m] = {self.FDJ:g} exceeds Transmission.FSJ [N m] = "
@@ -664,6 +676,10 @@ def calibration_digest(params: "ActuatorParams") -> str:
         if name in CALIBRATED_DRIVE_FIELDS:
             sec = CALIBRATED_DRIVE_FIELDS[name]
             values[f"{sec}.{name}"] = float(getattr(getattr(params, sec), name))
+        elif name == "stribeck":
+            # the Stribeck speed a calibration estimated (a file calibrated before it was
+            # estimated keeps its digest: the value is covered only where the block names it)
+            values["transmission.omega_s"] = float(params.transmission.omega_s)
     content = {"calibration": {"date": c.date, "sources": list(c.sources),
                                "estimates": [[n, float(v), float(se)] for n, v, se in c.estimates],
                                "fixed": list(c.fixed), "emaphm_version": c.emaphm_version,
@@ -727,7 +743,7 @@ _OPTIONAL_FIELDS = {"motor": {"L_sigma", "mu", "R_f"}, "load": {"T_0"},
                                    "speed_reference_weight", "current_reference_filter_s",
                                    "delay_periods", "decoupling", "decoupling_L",
                                    "emf_feedforward", "T_max", "I_max"},
-                    "transmission": {"K_c", "D_c"},
+                    "transmission": {"K_c", "D_c", "omega_s"},
                     "sensors": {"aa_order", "aa_cutoff", "delay"},
                     "calibration": {"emaphm_version", "trace_sha256", "digest"}}
 
@@ -914,6 +930,7 @@ PLAUSIBLE: dict[tuple[str, str], tuple[float | None, float | None, float | None,
                                    "0.01745"),
     ("transmission", "K_c"): (1e-3, 1.0, 1e8, 1e10, "N m/rad"),
     ("transmission", "D_c"): (None, None, 1e4, 1e6, "N m s/rad"),
+    ("transmission", "omega_s"): (None, None, 1e3, 1e4, "rad/s"),
     ("load", "J_l"): (1e-9, 1e-7, 100.0, 1e4, "kg m^2 at the motor shaft"),
     ("load", "C_l"): (None, None, 100.0, 1e3, "N m s/rad"),
     ("plant", "omega_s"): (1e-3, 1e-2, 1e3, 1e4, "rad/s"),

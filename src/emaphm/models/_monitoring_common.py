@@ -11,7 +11,7 @@ import numpy as np
 
 from ._jit import jit
 from .controller import N_CTL, plain
-from .layout import C_V_DT, P_CTL, P_DT, P_T_S, drive_settings
+from .layout import C_OMEGA_S, C_V_DT, P_CTL, P_DT, P_T_S, drive_settings
 
 __all__ = ["I_DIVERGED", "OMEGA_DIVERGED", "STATUS_OK", "STATUS_DIVERGED", "STATUS_TRIPPED",
            "variant_key", "variant_of"]
@@ -38,13 +38,17 @@ def _check_step(P, n_sub):
 
 def variant_key(P: np.ndarray, CP: np.ndarray) -> tuple[bool, bool]:
     """Which compiled variant of a kernel runs a population: ``(plain, ideal)``, the drive's
-    options all at their defaults (:func:`emaphm.models.controller.plain`) and no candidate's
-    inverter losing a volt to dead time (its step then skips their work: the same numbers)."""
+    options all at their defaults (:func:`emaphm.models.controller.plain`) and an ideal plant:
+    no candidate's inverter losing a volt to dead time, no candidate's friction with a
+    Stribeck drop (its step then skips their work: the same numbers)."""
+    CP = np.asarray(CP)
     return (bool(plain.py_func(P[P_CTL:P_CTL + N_CTL])),
-            not bool(np.any(np.asarray(CP)[:, C_V_DT] != 0.0)))
+            not bool(np.any(CP[:, C_V_DT] != 0.0) or np.any(CP[:, C_OMEGA_S] != 0.0)))
 
 
 def variant_of(params) -> tuple[bool, bool]:
     """:func:`variant_key` of the actuator ``params`` itself (every candidate at its
-    inverter's loss): the variant a population of it runs."""
-    return bool(plain.py_func(drive_settings(params))), params.inverter.V_lost == 0.0
+    inverter's loss and its friction's Stribeck speed): the variant a population of it
+    runs."""
+    return (bool(plain.py_func(drive_settings(params))),
+            params.inverter.V_lost == 0.0 and params.transmission.omega_s == 0.0)

@@ -72,9 +72,9 @@ C_T0 = C_GAMMA + N_Z * N_Z
 #: the voltage [V] a leg loses to the inverter's dead time and device drops (the data
 #: sheet's ``Inverter.V_lost`` as packed, plus the ``"V_dt"`` nuisance); what only the
 #: recorded-voltage model reads (:mod:`emaphm.models.driven`): the offset [rad, mechanical]
-#: of the encoder's zero from the magnet's axis and the Stribeck speed [rad/s] of the dry
-#: friction (the ``"angle"`` and ``"stribeck"`` nuisance; zero as packed: no offset,
-#: Borello's two levels)
+#: of the encoder's zero from the magnet's axis (the ``"angle"`` nuisance; zero as packed);
+#: the Stribeck speed [rad/s] of the dry friction (``Transmission.omega_s`` as packed, 0:
+#: Borello's two levels; the ``"stribeck"`` nuisance replaces it), which every model steps
 C_V_DT = C_T0 + 1
 C_DELTA = C_T0 + 2
 C_OMEGA_S = C_T0 + 3
@@ -230,7 +230,7 @@ def pack(params: ActuatorParams, theta0: float = 0.0, fault_model: str = "paper"
     row[C_T0] = params.load.T_0
     row[C_V_DT] = params.inverter.V_lost
     row[C_DELTA] = 0.0
-    row[C_OMEGA_S] = 0.0
+    row[C_OMEGA_S] = tr.omega_s
     return P, row[None, :]
 
 
@@ -275,12 +275,13 @@ class Nuisance:
 #: :data:`emaphm.units.DEFAULT_TOLERANCES`), and each phase's fault-bridge resistance as a
 #: decade ratio to ``Motor.R_f`` (``"Rf_a"``, ``"Rf_b"``, ``"Rf_c"``: ``R_f x 10**value``
 #: from 0.03x to 10x; it changes the winding step of a shorted phase only,
-#: :mod:`emaphm.modes.short_circuit`). Read on the recorded-voltage path only
+#: :mod:`emaphm.modes.short_circuit`). Searched on the recorded-voltage path
 #: (:mod:`emaphm.models.driven`): the voltage a leg loses to the inverter's dead time and its
-#: devices' drops (``"V_dt"``, V, the same on every leg, opposing its current) and the
-#: offset of the encoder's zero from the magnet's axis (``"angle"``, electrical radians),
-#: and the speed below which the dry friction rises from its dynamic to its static level
-#: (``"stribeck"``, rad/s: the Stribeck drop, which data sheets do not state).
+#: devices' drops (``"V_dt"``, V, the same on every leg, opposing its current), the
+#: offset of the encoder's zero from the magnet's axis (``"angle"``, electrical radians,
+#: read there only), and the speed below which the dry friction rises from its dynamic to
+#: its static level (``"stribeck"``, rad/s: the Stribeck drop, which data sheets do not
+#: state; a value that replaces ``Transmission.omega_s``, which every model steps).
 NUISANCE_PARAMETERS: dict[str, Nuisance] = {n.name: n for n in (
     Nuisance("R", -0.1, 0.3, "relative", "winding resistance"),
     Nuisance("flux", -0.06, 0.06, "relative", "magnet flux"),
@@ -380,7 +381,8 @@ class PopulationPacker:
                 CP[:, C_DELTA] += NU[:, j] / self.nominal.motor.p
                 continue
             if name == "stribeck":
-                CP[:, C_OMEGA_S] += NU[:, j]
+                # searched as a value (from 0, no drop), not as a deviation of the stated one
+                CP[:, C_OMEGA_S] = NU[:, j]
                 continue
             if name.startswith("Rf_"):
                 if R_f is None:

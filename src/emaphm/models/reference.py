@@ -39,7 +39,8 @@ Mechanics (:mod:`emaphm.models.plant_mechanics`)
 ------------------------------------------------
 Motor and load are two bodies joined by a backlash dead band closed by a
 compliant, damped contact (``Transmission.K_c``, ``Transmission.D_c``); the motor side has
-dry friction with a Stribeck drop (``Plant.omega_s``), Borello's stick/slip at
+dry friction with a Stribeck drop (``Transmission.omega_s`` where the file states it,
+else ``Plant.omega_s``), Borello's stick/slip at
 rest. The mechanics see the sub-step's mean air-gap torque.
 
 Energy bookkeeping
@@ -348,7 +349,10 @@ def _run(params: ActuatorParams, k, profile: Profile, *, fault_model: str, n_sub
     el = electrical_step(faulty.motor, T_s / n_sub, fault_model)
     pl = faulty.plant
     tr = faulty.transmission
-    plant = np.array([pl.omega_s, tr.K_c, tr.D_c, faulty.inverter.V_lost])
+    # the Stribeck speed the unit's file states (or its calibration estimated), else the
+    # plant's own
+    omega_s = tr.omega_s if tr.omega_s > 0.0 else pl.omega_s
+    plant = np.array([omega_s, tr.K_c, tr.D_c, faulty.inverter.V_lost])
     t = profile.grid(T_s)
     ref = np.ascontiguousarray(profile.theta_ref(t))
     load = np.ascontiguousarray(profile.load_torque(t) + float(extra_load))

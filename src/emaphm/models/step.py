@@ -40,7 +40,7 @@ from . import pmsm as _pmsm
 from ._monitoring_common import I_DIVERGED, OMEGA_DIVERGED
 from .controller import N_STATE as N_CTL_STATE
 from .layout import (C_BACKLASH, C_C0_A, C_C0_B, C_C0_C, C_ECC, C_FDJ, C_FSJ, C_GAMMA, C_KP,
-                     C_V_DT,
+                     C_OMEGA_S, C_V_DT,
                      C_MU_A, C_MU_B, C_MU_C, C_PHI, C_PHI_END, C_GAMMA_END, C_T0)
 from .pmsm import COS_2PI_3, SIN_2PI_3
 
@@ -139,6 +139,7 @@ phase_currents = _pmsm.phase_currents
 torque_loops = _pmsm.torque_loops
 transmission_step = _mechanics.transmission_step
 dead_time_drop = _inverter.dead_time_drop
+stribeck_factor = _mechanics.stribeck_factor
 
 # ---- sine and cosine (fdlibm, branch-free) ----------------------------------------------
 
@@ -357,11 +358,15 @@ def substep(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c):
 
     ``x`` its plant state (:data:`X_FIELDS`), ``c`` its constants (its CP row: back-EMF
     coefficients, shorted fractions, eccentricity, the winding step's ``Phi`` and
-    ``Gamma``, friction, backlash, its own load torque ``T_0`` [N m] and what its legs lose
-    to dead time) beside the profile's ``T_l`` in ``mech = (T_l, J_m, C_m, J_l, C_l, K_c,
-    D_c, dt, 1/i_0)``; the sines and cosines of the electrical angle and of ``theta_m +
-    ecc_phase``; the leg voltages [V].
+    ``Gamma``, friction with its Stribeck speed, backlash, its own load torque ``T_0`` [N m]
+    and what its legs lose to dead time) beside the profile's ``T_l`` in ``mech = (T_l, J_m,
+    C_m, J_l, C_l, K_c, D_c, dt, 1/i_0)``; the sines and cosines of the electrical angle and
+    of ``theta_m + ecc_phase``; the leg voltages [V].
     Returns ``(x, torque at the start of the step)``.
+
+    The sliding friction is ``FDJ + (FSJ - FDJ) exp(-(omega_m/omega_s)^2)`` at the step's
+    start speed (:func:`~emaphm.models.mechanics.stribeck_factor`, branch-free: it runs in
+    the vector lanes; ``omega_s = 0`` is Borello's two levels, exactly ``FDJ``).
     """
     T_l, J_m, C_m, J_l, C_l, K_c, D_c, dt, inv_i0 = mech
     thm, wm, thl, wl, z0, z1, z2, z3, z4, ia, ib, ic = x
@@ -379,8 +384,10 @@ def substep(x, c, mech, s_e, c_e, s_g, c_g, u_a, u_b, u_c):
     # the mechanics see the step's mean torque (trapezoid): second order in the fast
     # current transients of the coarse step
     T_m = 0.5 * (tq + torque_loops(ja, jb, jc, z2, z3, z4, ca, cb, cc, mu_a, mu_b, mu_c))
+    FSJ, FDJ = c[C_FSJ], c[C_FDJ]
+    F_d = FDJ + (FSJ - FDJ) * stribeck_factor(wm, c[C_OMEGA_S])
     thm, wm, thl, wl = transmission_step(thm, wm, thl, wl, T_m, T_l + c[C_T0], J_m, C_m,
-                                         c[C_FSJ], c[C_FDJ], J_l, C_l, c[C_BACKLASH], K_c, D_c, dt)
+                                         FSJ, F_d, J_l, C_l, c[C_BACKLASH], K_c, D_c, dt)
     return (thm, wm, thl, wl, z0, z1, z2, z3, z4, ja, jb, jc), tq
 
 
@@ -412,13 +419,19 @@ _substep_parts = dict(back_emf=back_emf_inline, torque_loops=torque_loops_inline
                       phase_currents=phase_currents_inline,
                       transmission_step=transmission_step_inline)
 substep_inline = inlined(substep, dead_time_drop=inlined(_inverter.dead_time_drop),
-                         **_substep_parts)
+                         stribeck_factor=inlined(_mechanics.stribeck_factor), **_substep_parts)
 
 
 def _no_drop(i, V_lost, inv_i_0):
     return 0.0
 
 
-#: :func:`substep` of an inverter without dead time (the kernels run it where no
-#: candidate loses a volt): the same numbers, none of the work
-substep_ideal_inline = inlined(substep, dead_time_drop=inline(_no_drop), **_substep_parts)
+def _no_stribeck(omega, omega_s):
+    return 0.0
+
+
+#: :func:`substep` of an ideal plant: an inverter without dead time and friction without a
+#: Stribeck drop (the kernels run it where no candidate loses a volt or has a Stribeck
+#: speed): the same numbers, none of the work
+substep_ideal_inline = inlined(substep, dead_time_drop=inline(_no_drop),
+                               stribeck_factor=inline(_no_stribeck), **_substep_parts)
