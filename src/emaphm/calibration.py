@@ -687,7 +687,8 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     their metadata's ``"parameters"``, else the preset: :func:`emaphm.params.resolve_params`;
     :attr:`CalibrationResult.params_source` says which).
 
-    ``free``: the parameters to estimate (default all of :data:`PARAMETERS`);
+    ``free``: the parameters to estimate (default the unit's own of :data:`PARAMETERS` and
+    the dry friction's Stribeck speed; on the recorded-voltage path the drive's too);
     ``sources``: a name per trace for the report; ``progress``: called with the number of
     model simulations so far after each (a progress line); ``correlation_limit`` and
     ``multiple_limit``: when estimates count as not separable (:data:`CORRELATION_LIMIT`,
@@ -710,27 +711,12 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
     if not traces:
         raise CalibrationError("calibration needs at least one trace of the healthy unit")
     sources = _sources(traces, sources)
-    default_free = free is None
-    free = list(free) if free is not None else list(_NAMES)
-    unknown = [n for n in free if n not in PARAMETERS]
-    if unknown:
-        raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from "
-                         + ", ".join(_NAMES))
-    drive_unknown = list(drive_unknown)
-    strange = [n for n in drive_unknown if n not in DRIVE_SETTINGS]
-    if strange:
-        raise ValueError(f"unknown drive setting(s) {strange}; a calibration estimates "
-                         + ", ".join(DRIVE_SETTINGS) + " (describe the others in [controller])")
-    free += [n for n in drive_unknown if n not in free]
+    free, drive_unknown = _free(free, drive_unknown)
     from .recorded import DRIVEN, drive_model_of
 
     drives = [drive_model_of(tr) for tr in traces]
     targets = [_DrivenTarget(tr, base, src, d) if d in DRIVEN else _target(tr, base, src)
                for tr, src, d in zip(traces, sources, drives)]
-    if default_free and "stribeck" not in free:
-        # the dry friction's Stribeck drop, which data sheets do not state: estimated per
-        # unit (where the profile identifies it) and written into [transmission]
-        free.append("stribeck")
     if any(isinstance(tg, _DrivenTarget) for tg in targets):
         free += [n for n in DRIVE_PARAMETERS if n not in free]
         # the currents' common gain scales what the recorded voltages drive (R, L, the
@@ -776,6 +762,24 @@ def calibrate(traces: Sequence[Trace], params: ActuatorParams | None = None, *,
                              weak=tuple(sel["weak"]), fit_ratio=ratios,
                              evaluations=fitter.count, elapsed_s=elapsed, fits=tuple(fits),
                              params_source=params_source)
+
+
+def _free(free: Sequence[str] | None, drive_unknown: Sequence[str]) -> tuple[list[str], list[str]]:
+    """The parameters a calibration estimates (``free``, default :data:`PARAMETERS`' own and
+    the dry friction's Stribeck speed, which data sheets do not state: estimated per unit
+    where the profile identifies it, and written into ``[transmission]``) with the drive
+    settings the user does not know, each name checked."""
+    names = list(free) if free is not None else list(_NAMES) + ["stribeck"]
+    unknown = [n for n in names if n not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"unknown calibration parameter(s) {unknown}; choose from "
+                         + ", ".join(_NAMES))
+    drive_unknown = list(drive_unknown)
+    strange = [n for n in drive_unknown if n not in DRIVE_SETTINGS]
+    if strange:
+        raise ValueError(f"unknown drive setting(s) {strange}; a calibration estimates "
+                         + ", ".join(DRIVE_SETTINGS) + " (describe the others in [controller])")
+    return names + [n for n in drive_unknown if n not in names], drive_unknown
 
 
 def _start(base: ActuatorParams, name: str) -> float:
