@@ -238,7 +238,7 @@ def side_by_side(rev: str, quick: bool) -> list[tuple[str, str, str]]:
     stated = "today, physical, Stribeck drop stated"
     if stated in ns:
         rows.append((f"Side by side, the Stribeck drop's cost: SIMD kernel, N = {N_MAIN}, "
-                     "physical, the drop stated against none (the ideal plant's step)",
+                     "physical, the drop stated against none (the ideal plant's step; the full step runs the dead time's terms too, at 0 V)",
                      f"{ns[stated] / ns['today, physical']:.3f} x", ""))
     for fm in new:
         share = packs[fm][1] / whole[fm][1]
