@@ -94,6 +94,11 @@ def run_short(task: tuple[str, str, float, float, int]) -> dict:
             "mmf_within_25": mmf is not None and abs(mmf - truth_mmf) <= 0.25 * truth_mmf,
             "plant_power": truth_p, "power": read.get("fault_power_w"),
             "power_interval": read.get("fault_power_interval"),
+            "plant_mu": mu, "mu_interval": read.get("mu_interval"),
+            "plant_R_f": rf, "R_f_interval": read.get("R_f_interval"),
+            "determined": read.get("determined"), "open": read.get("open"),
+            "profile": read.get("profile"),
+            "others": [f for f in _named(d) if f != ("short_circuit", ph.upper())],
             "refit": None if d.refit is None else d.refit.mode}
 
 
@@ -192,6 +197,46 @@ def _shorts_table(rows: list[dict]) -> list[str]:
     return out
 
 
+#: The tolerances of the short's profile tried by ``--tune-shorts`` (its likelihood-ratio
+#: threshold, :data:`emaphm.fault_loops.PROFILE_LR`).
+TOLERANCES = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.5)
+
+
+def _covered(r: dict, tolerance: float) -> dict[str, bool] | None:
+    """Whether the plant's loop current, power, shorted fraction and bridge fall inside the
+    intervals the run's profile gives at ``tolerance`` (None: no profile, the short not
+    read)."""
+    from emaphm.fault_loops import QUANTITIES, intervals
+
+    prof = r.get("profile")
+    if not prof:
+        return None
+    Q = {q: np.asarray(prof[q]) for q in QUANTITIES}
+    at = {q: r[k] for q, k in (("fault_current_a_rms", "current"), ("fault_power_w", "power"),
+                               ("fault_mmf_a_rms", "mmf"), ("mu", "mu_read"),
+                               ("R_f_ohm", "R_f_read"))}
+    iv = intervals(Q, np.asarray(prof["fit_over_best"]), at, tolerance)
+    inside = lambda x, ab: ab[0] * 0.999 <= x <= ab[1] * 1.001   # noqa: E731
+    return {"current": inside(r["plant_current"], iv["fault_current_interval"]),
+            "power": inside(r["plant_power"], iv["fault_power_interval"]),
+            "mu": inside(r["plant_mu"], iv["mu_interval"]),
+            "R_f": inside(r["plant_R_f"], iv["R_f_interval"]),
+            "width": iv["fault_current_interval"][1] / iv["fault_current_interval"][0]}
+
+
+def _tune_shorts(rows: list[dict]) -> list[str]:
+    """Coverage of the plant's loop by the profile's intervals at each tolerance."""
+    out = ["| tolerance | runs | plant current inside | power | shorted fraction | bridge "
+           "| median current width (hi/lo) |", "|---|---|---|---|---|---|---|"]
+    for tol in TOLERANCES:
+        cov = [c for c in (_covered(r, tol) for r in rows) if c is not None]
+        n = len(cov)
+        out.append(f"| {tol:g} | {n} | " + " | ".join(
+            f"{sum(c[q] for c in cov)}/{n}" for q in ("current", "power", "mu", "R_f"))
+            + f" | {np.median([c['width'] for c in cov]):.2f} |")
+    return out
+
+
 def _units_table(units: list[dict]) -> list[str]:
     out = ["| actuator | fault | units | named right, alone | interval (Wilson 95 %) | faulty | "
            "unexplained | median CPU |", "|---|---|---|---|---|---|---|---|"]
@@ -232,7 +277,19 @@ def main() -> None:
     ap.add_argument("--units", type=int, default=20, help="production units per actuator")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--tune", action="store_true", help="the tuning units 60000+ only")
+    ap.add_argument("--tune-shorts", action="store_true",
+                    help="shorts on tuning noise seeds 200+ only: the coverage of the plant's "
+                         "loop by the profile's intervals at each tolerance")
     args = ap.parse_args()
+    if args.tune_shorts:
+        tasks = [(name, ph, mu, rf, 200 + i) for name in ACTUATORS
+                 for i, (ph, mu, rf) in enumerate((ph, mu, rf) for ph in "abc"
+                                                  for mu in SHORT_MU for rf in SHORT_RF)]
+        with ProcessPoolExecutor(args.workers, initializer=_warm) as ex:
+            rows = list(ex.map(run_short, tasks))
+        (RESULTS / "fault_coverage_shorts_tuning.json").write_text(json.dumps(rows, indent=1))
+        print("\n".join(_tune_shorts(rows)))
+        return
     seed0 = TUNE_SEED0 if args.tune else UNIT_SEED0
     t0 = time.time()
     shorts = [] if args.tune else [

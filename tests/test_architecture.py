@@ -420,7 +420,7 @@ LAYERS = {
     "emaphm.models": 6,
     "emaphm.simulate": 7, "emaphm.diagnosis": 7, "emaphm.fitness": 7, "emaphm.search": 7,
     "emaphm.calibration": 8, "emaphm.recorded": 8,
-    "emaphm.problem": 9, "emaphm.identify": 10, "emaphm.verdict": 11,
+    "emaphm.problem": 9, "emaphm.identify": 10, "emaphm.fault_loops": 10.5, "emaphm.verdict": 11,
     "emaphm.campaign.executors": 11.5,  # the worker pools batch and the campaigns share
     "emaphm.batch": 12, "emaphm.results": 12, "emaphm.plots": 12, "emaphm.mismatch": 12,
     "emaphm.prognosis": 13, "emaphm.assessment": 14, "emaphm.campaign": 14, "emaphm.fleet": 15,

@@ -41,7 +41,7 @@ from .fitness import (MIN_NOISE, MISFIT_LOG_MEAN, MISFIT_LOG_STD, MISFIT_P, TRAN
 from .faults import K_NOMINAL
 from .firmware import MODELLED
 from .params import ActuatorParams, as_params, resolve_params
-from .problem import IdentificationProblem, apply_extra
+from .problem import IdentificationProblem
 from .recorded import DRIVE_NUISANCE
 from .traces import Trace
 
@@ -265,72 +265,17 @@ def _refit(problem: IdentificationProblem, names: tuple[str, ...], k: np.ndarray
 
 
 def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
-                 diag: Diagnosis, seed: int) -> dict | None:
+                 diag: Diagnosis) -> dict | None:
     """Each named short's fault loop (physical fault model) at the fit: its RMS current,
-    the power in its bridge and its ampere-turns (:func:`emaphm.faults.loop_report`), each
-    with the range over the fault resistances that fit as well (a mild short's shorted
-    fraction and bridge trade off, its ampere-turns stay; each point of the profile
-    refits that phase's fraction alone)."""
+    the power in its bridge, its ampere-turns, its shorted fraction and bridge, each with
+    its interval over the fits as good along the profile of the fit
+    (:func:`emaphm.fault_loops.profile`)."""
+    from .fault_loops import profile
+
     shorts = [f for f in (*diag.faults, *diag.suspected) if f.mode == _short.MODE.name]
     if problem.fault_model != "physical" or not shorts:
         return None
-    names = tuple(extra)
-    at = problem.fault_loops(k, params=apply_extra(problem.params, names, [extra[n] for n in names]))
-    out = {}
-    for f in shorts:
-        j = "ABC".index(f.phase)
-        out[f.phase] = {key: at[key][j] for key in LOOP_QUANTITIES}
-        valley = _valley(problem, k, extra, j, seed)
-        for key, name in LOOP_QUANTITIES.items():
-            span = [at[key][j], *valley[key]]
-            out[f.phase][name] = [float(min(span)), float(max(span))]
-    return out
-
-
-#: The fault loop's quantities a short reports, and the names of their ranges.
-LOOP_QUANTITIES = {"fault_current_a_rms": "fault_current_interval",
-                   "fault_power_w": "fault_power_interval",
-                   "fault_mmf_a_rms": "fault_mmf_interval"}
-
-#: Fault-bridge resistances (decades from the parameters' Motor.R_f) the valley of a
-#: short is profiled at.
-VALLEY_DECADES = (-1.0, -0.5, 0.0, 0.5, 1.0)
-
-
-def _valley(problem: IdentificationProblem, k: np.ndarray, extra: dict, j: int,
-            seed: int) -> dict[str, tuple[float, float]]:
-    """The range of each of phase ``j``'s :data:`LOOP_QUANTITIES` over the fault
-    resistances at which the trace fits about as well (within :data:`VALLEY_TOLERANCE`
-    of the best)."""
-    from .identify import minimize
-
-    name = f"Rf_{'abc'[j]}"
-    rest = tuple(n for n in extra if n != name)
-    base = apply_extra(problem.params, rest, [extra[n] for n in rest])
-    # the fit of the bridge the identification found, and the profile around it
-    r_f = float(extra.get(name, 0.0))
-    points = []
-    for d in sorted({r_f, *VALLEY_DECADES}):
-        p = replace(problem, params=_with_bridge(base, j, d), nuisance=(), start=k,
-                    objective=None)
-        r = minimize(p, "lsq", seed=seed, termination=200)
-        points.append((r.fitness, p.fault_loops(r.k)))
-    best_f = min(f for f, _ in points)
-    keep = [loops for f, loops in points if f <= best_f * (1.0 + VALLEY_TOLERANCE)]
-    return {key: (min(q[key][j] for q in keep), max(q[key][j] for q in keep))
-            for key in LOOP_QUANTITIES}
-
-
-#: A point of a short's valley fits "as well" within this share of the best fit (the
-#: scatter of the fit ratio of actuators the model describes, MISFIT_LOG_STD, about 20 %).
-VALLEY_TOLERANCE = 0.05
-
-
-def _with_bridge(params: ActuatorParams, j: int, decades: float) -> ActuatorParams:
-    m = params.motor
-    R_f = list(m.R_f)
-    R_f[j] = R_f[j] * 10.0 ** decades
-    return replace(params, motor=replace(m, R_f=tuple(R_f)))
+    return {f.phase: profile(problem, k, extra, "ABC".index(f.phase)) for f in shorts}
 
 
 def _bound_note(name: str, value: float) -> str:
@@ -395,7 +340,7 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
         k, extra = refit.k, dict(refit.nuisance)
         ratio = None if noiseless else refit.fit_ratio
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
-    report = _fault_loops(problem, k, extra, diag, seed) if loops else None
+    report = _fault_loops(problem, k, extra, diag) if loops else None
     if report is not None:
         findings["fault_loops"] = report
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)

@@ -30,26 +30,63 @@ def read(r: Reading) -> list[Fault]:
                        f"through a fault resistance of {R_f:.3g} ohm"
                        + ("" if searched else " (the parameters', not searched)"))
             details = {"mu": s, "R_f_ohm": R_f}
-            if loops is not None:
-                details.update(loops.get(ph, {}))
-                if "fault_current_a_rms" in details:
-                    reading += (f": {details['fault_current_a_rms']:.2f} A rms in the fault "
-                                f"loop, {details['fault_power_w']:.2f} W in the bridge, "
-                                f"ampere-turns mu i_f {details['fault_mmf_a_rms']:.3g} A")
-                    iv = details.get("fault_current_interval")
-                    if iv is not None and iv[1] > 1.25 * iv[0]:
-                        pw = details["fault_power_interval"]
-                        mmf = details["fault_mmf_interval"]
-                        reading += (f" (fits as well from {iv[0]:.2f} to {iv[1]:.2f} A and "
-                                    f"{pw[0]:.2f} to {pw[1]:.2f} W, the ampere-turns "
-                                    f"{mmf[0]:.3g} to {mmf[1]:.3g} A: a mild short's shorted "
-                                    "fraction and fault resistance trade off)")
+            if loops is not None and ph in loops:
+                details.update(loops[ph])
+                reading = _loop_words(ph, details, searched)
         else:
             reading = (f"{100 * s:.0f}% of phase {ph} turns shorted "
                        f"(R x{1 - s:.2f}, L x{(1 - s) ** 2:.2f})")
         faults.append(Fault("short_circuit", f"k{3 + j}", kj, kj, reading, phase=ph,
                             details=details))
     return faults
+
+
+#: The fault loop's quantities a short reports (:func:`emaphm.fault_loops.profile`): name ->
+#: the name of its interval over the fits as good.
+LOOP_QUANTITIES = {"fault_current_a_rms": "fault_current_interval",
+                   "fault_power_w": "fault_power_interval",
+                   "fault_mmf_a_rms": "fault_mmf_interval",
+                   "mu": "mu_interval", "R_f_ohm": "R_f_interval"}
+
+#: The loop's quantities in words, by the report's names.
+_WORDS = {"fault_mmf_a_rms": ("the ampere-turns mu i_f", "{:.3g} A"),
+          "fault_current_a_rms": ("the loop current", "{:.3g} A"),
+          "fault_power_w": ("the power in the bridge", "{:.3g} W"),
+          "mu": ("the shorted fraction", "{:.1%}"),
+          "R_f_ohm": ("the fault resistance", "{:.3g} ohm")}
+
+
+def _loop_words(ph: str, d: dict, searched: bool) -> str:
+    """A short's reading from its fault loop's report: the ampere-turns first (what the
+    terminal currents carry, its severity), then the fit's fraction, bridge, current and
+    power, each with its interval over the fits as good, and which of them the fit
+    determines."""
+    def span(q: str) -> str:
+        lo, hi = d[LOOP_QUANTITIES[q]]
+        fmt = _WORDS[q][1]
+        for digits in (".3g", ".4g", ".5g"):          # as many as tell the ends apart
+            fmt = _WORDS[q][1].replace(".3g", digits)
+            if fmt.format(lo) != fmt.format(hi):
+                break
+        return f"{fmt.format(lo)} to {fmt.format(hi)}"
+
+    det = set(d.get("determined", ()))
+    text = (f"inter-turn short circuit in phase {ph}: ampere-turns mu i_f "
+            f"{_WORDS['fault_mmf_a_rms'][1].format(d['fault_mmf_a_rms'])} rms "
+            f"({span('fault_mmf_a_rms')}); at the fit {d['mu']:.1%} of its turns through "
+            f"{d['R_f_ohm']:.3g} ohm" + ("" if searched else " (the parameters' bridge)")
+            + f", {d['fault_current_a_rms']:.3g} A rms in the fault loop, "
+            f"{d['fault_power_w']:.3g} W in the bridge")
+    loose = [q for q in ("mu", "R_f_ohm", "fault_current_a_rms", "fault_power_w")
+             if q not in det]
+    if loose:
+        text += ("; fits as good span " + ", ".join(f"{_WORDS[q][0]} {span(q)}" for q in loose)
+                 + ": not determined by the fit (the shorted fraction and the fault "
+                 "resistance trade off)")
+    if d.get("open"):
+        text += (" and reach the end of the resistances searched ("
+                 + " and ".join(d["open"]) + ")")
+    return text
 
 
 def hypothesis(problem: Any, ident: Any, diag: Any) -> tuple[str, ...] | None:
