@@ -166,21 +166,28 @@ def wilson(k: int, n: int, z: float = 1.959964) -> tuple[float, float]:
 
 
 def _shorts_table(rows: list[dict]) -> list[str]:
-    out = ["| actuator | runs | right phase alone | wrong phase | unexplained | called a sensor fault "
-           "| ampere-turns within 25 % | current within 25 % | plant current in the range "
-           "| plant power in the range | median CPU |",
-           "|---|---|---|---|---|---|---|---|---|---|---|"]
+    out = ["| actuator | runs | right phase alone | wrong phase | another fault beside | "
+           "unexplained | called a sensor fault | ampere-turns within 25 % | current within "
+           "25 % | plant current in its interval | plant power in its interval | plant "
+           "fraction in its interval | current interval's width (median, max) | current "
+           "determined | median CPU |",
+           "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for name in ACTUATORS:
         rs = [r for r in rows if r["actuator"] == name]
         n = len(rs)
-        p_in = sum(r["power_interval"] is not None and r["power_interval"][0] * 0.999
-                   <= r["plant_power"] <= r["power_interval"][1] * 1.001 for r in rs)
+        inside = lambda x, iv: iv is not None and iv[0] * 0.999 <= x <= iv[1] * 1.001  # noqa: E731
+        p_in = sum(inside(r["plant_power"], r["power_interval"]) for r in rs)
+        mu_in = sum(inside(r["plant_mu"], r.get("mu_interval")) for r in rs)
+        widths = [r["interval"][1] / r["interval"][0] for r in rs if r["interval"]]
         out.append(f"| {name} | {n} | {sum(r['right_alone'] for r in rs)}/{n} | "
                    f"{sum(r['wrong_phase'] for r in rs)} | "
+                   f"{sum(bool(r.get('others')) for r in rs)} | "
                    f"{sum(r['verdict'] == 'unexplained' for r in rs)} | "
                    f"{sum(r['sensor'] for r in rs)} | {sum(r['mmf_within_25'] for r in rs)}/{n} | "
                    f"{sum(r['within_25'] for r in rs)}/{n} | "
-                   f"{sum(r['in_interval'] for r in rs)}/{n} | {p_in}/{n} | "
+                   f"{sum(r['in_interval'] for r in rs)}/{n} | {p_in}/{n} | {mu_in}/{n} | "
+                   f"{np.median(widths):.2f}x, {max(widths):.2f}x | "
+                   f"{sum('fault_current_a_rms' in (r.get('determined') or ()) for r in rs)}/{n} | "
                    f"{np.median([r['cpu_s'] for r in rs]):.2f} s |")
     out += ["", "By shorted fraction (both actuators): ampere-turns within 25 % / current within "
             "25 % / current in the range / named right alone", "",
@@ -235,6 +242,12 @@ def _tune_shorts(rows: list[dict]) -> list[str]:
             f"{sum(c[q] for c in cov)}/{n}" for q in ("current", "power", "mu", "R_f"))
             + f" | {np.median([c['width'] for c in cov]):.2f} |")
     return out
+
+
+def _profile_lr() -> float:
+    from emaphm.fault_loops import PROFILE_LR
+
+    return PROFILE_LR
 
 
 def _units_table(units: list[dict]) -> list[str]:
@@ -316,10 +329,13 @@ def main() -> None:
              f"Each phase at shorted fractions {', '.join(map(str, SHORT_MU))} through "
              f"{', '.join(map(str, SHORT_RF))} ohm (noise seeds 100+). The fault-loop current is "
              "the monitoring model's at the fit, against the RMS current the plant reports (its "
-             "PWM ripple included); the ranges are those of the fault resistances that fit as "
-             "well. The ampere-turns are the loop's `mu i_f` rms, what the terminal currents "
-             "see: for a mild short the shorted fraction and the bridge trade off along a "
-             "valley where the current and the power change and the ampere-turns do not.", ""]
+             "PWM ripple included); the intervals are those of the profile of the fit along "
+             "the fault resistance (`emaphm.fault_loops`: the fits within `PROFILE_LR` = "
+             f"{_profile_lr():g} of the best, tuned on noise seeds 200+ with `--tune-shorts`), "
+             "a quantity determined where its interval spans less than a factor 2. The "
+             "ampere-turns are the loop's `mu i_f` rms, what the terminal currents see: for a "
+             "mild short the shorted fraction and the bridge trade off along a valley where "
+             "the current and the power change and the ampere-turns do not.", ""]
     lines += _shorts_table(short_rows)
     lines += ["", f"### B. Commissioned production units ({args.units} per actuator, seeds "
               f"{UNIT_SEED0}+)", "",
