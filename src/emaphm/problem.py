@@ -197,6 +197,8 @@ class IdentificationProblem:
                   (:data:`emaphm.recorded.DRIVE_MODELS`); default the trace's best
                   (:func:`emaphm.recorded.drive_model_of`: its recorded voltages where
                   it has them, else the modelled controller)
+    held          components of k (0-based) held at their healthy values: the fit
+                  without those faults (the verdict asks whether a short explains them)
     ============  ===================================================================
 
     After construction ``params``, ``params_source``, ``fault_model``, ``nuisance`` and
@@ -218,8 +220,13 @@ class IdentificationProblem:
     objective: Any = field(default=None, repr=False)
     drive_model: str | None = None
     params_source: str | None = None
+    held: tuple[int, ...] = ()
 
     def __post_init__(self) -> None:
+        held = tuple(sorted({int(j) for j in self.held}))
+        if any(not 0 <= j < N_K for j in held):
+            raise ValueError(f"held components are indices of k, 0 to {N_K - 1}, got {self.held!r}")
+        object.__setattr__(self, "held", held)
         if self.params_source is not None and self.params_source not in PARAMS_SOURCES:
             raise ValueError(f"params_source must be one of {', '.join(PARAMS_SOURCES)}, got "
                              f"{self.params_source!r}")
@@ -276,9 +283,9 @@ class IdentificationProblem:
         return NOT_OBSERVABLE[self.drive_model]
 
     def _fixed(self, K: np.ndarray) -> np.ndarray:
-        """``K`` with the components of the modes this path cannot see at their healthy
-        values (k8 at 0.5 where no position loop is modelled)."""
-        blind = [j for m in self.not_observable for j in MODES[m].k_components]
+        """``K`` with the components of the modes this path cannot see (k8 at 0.5 where no
+        position loop is modelled) and those :attr:`held` at their healthy values."""
+        blind = [j for m in self.not_observable for j in MODES[m].k_components] + list(self.held)
         if blind:
             K = np.array(K, dtype=float, copy=True)
             K[..., blind] = K_NOMINAL[blind]

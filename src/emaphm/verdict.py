@@ -264,6 +264,59 @@ def _refit(problem: IdentificationProblem, names: tuple[str, ...], k: np.ndarray
     return best
 
 
+#: The fit without the faults read beside a short "fits as well" within this share of the
+#: verdict's (:func:`_parsimony`). Measured: the shorts of 2 % read on the other phases
+#: beside a 10 % short on ema-270v-750w's feed-forward drive (recorded current references,
+#: bench_drives' tuning units 80000-80005) cost +1.5 to +14 % when held; a real fault beside
+#: a short costs more when held (data sheets of both actuators, a 10 % short through 0.15
+#: ohm, noise seeds 1-2): friction x1.25 +25 to +83 %, x1.5 +76 to +190 %, a 5 % short of
+#: a second phase +76 to +620 %, backlash x10 beside a 20 % short +430 to +750 %.
+PARSIMONY_GAIN = 0.2
+
+
+def _parsimony(problem: IdentificationProblem, diag: Diagnosis, k: np.ndarray, extra: dict,
+               ratio: float | None, seed: int,
+               read: Callable[[np.ndarray, dict, float | None], Diagnosis]) -> tuple | None:
+    """Where a short is named beside other faults of k (physical fault model): the fit with
+    those others held healthy and the short's fault resistance searched, from ``k``. When
+    it fits as well (within :data:`PARSIMONY_GAIN` of ``ratio``) and names the short alone,
+    the short explains them (a severe short's loop losses read as friction, a short on
+    another phase beside it): ``(that fit, (the short's phase, the faults it explains))``,
+    else None. One least-squares run, made only for such verdicts."""
+    from .identify import minimize     # local: the search stack is heavy to import
+
+    shorts = [f for f in diag.faults if f.mode == _short.MODE.name]
+    if problem.fault_model != "physical" or not shorts or len(diag.faults) < 2:
+        return None
+    main = max(shorts, key=lambda f: f.k)
+    others = [f for f in diag.faults if f is not main]
+    held = {int(c[1:]) - 1 for f in others for c in f.component.split(",")
+            if c[:1] == "k" and c[1:].isdigit()}
+    j = 2 + "ABC".index(main.phase)
+    if not held or j in held:
+        return None
+    # the other phases' shorts held too: what the fit read there is what the short explains
+    held = sorted(held | ({2, 3, 4} - {j}))
+    rf = f"Rf_{main.phase.lower()}"
+    start = np.array(k, dtype=float)
+    start[held] = K_NOMINAL[held]
+    trial = replace(problem, nuisance=tuple(extra) + (() if rf in extra else (rf,)),
+                    held=tuple(held), start=start, search=None, objective=None)
+    r = minimize(trial, "lsq", seed=seed)
+    r_ratio = fit_ratio_of(r)
+    if ratio is not None and r_ratio is not None:
+        if r_ratio > (1.0 + PARSIMONY_GAIN) * ratio:
+            return None
+    elif not r.fitness <= (1.0 + PARSIMONY_GAIN) * trial.fitness_at(k, extra):
+        return None
+    named = {(f.mode, f.phase) for f in read(r.k, dict(r.nuisance), r_ratio).faults}
+    if named != {(main.mode, main.phase)}:
+        return None
+    words = [f"{f.mode.replace('_', ' ')}{' ' + f.phase if f.phase else ''}" for f in others
+             if (f.mode, f.phase) not in named]
+    return r, (main.phase, *words)
+
+
 def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
                  diag: Diagnosis) -> dict | None:
     """Each named short's fault loop (physical fault model) at the fit: its RMS current,
@@ -340,6 +393,17 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
         k, extra = refit.k, dict(refit.nuisance)
         ratio = None if noiseless else refit.fit_ratio
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
+    lean = _parsimony(problem, diag, k, extra, ratio, seed, lambda k_, extra_, ratio_: diagnose(
+        k_, fit_ratio=None if noiseless else ratio_, extra=extra_, findings=findings, **kw))
+    if lean is not None:
+        r, dropped = lean
+        k, extra = r.k, dict(r.nuisance)
+        ratio = None if noiseless else fit_ratio_of(r)
+        refit = Refit(_short.MODE.name, r.k, dict(r.nuisance), fit_ratio_of(r))
+        diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
+        notes += (f"the short read in phase {dropped[0]} explains what was read beside it "
+                  f"({', '.join(dropped[1:])}): the fit without it, the short's fault "
+                  "resistance searched, fits as well, so it is not named",)
     report = _fault_loops(problem, k, extra, diag) if loops else None
     if report is not None:
         findings["fault_loops"] = report

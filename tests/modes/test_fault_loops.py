@@ -79,3 +79,23 @@ def test_the_profile_of_a_severe_short_holds_the_ampere_turns_and_spans_the_vall
     assert hi > 1.5 * lo
     assert len(out["profile"]["fit_over_best"]) == len(out["profile"]["R_f_ohm"])
     assert min(out["profile"]["fit_over_best"]) == 1.0
+
+
+@pytest.mark.slow
+def test_a_short_does_not_name_what_its_own_fit_explains_and_keeps_a_real_second_fault():
+    """30 % of phase A through 0.05 ohm (preset, noise seed 4) read friction x1.2 beside the
+    short: the fit with the friction held healthy and the short's fault resistance searched
+    fits as well (verdict._parsimony), so the short is named alone, and a note says why; a
+    real friction x1.5 beside a 10 % short (seed 2) costs +81 % when held: both named."""
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+    from emaphm.verdict import examine
+
+    tr = simulate(faults=["short_circuit:a:0.3:0.05"], sensors=DEFAULT_SENSORS, seed=4)
+    d = examine(tr, seed=0).diagnosis
+    assert [(f.mode, f.phase) for f in d.faults] == [("short_circuit", "A")]
+    assert any("explains what was read beside it (friction)" in n for n in d.notes)
+    assert d.refit is not None and d.refit.k[0] == 0.0
+    both = simulate(faults=["short_circuit:a:0.1:0.15", "friction:1.5"], sensors=DEFAULT_SENSORS,
+                    seed=2)
+    d = examine(both, seed=0).diagnosis
+    assert {(f.mode, f.phase) for f in d.faults} == {("short_circuit", "A"), ("friction", None)}
