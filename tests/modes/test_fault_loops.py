@@ -1,5 +1,6 @@
 """A short's fault loop read from the profile of the one fit (emaphm.fault_loops): the
-intervals' known answers on a synthetic profile, and the profile of a plant short."""
+intervals' known answers on a synthetic profile, the profile of a plant short, and what a
+short's own fit explains (emaphm.verdict._parsimony)."""
 
 from __future__ import annotations
 
@@ -99,3 +100,4 @@ def test_a_short_does_not_name_what_its_own_fit_explains_and_keeps_a_real_second
                     seed=2)
     d = examine(both, seed=0).diagnosis
     assert {(f.mode, f.phase) for f in d.faults} == {("short_circuit", "A"), ("friction", None)}
+
