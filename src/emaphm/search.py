@@ -67,7 +67,8 @@ def nuisance_text(name: str, value: float) -> str:
         return f"{n.words} {100 * value:+.1f} %"
     if n.unit == "decades":
         return f"{n.words} x{10.0 ** value:.3g}"
-    return f"{n.words} {value:+.3f} {n.unit}"
+    # a deviation carries its sign; a value that cannot be negative (a loss, a speed) not
+    return f"{n.words} {value:{'+' if n.lo < 0 else ''}.3f} {n.unit}"
 
 
 def nuisance_start(names: tuple[str, ...]) -> np.ndarray:

@@ -61,6 +61,8 @@ def test_load_is_a_nuisance_in_newton_metres_and_only_fills_its_column():
     np.testing.assert_array_equal(cal[:, C_T0], 0.04 + LOADS)
     assert nuisance_text("load", 0.0204) == "unreported constant load +0.020 N m"
     assert nuisance_text("R", 0.3) == "winding resistance +30.0 %"
+    # a value that cannot be negative carries no sign
+    assert nuisance_text("stribeck", 1.1) == "Stribeck speed of the dry friction 1.100 rad/s"
 
 
 @pytest.mark.parametrize("name,kernel", [("scalar", scalar_kernel), ("simd", simd_kernel)])
