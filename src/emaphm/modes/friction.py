@@ -48,7 +48,8 @@ def measure(r: Reading) -> dict[str, float]:
 #: Trended by k1. Failure at 0.5, twice the nominal dry friction: the position loop still
 #: tracks, but the stick-slip dead zone and the current spent on friction double; beyond it
 #: the torque margin of a flight-control actuator shrinks fast. Model discrepancy 0.053
-#: (mean +0.039): the plant's Stribeck drop, which the monitoring model lacks, reads as
+#: (mean +0.039), measured on data sheets: the plant's Stribeck drop, which a data sheet's
+#: two-level friction lacks (a calibrated unit has it, docs/commissioning.md), reads as
 #: more Coulomb friction, more so as the friction grows (how it was measured:
 #: :data:`emaphm.prognosis.trends.MODEL_DISCREPANCY`).
 INDICATORS = (Indicator("friction", "friction (k1)", failure=0.5, discrepancy=0.053,
