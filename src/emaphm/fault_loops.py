@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .faults import MAX_SHORTED_FRACTION, N_K
+from .faults import MAX_SHORTED_FRACTION
 from .firmware import MODELLED
 from .models.layout import MU_MIN
 from .modes.short_circuit import LOOP_QUANTITIES
@@ -150,17 +150,17 @@ def _best_fractions(trial: IdentificationProblem, k: np.ndarray, nu: np.ndarray,
 def _quantities(trial: IdentificationProblem, k: np.ndarray, nu: np.ndarray, mu: np.ndarray,
                 decades: np.ndarray, j: int) -> dict[str, np.ndarray]:
     """Phase ``j``'s loop at each shorted fraction ``mu`` through the bridge ``decades``
-    (decades of ``Motor.R_f``), the rest at ``k`` and ``nu``: on the modelled controller
-    every point in one run of the scalar kernel, on a driven path one run each."""
+    (decades of ``Motor.R_f``), the rest at ``k`` and ``nu``: every point in one run of the
+    model (the scalar kernel's loop currents on the modelled controller)."""
     K = np.repeat(k[None, :], mu.size, axis=0)
     K[:, 2 + j] = mu
     rows = np.hstack([K, np.repeat(nu[None, :], mu.size, axis=0), decades[:, None]])
     R_f = trial.params.motor.R_f[j] * 10.0 ** decades
+    model = trial.objective.model
     if trial.drive_model == MODELLED:
-        f = trial.objective.model.loop_currents(rows)[:, :, j]
-        i_f = np.sqrt(np.mean(f ** 2, axis=1))
+        f = model.loop_currents(rows)[:, :, j]
     else:
-        i_f = np.array([trial.fault_loops(r[:N_K], r[N_K:])["fault_current_a_rms"][j]
-                        for r in rows])
+        f = model.simulate_population(rows).f_abc[:, :, j]
+    i_f = np.sqrt(np.mean(f ** 2, axis=1))
     return {"fault_current_a_rms": i_f, "fault_power_w": R_f * i_f ** 2,
             "fault_mmf_a_rms": mu * i_f, "mu": mu, "R_f_ohm": R_f}

@@ -233,7 +233,7 @@ def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis, see
         names = m.hypothesis(problem, ident, diag) if m.hypothesis is not None else None
         if not names:
             continue
-        r = _refit(problem, tuple(names), ident.k, seed)
+        r = _refit(problem, tuple(names), ident.k, seed, m.refit_from_healthy)
         ratio = fit_ratio_of(r)
         if base is not None and ratio is not None:
             drive = getattr(ident, "drive_model", MODELLED)
@@ -249,14 +249,14 @@ def _hypotheses(problem: IdentificationProblem, ident: Any, diag: Diagnosis, see
 
 
 def _refit(problem: IdentificationProblem, names: tuple[str, ...], k: np.ndarray,
-           seed: int) -> Any:
-    """A hypothesis' least-squares refit from the identified k and from the healthy
-    actuator, the better: a fault the first fit made up for what the hypothesis explains
-    (a backlash for a weaker magnet) can hold the refit from k in its basin."""
+           seed: int, from_healthy: bool = True) -> Any:
+    """A hypothesis' least-squares refit from the identified k and (``from_healthy``) from
+    the healthy actuator, the better: a fault the first fit made up for what the hypothesis
+    explains (a backlash for a weaker magnet) can hold the refit from k in its basin."""
     from .identify import minimize     # local: the search stack is heavy to import
 
     best = None
-    for start in (k, None):
+    for start in ((k, None) if from_healthy else (k,)):
         trial = replace(problem, nuisance=names, start=start, search=None, objective=None)
         r = minimize(trial, "lsq", seed=seed)
         if best is None or r.fitness < best.fitness:

@@ -229,6 +229,10 @@ class FaultMode:
                         residual of an identification asks for the mode, the parameters
                         to search beside k in a refit (the verdict makes it,
                         :func:`emaphm.verdict.diagnose_identification`)
+    refit_from_healthy  whether that refit also starts from the healthy actuator (a fault
+                        the first fit made up for what the mode explains can hold a refit
+                        from k in its basin); False where the mode is read at k already
+                        and its refit only adds its parameters (a short's bridge)
     measure             ``measure(Reading) -> {threshold field: value}``: what ``read``
                         compares with each of its thresholds (the largest over the
                         phases), so that an assessment can set the thresholds from the
@@ -256,6 +260,7 @@ class FaultMode:
     spec: str = "SEVERITY"
     parse_fields: Callable[[list[str]], Injection] | None = None
     hypothesis: Callable[[Any, Any, Any], tuple[str, ...] | None] | None = None
+    refit_from_healthy: bool = True
     k_components: tuple[int, ...] = ()
     measure: Callable[[Reading], dict[str, float]] = _identity_measure
     magnitude: Callable[[float], float] = abs

@@ -154,5 +154,6 @@ MODE = FaultMode("short_circuit", "inter-turn short circuit", threshold=0.03,
                  thresholds_by_fm={"physical": 0.018}, read=read, inject=inject,
                  severity_unit="shorted fraction of the turns", grid=(0.03, 0.05, 0.1, 0.2),
                  per_phase=True, spec="PHASE:FRACTION[:R_F_OHM]", parse_fields=parse,
-                 hypothesis=hypothesis, measure=measure, extra_grids=GRIDS,
+                 hypothesis=hypothesis, refit_from_healthy=False, measure=measure,
+                 extra_grids=GRIDS,
                  k_components=(2, 3, 4), indicators=INDICATORS)
