@@ -14,7 +14,7 @@ ORDER = ["plant.md", "commissioning.md", "assess.md", "pipeline.md", "identifica
          "false_alarms.md", "models.md", "batches.md", "model_report.md", "optim.md", "prognosis.md",
          "demagnetization.md", "demagnetization-ema-270v-750w.md", "resistance.md", "sensor_drift.md",
          "inspection.md", "fault_coverage.md", "fleet.md", "long_history.md", "versions.md",
-         "import.md", "batch_identify.md", "drives.md", "drives-described-undescribed-references.md",
+         "import.md", "batch_identify.md", "drives-all.md",
          "drive_cost.md"]
 #: written by benchmarks/run_paper_campaign.py beside the campaign report
 CAMPAIGN = ROOT.parent / "docs" / "results" / "timing.md"
