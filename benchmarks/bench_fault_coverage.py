@@ -23,7 +23,10 @@ prints what the healthy ones show against each new threshold (the largest single
 gain and offset deviation, the largest flux loss read), seeds no reported figure uses.
 
 Run: ``python benchmarks/bench_fault_coverage.py [--units 20] [--workers 2] [--tune]``
--> ``benchmarks/results/fault_coverage.md`` and ``fault_coverage.json``.
+-> ``benchmarks/results/fault_coverage.md`` and ``fault_coverage.json``; ``--offsets``: C.
+**Current-sensor offsets** of +-0.1 to +-0.3 A on each phase of the commissioned units ->
+``sensor_offsets.md``; ``--tune-shorts``: the coverage of the short's profile intervals on
+tuning noise seeds 200+ (what set :data:`emaphm.fault_loops.PROFILE_LR`).
 """
 
 from __future__ import annotations
@@ -151,6 +154,60 @@ def run_unit(task: tuple[str, int]) -> dict:
             "gain_dev": abs(fin.fit.gain - 1.0) if fin.fit else None,
             "offset_dev": abs(fin.fit.offset) if fin.fit else None,
             "refit": None if d.refit is None else d.refit.mode})
+    return out
+
+
+#: Part C's sensor offsets [A], each on each phase of every unit.
+OFFSETS = (-0.3, -0.2, -0.1, 0.1, 0.2, 0.3)
+
+
+def run_offsets(task: tuple[str, int]) -> dict:
+    """Part C, one commissioned unit: calibrate it on two healthy traces, then an offset of
+    each size of :data:`OFFSETS` on each phase (one trace each, noise seeds 10+)."""
+    from emaphm.calibration import CalibrationError, calibrate
+    from emaphm.simulate import DEFAULT_SENSORS, simulate
+    from emaphm.units import draw_unit
+    from emaphm.verdict import examine
+
+    name, seed = task
+    sheet = datasheet(name)
+    unit = draw_unit(sheet, seed)
+    healthy = [simulate(unit=unit, params=sheet, sensors=DEFAULT_SENSORS, seed=s) for s in (1, 2)]
+    try:
+        cal = calibrate(healthy, sheet)
+    except CalibrationError as exc:
+        return {"actuator": name, "unit": seed, "error": str(exc)}
+    runs = []
+    for i, (ph, off) in enumerate((ph, off) for ph in "abc" for off in OFFSETS):
+        tr = simulate(unit=unit, params=sheet, faults=[f"current_sensor:{ph}:offset:{off}"],
+                      sensors=DEFAULT_SENSORS, seed=10 + i)
+        d = examine(tr, params=cal.params, seed=0).diagnosis
+        runs.append({"phase": ph, "offset": off, "verdict": d.verdict, "named": _named(d),
+                     "right_alone": _named(d) == [("current_sensor", ph.upper())]})
+    return {"actuator": name, "unit": seed, "runs": runs}
+
+
+def _offsets_table(units: list[dict]) -> list[str]:
+    out = ["| actuator | offset [A] | runs | named right, alone | interval (Wilson 95 %) | "
+           "unexplained | another fault named |", "|---|---|---|---|---|---|---|"]
+    for name in ACTUATORS:
+        us = [u for u in units if u["actuator"] == name and "runs" in u]
+        for off in OFFSETS:
+            rs = [r for u in us for r in u["runs"] if r["offset"] == off]
+            n, k = len(rs), sum(r["right_alone"] for r in rs)
+            lo, hi = wilson(k, n)
+            out.append(f"| {name} | {off:+g} | {n} | {k}/{n} | {100 * lo:.0f}-{100 * hi:.0f} % | "
+                       f"{sum(r['verdict'] == 'unexplained' for r in rs)} | "
+                       f"{sum(r['verdict'] == 'faulty' and not r['right_alone'] for r in rs)} |")
+        rs = [r for u in us for r in u["runs"]]
+        k = sum(r["right_alone"] for r in rs)
+        lo, hi = wilson(k, len(rs))
+        out.append(f"| {name} | all | {len(rs)} | {k}/{len(rs)} | {100 * lo:.0f}-{100 * hi:.0f} % | "
+                   f"{sum(r['verdict'] == 'unexplained' for r in rs)} | "
+                   f"{sum(r['verdict'] == 'faulty' and not r['right_alone'] for r in rs)} |")
+        failed = [u for u in units if u["actuator"] == name and "error" in u]
+        if failed:
+            out.append(f"| {name} | calibration refused | {len(failed)} units | | | | |")
     return out
 
 
@@ -293,7 +350,28 @@ def main() -> None:
     ap.add_argument("--tune-shorts", action="store_true",
                     help="shorts on tuning noise seeds 200+ only: the coverage of the plant's "
                          "loop by the profile's intervals at each tolerance")
+    ap.add_argument("--offsets", action="store_true",
+                    help="part C only: sensor offsets of +-0.1 to +-0.3 A on each phase of "
+                         "commissioned units (seeds 50000+) -> results/sensor_offsets.md")
     args = ap.parse_args()
+    if args.offsets:
+        t0 = time.time()
+        with ProcessPoolExecutor(args.workers, initializer=_warm) as ex:
+            units = list(ex.map(run_offsets, [(name, UNIT_SEED0 + u) for name in ACTUATORS
+                                              for u in range(args.units)]))
+        now = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+        lines = [f"## Current-sensor offsets on commissioned units ({now})", "",
+                 f"Machine: {machine()}; load average {os.getloadavg()[0]:.2f} at the end; "
+                 f"{(time.time() - t0) / 60:.1f} min wall on {args.workers} workers. "
+                 f"`benchmarks/bench_fault_coverage.py --offsets`: {args.units} production "
+                 f"units per actuator (seeds {UNIT_SEED0}+), each calibrated on two healthy "
+                 "traces (noise seeds 1, 2), then an offset of each size on each phase (one "
+                 "trace each, noise seeds 10+), diagnosed as `emaphm diagnose` does with the "
+                 "calibration: the right sensor named, alone.", ""] + _offsets_table(units)
+        (RESULTS / "sensor_offsets.md").write_text("\n".join(lines) + "\n")
+        (RESULTS / "sensor_offsets.json").write_text(json.dumps(units, indent=1))
+        print("\n".join(lines))
+        return
     if args.tune_shorts:
         tasks = [(name, ph, mu, rf, 200 + i) for name in ACTUATORS
                  for i, (ph, mu, rf) in enumerate((ph, mu, rf) for ph in "abc"
