@@ -109,7 +109,7 @@ def drive_check(problem: IdentificationProblem, k: Any, ratio: float | None, fau
     fault takes that fault from the verdict. ``read(k, extra, ratio)`` is the verdict on a
     refit. Faults of one phase (a short, a current sensor) are not checked: the control acts
     on the three phases alike."""
-    from .identify import minimize     # local: the search stack is heavy to import
+    from .identify import make_solver, minimize     # local: the search stack is heavy
 
     kept, why = list(faults), None
     if not kept or problem.drive_model != MODELLED:
@@ -127,7 +127,10 @@ def drive_check(problem: IdentificationProblem, k: Any, ratio: float | None, fau
         if ratio is not None and _far_off(trial, k, ratio):
             continue
         try:
-            r = minimize(trial, "lsq", seed=seed)
+            # local (from k and from the healthy actuator, no further starts): the question
+            # is whether the deviation fits about as well as the verdict, and a refit that
+            # stays far above it (the further starts' trigger) cannot
+            r = minimize(trial, make_solver("lsq", restarts=0), seed=seed)
         except ValueError:             # a drive that does not follow the command at all
             continue
         r_ratio = fit_ratio_of(r)
