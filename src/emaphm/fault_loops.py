@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .faults import MAX_SHORTED_FRACTION
+from .faults import MAX_SHORTED_FRACTION, loop_report
 from .firmware import MODELLED
 from .models.layout import MU_MIN
 from .modes.short_circuit import LOOP_QUANTITIES
@@ -82,11 +82,12 @@ def profile(problem: IdentificationProblem, k: np.ndarray, extra: dict, j: int) 
     r_f = float(extra.get(name, 0.0))
     decades = np.unique(np.append(np.linspace(lo_d, hi_d, PROFILE_DECADES), r_f))
     nu = np.array([float(extra.get(n, 0.0)) for n in names[:-1]])
-    mu, F = _best_fractions(trial, np.asarray(k, dtype=float), nu, decades, j)
-    Q = _quantities(trial, np.asarray(k, dtype=float), nu, mu, decades, j)
-    at = _quantities(trial, np.asarray(k, dtype=float), nu, np.array([float(k[2 + j])]),
-                     np.array([r_f]), j)
-    out: dict[str, Any] = {q: float(v[0]) for q, v in at.items()}
+    k = np.asarray(k, dtype=float)
+    mu, F = _best_fractions(trial, k, nu, decades, j)
+    # the profile's points and, last, the fit itself, in one run of the model
+    Q = _quantities(trial, k, nu, np.append(mu, k[2 + j]), np.append(decades, r_f), j)
+    out: dict[str, Any] = {q: float(v[-1]) for q, v in Q.items()}
+    Q = {q: v[:-1] for q, v in Q.items()}
     out.update(intervals(Q, F, out))
     # the profile itself: each point's bridge, fraction, fit over the best and loop
     out["profile"] = {q: Q[q].tolist() for q in QUANTITIES}
@@ -155,12 +156,10 @@ def _quantities(trial: IdentificationProblem, k: np.ndarray, nu: np.ndarray, mu:
     K = np.repeat(k[None, :], mu.size, axis=0)
     K[:, 2 + j] = mu
     rows = np.hstack([K, np.repeat(nu[None, :], mu.size, axis=0), decades[:, None]])
-    R_f = trial.params.motor.R_f[j] * 10.0 ** decades
     model = trial.objective.model
     if trial.drive_model == MODELLED:
         f = model.loop_currents(rows)[:, :, j]
     else:
         f = model.simulate_population(rows).f_abc[:, :, j]
-    i_f = np.sqrt(np.mean(f ** 2, axis=1))
-    return {"fault_current_a_rms": i_f, "fault_power_w": R_f * i_f ** 2,
-            "fault_mmf_a_rms": mu * i_f, "mu": mu, "R_f_ohm": R_f}
+    loops = loop_report(np.mean(f ** 2, axis=1), trial.params.motor.R_f[j] * 10.0 ** decades, mu)
+    return {"mu": mu, **{q: np.asarray(v) for q, v in loops.items()}}

@@ -293,13 +293,12 @@ def _parsimony(problem: IdentificationProblem, diag: Diagnosis, k: np.ndarray, e
         return None
     main = max(shorts, key=lambda f: f.k)
     others = [f for f in diag.faults if f is not main]
-    held = {int(c[1:]) - 1 for f in others for c in f.component.split(",")
-            if c[:1] == "k" and c[1:].isdigit()}
-    j = 2 + "ABC".index(main.phase)
+    held = {c for f in others for c in _components(f)}
+    (j,) = _components(main)
     if not held or j in held:
         return None
     # the other phases' shorts held too: what the fit read there is what the short explains
-    held = sorted(held | ({2, 3, 4} - {j}))
+    held = sorted(held | (set(_short.MODE.k_components) - {j}))
     rf = f"Rf_{main.phase.lower()}"
     start = np.array(k, dtype=float)
     start[held] = K_NOMINAL[held]
@@ -318,6 +317,15 @@ def _parsimony(problem: IdentificationProblem, diag: Diagnosis, k: np.ndarray, e
     words = [f"{f.mode.replace('_', ' ')}{' ' + f.phase if f.phase else ''}" for f in others
              if (f.mode, f.phase) not in named]
     return r, (main.phase, *words)
+
+
+def _components(fault: Any) -> tuple[int, ...]:
+    """The components of k a named fault reads (its mode's, its own phase's of a per-phase
+    mode; none for a mode beside k)."""
+    mode = MODES[fault.mode]
+    if mode.per_phase and mode.k_components:
+        return (mode.k_components["ABC".index(fault.phase)],)
+    return mode.k_components
 
 
 def _fault_loops(problem: IdentificationProblem, k: np.ndarray, extra: dict,
@@ -390,14 +398,18 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     if not check:
         return replace(diag, notes=notes)
     problem = _problem_of(trace, ident, params)
-    refit = _hypotheses(problem, ident, diag, seed, lambda k_, extra_, ratio_: diagnose(
-        k_, fit_ratio=None if noiseless else ratio_, extra=extra_, findings=findings, **kw))
+
+    def read(k_: np.ndarray, extra_: dict, ratio_: float | None) -> Diagnosis:
+        """The verdict on a refit (its k, values beside k and fit ratio)."""
+        return diagnose(k_, fit_ratio=None if noiseless else ratio_, extra=extra_,
+                        findings=findings, **kw)
+
+    refit = _hypotheses(problem, ident, diag, seed, read)
     if refit is not None:
         k, extra = refit.k, dict(refit.nuisance)
         ratio = None if noiseless else refit.fit_ratio
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, **kw)
-    lean = _parsimony(problem, diag, k, extra, ratio, seed, lambda k_, extra_, ratio_: diagnose(
-        k_, fit_ratio=None if noiseless else ratio_, extra=extra_, findings=findings, **kw))
+    lean = _parsimony(problem, diag, k, extra, ratio, seed, read)
     if lean is not None:
         r, dropped = lean
         k, extra = r.k, dict(r.nuisance)
@@ -418,7 +430,7 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
         m = mismatch_fit(problem, k, seed=seed, nuisance=names)
         diag = diagnose(k, fit_ratio=ratio, extra=extra, findings=findings, mismatch=m, **kw)
     if diag.verdict == "faulty" and needs_mismatch_check(params):
-        diag = _drive_deviations(problem, diag, k, extra, ratio, seed, findings, noiseless, kw)
+        diag = _drive_deviations(problem, diag, k, ratio, seed, read)
     if diag.unexplained is not None and diag.unexplained.reason == "misfit":
         share = transient_share(problem, k, [extra.get(n, 0.0) for n in problem.nuisance])
         if share is not None and share >= TRANSIENT_MISFIT:
@@ -426,13 +438,10 @@ def diagnose_identification(trace: Trace | IdentificationProblem, ident: Any, *,
     return replace(diag, notes=notes, refit=refit)
 
 
-def _drive_deviations(problem, diag, k, extra, ratio, seed, findings, noiseless, kw) -> Diagnosis:
+def _drive_deviations(problem, diag, k, ratio, seed, read) -> Diagnosis:
     """The verdict after :func:`drive_check`: the faults a likely drive deviation explains as
     well dropped; where none is left, ``unexplained`` (reason ``"drive"``)."""
-    kept, why = drive_check(
-        problem, k, ratio, diag.faults, seed=seed,
-        read=lambda k_, extra_, ratio_: diagnose(k_, fit_ratio=None if noiseless else ratio_,
-                                                 extra=extra_, findings=findings, **kw))
+    kept, why = drive_check(problem, k, ratio, diag.faults, seed=seed, read=read)
     if why is None:
         return diag
     if kept:
